@@ -1,0 +1,30 @@
+# The two commands of the README: `make demo` and `make test`. Both install missing Debian packages,
+# then build in Release under build/ (the binary is build/bin/clogscope).
+BUILD_DIR ?= build
+JOBS ?= $(shell nproc)
+
+.PHONY: all deps build test demo bench clean format
+
+all: build
+
+deps:
+	@scripts/install-deps.sh
+
+build: deps
+	@cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release >/dev/null
+	@cmake --build $(BUILD_DIR) -j $(JOBS)
+
+test: build
+	@cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS) $(CTEST_ARGS)
+
+demo: build
+	@scripts/demo.sh $(BUILD_DIR)/bin/clogscope
+
+bench: build
+	@$(BUILD_DIR)/bin/clogscope_bench
+
+format:
+	@clang-format -i $$(git ls-files '*.h' '*.cc')
+
+clean:
+	@rm -rf $(BUILD_DIR)

@@ -1,0 +1,51 @@
+#include "apps/cli_util.h"
+
+#include <cstdio>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+namespace clogscope::apps {
+
+bool ParseSize(const std::string& text, int* width, int* height) {
+  int w = 0, h = 0;
+  char x = 0, extra = 0;
+  if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') ||
+      w <= 0 || h <= 0) {
+    return false;
+  }
+  *width = w;
+  *height = h;
+  return true;
+}
+
+cv::Rect ParseRoi(const std::string& text) {
+  std::vector<int> v;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    try {
+      size_t used = 0;
+      v.push_back(std::stoi(item, &used));
+      if (used != item.size()) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      throw std::invalid_argument("--roi '" + text + "': expected x,y,w,h in whole px");
+    }
+  }
+  if (v.size() != 4) throw std::invalid_argument("--roi '" + text + "': expected x,y,w,h in whole px");
+  if (v[0] < 0 || v[1] < 0 || v[2] <= 0 || v[3] <= 0)
+    throw std::invalid_argument("--roi '" + text + "': x and y must be >= 0, w and h > 0");
+  return cv::Rect(v[0], v[1], v[2], v[3]);
+}
+
+void SetUpLogging(const std::string& level) {
+  auto logger = spdlog::stderr_color_mt("clogscope");
+  logger->set_pattern("%^[%l]%$ %v");
+  logger->set_level(spdlog::level::from_str(level));
+  spdlog::set_default_logger(logger);
+}
+
+}  // namespace clogscope::apps

@@ -1,0 +1,63 @@
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "vision/strand_measure.h"
+#include "vision/synthetic.h"
+
+namespace clogscope::apps {
+
+// Each RunX parses argv (argv[0] is the subcommand name) into an options struct and calls the typed
+// function below it; it returns the process exit code. Contract violations surface as
+// std::invalid_argument, which main() reports as one line.
+int RunRender(int argc, char** argv);
+int RunMeasure(int argc, char** argv);
+
+// --- render --------------------------------------------------------------------------------
+struct RenderCommandOptions {
+  vision::SceneParams scene;
+  int frames = 1;
+  double fps = 25.0;
+  std::string out;         // directory of PNGs, or a .avi / .mp4 video
+  std::string truth_path;  // empty: next to the output (DIR/truth.json or NAME.truth.json)
+  bool Validate(std::string* why) const;
+};
+// Renders and writes frames and truth; returns the truth path written.
+std::string RenderToFiles(const RenderCommandOptions& options);
+
+// --- measure -------------------------------------------------------------------------------
+struct MeasureCommandOptions {
+  std::vector<std::string> inputs;          // images, directories of images, videos
+  std::optional<double> scale_um_per_px;    // converts widths to µm when given
+  std::optional<double> band_start_um, band_height_um;  // need a scale
+  std::optional<double> band_start_px, band_height_px;  // defaults: the µm values at 3 µm/px
+  vision::StrandMeasureOptions strand;      // band fields are filled from the above
+  std::string out_frames;                   // per-frame CSV
+  std::string overlay_dir;                  // empty: no overlays
+  int overlay_every = 0;                    // 0: every image, every 25th video frame
+  bool flag_outliers = true;
+  bool Validate(std::string* why) const;
+  // The band in px from the µm or px options (throws std::invalid_argument on a conflict).
+  void ResolveBand();
+};
+
+struct MeasureSummary {
+  int inputs_ok = 0;
+  int inputs_failed = 0;
+  int frames = 0;
+  int valid_frames = 0;
+  int overlays_written = 0;
+  double seconds = 0;
+  std::vector<std::string> errors;  // one line per input that could not be read
+};
+
+// Measures every frame of every input and writes the per-frame CSV (atomically) and overlays.
+// An input that cannot be opened is reported in the summary and skipped.
+MeasureSummary MeasureInputs(MeasureCommandOptions options);
+
+// The per-frame CSV's columns, in order.
+const std::vector<std::string>& FrameCsvColumns();
+
+}  // namespace clogscope::apps

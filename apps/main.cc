@@ -1,0 +1,71 @@
+// clogscope: one binary, subcommands dispatched to RunX(argc, argv).
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <stdexcept>
+#include <string>
+
+#include <spdlog/spdlog.h>
+
+#include "apps/cli_util.h"
+#include "apps/commands.h"
+#include "common/provenance.h"
+#include "common/version.h"
+
+namespace {
+
+struct Command {
+  const char* name;
+  int (*run)(int, char**);
+  const char* summary;
+};
+
+const Command kCommands[] = {
+    {"render", clogscope::apps::RunRender, "synthetic frames with exact ground truth"},
+    {"measure", clogscope::apps::RunMeasure, "strand width per frame from images or videos"},
+};
+
+void PrintUsage() {
+  std::printf(
+      "clogscope %s — effective nozzle diameter from microscope video\n\n"
+      "Usage: clogscope COMMAND [OPTIONS]   (clogscope COMMAND --help for its options)\n\n"
+      "Commands:\n",
+      clogscope::kVersion);
+  for (const auto& c : kCommands) std::printf("  %-10s %s\n", c.name, c.summary);
+  std::printf(
+      "\nExamples:\n"
+      "  clogscope render --out frames/ --frames 10 --tilt-deg 5\n"
+      "  clogscope measure frames/ --scale-um-per-px 3 --out-frames frames.csv --overlay ov/\n"
+      "\nEnvironment: CLOGSCOPE_LOG=debug|info|warn|error sets the log level (default info).\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  clogscope::SetCommandLine(argc, argv);
+  const char* level = std::getenv("CLOGSCOPE_LOG");
+  clogscope::apps::SetUpLogging(level ? level : "info");
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") ||
+      !std::strcmp(argv[1], "help")) {
+    PrintUsage();
+    return argc < 2 ? 2 : 0;
+  }
+  if (!std::strcmp(argv[1], "--version") || !std::strcmp(argv[1], "version")) {
+    std::printf("clogscope %s\n", clogscope::kVersion);
+    return 0;
+  }
+  for (const auto& c : kCommands) {
+    if (std::strcmp(argv[1], c.name) != 0) continue;
+    try {
+      return c.run(argc - 1, argv + 1);
+    } catch (const std::invalid_argument& e) {
+      std::fprintf(stderr, "clogscope %s: error: %s\n", c.name, e.what());
+      return 1;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "clogscope %s: failed: %s\n", c.name, e.what());
+      return 1;
+    }
+  }
+  std::fprintf(stderr, "clogscope: unknown command '%s' (try clogscope --help)\n", argv[1]);
+  return 2;
+}

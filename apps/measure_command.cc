@@ -1,0 +1,246 @@
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <set>
+#include <filesystem>
+#include <stdexcept>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include "apps/cli_util.h"
+#include "apps/commands.h"
+#include "common/atomic_file.h"
+#include "common/csv.h"
+#include "common/provenance.h"
+#include "vision/batch.h"
+#include "vision/overlay.h"
+#include "vision/video_io.h"
+
+namespace clogscope::apps {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The reference band: from 50 µm to 200 µm below the tip; at the nominal 3 µm/px without a scale.
+constexpr double kDefaultBandStartUm = 50.0;
+constexpr double kDefaultBandHeightUm = 150.0;
+constexpr double kNominalScaleUmPerPx = 3.0;
+constexpr int kVideoOverlayEvery = 25;
+
+struct Row {
+  std::string source;
+  int frame = 0;
+  double time_s = -1;
+  vision::StrandMeasurement m;
+};
+
+std::string FormatRow(const Row& r, std::optional<double> scale) {
+  const auto& m = r.m;
+  const bool ok = m.valid();
+  auto num = [&](double v, int d) { return ok ? CsvNumber(v, d) : std::string(); };
+  auto geo = [&](double v, int d) { return m.has_geometry ? CsvNumber(v, d) : std::string(); };
+  return CsvLine({
+      r.source,
+      std::to_string(r.frame),
+      r.time_s >= 0 ? CsvNumber(r.time_s, 4) : "",
+      ok ? "1" : "0",
+      num(m.width_px, 4),
+      num(m.width_sigma_px, 4),
+      scale ? num(m.width_px * *scale, 3) : "",
+      scale ? num(m.width_sigma_px * *scale, 3) : "",
+      geo(m.angle_deg, 3),
+      geo(m.contrast, 1),
+      geo(m.blur_px, 3),
+      geo(m.tip_x_px, 2),
+      geo(m.tip_y_px, 2),
+      std::to_string(m.calipers_used),
+      std::to_string(m.calipers_total),
+      m.status == vision::FrameStatus::kNoStrand ? "" : vision::PolarityName(m.polarity),
+      vision::FrameStatusName(m.status),
+      m.detail,
+  });
+}
+
+// "<video file name>_<frame>.png" or "<image stem>.png"; a suffix keeps names of this run unique.
+std::string OverlayName(const Row& r, bool from_video, std::set<std::string>* used) {
+  const fs::path p(r.source);
+  const std::string base =
+      from_video ? fmt::format("{}_{:06d}", p.filename().string(), r.frame) : p.stem().string();
+  std::string name = base + ".png";
+  for (int k = 2; !used->insert(name).second; ++k) name = fmt::format("{}-{}.png", base, k);
+  return name;
+}
+
+}  // namespace
+
+const std::vector<std::string>& FrameCsvColumns() {
+  static const std::vector<std::string> kColumns = {
+      "source",        "frame",          "time_s",     "valid",      "width_px",
+      "width_sigma_px", "width_um",      "width_sigma_um", "angle_deg", "contrast",
+      "blur_px",       "tip_x_px",       "tip_y_px",   "calipers_used", "calipers_total",
+      "polarity",      "reason",         "detail"};
+  return kColumns;
+}
+
+bool MeasureCommandOptions::Validate(std::string* why) const {
+  if (inputs.empty()) *why = "no input given";
+  else if (scale_um_per_px && !(*scale_um_per_px > 0 && std::isfinite(*scale_um_per_px)))
+    *why = fmt::format("--scale-um-per-px {}: must be a positive number", *scale_um_per_px);
+  else if (out_frames.empty()) *why = "--out-frames is required";
+  else if (overlay_every < 0) *why = "--overlay-every must not be negative";
+  else if (!strand.Validate(why)) return false;
+  else return true;
+  return false;
+}
+
+void MeasureCommandOptions::ResolveBand() {
+  if ((band_start_um || band_height_um) && !scale_um_per_px) {
+    throw std::invalid_argument(
+        "--band-start-um/--band-height-um need --scale-um-per-px (or give the band in px)");
+  }
+  if ((band_start_um && band_start_px) || (band_height_um && band_height_px)) {
+    throw std::invalid_argument("give the band either in µm or in px, not both");
+  }
+  const double scale = scale_um_per_px.value_or(kNominalScaleUmPerPx);
+  strand.band_start_px = band_start_px ? *band_start_px : band_start_um.value_or(kDefaultBandStartUm) / scale;
+  strand.band_height_px =
+      band_height_px ? *band_height_px : band_height_um.value_or(kDefaultBandHeightUm) / scale;
+  if (!(strand.band_start_px >= 0)) throw std::invalid_argument("band start: must not be negative");
+  if (!(strand.band_height_px >= 4)) {
+    throw std::invalid_argument(
+        fmt::format("band height {:.2f} px: must be at least 4 px", strand.band_height_px));
+  }
+}
+
+MeasureSummary MeasureInputs(MeasureCommandOptions o) {
+  o.ResolveBand();
+  std::string why;
+  if (!o.Validate(&why)) throw std::invalid_argument(why);
+  if (!o.overlay_dir.empty()) {
+    std::error_code ec;
+    fs::create_directories(o.overlay_dir, ec);
+    if (ec || !fs::is_directory(o.overlay_dir))
+      throw std::invalid_argument(o.overlay_dir + ": cannot create overlay directory");
+  }
+  MeasureSummary summary;
+  std::set<std::string> overlay_names;
+  const auto t0 = std::chrono::steady_clock::now();
+  // Rows go to "<out>.partial" as each input completes, so an interrupted run keeps what it did.
+  AtomicTextFile csv(o.out_frames, /*keep_partial=*/true);
+  csv.stream() << ProvenanceCsvComment(CurrentProvenance()) << CsvLine(FrameCsvColumns()) << "\n";
+
+  for (const std::string& input : o.inputs) {
+    std::unique_ptr<vision::FrameSource> source;
+    try {
+      source = vision::FrameSource::Open(input);
+    } catch (const std::invalid_argument& e) {
+      spdlog::error("{}", e.what());
+      summary.errors.push_back(e.what());
+      ++summary.inputs_failed;
+      continue;
+    }
+    const bool from_video = vision::IsVideoPath(input) && !fs::is_directory(input);
+    const int every = o.overlay_every > 0 ? o.overlay_every : (from_video ? kVideoOverlayEvery : 1);
+    std::vector<Row> rows;
+    std::vector<std::pair<size_t, cv::Mat>> keep;  // frames to draw overlays of, by row
+    const auto ts = std::chrono::steady_clock::now();
+    vision::MeasureFrames(*source, o.strand, [&](vision::InputFrame& f, vision::StrandMeasurement& m) {
+      if (!o.overlay_dir.empty() && !f.image.empty() && f.index % every == 0) {
+        keep.emplace_back(rows.size(), f.image);
+      }
+      rows.push_back({f.source, f.index, f.time_s, std::move(m)});
+    });
+    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - ts).count();
+    if (o.flag_outliers) {
+      std::vector<vision::StrandMeasurement> ms;
+      ms.reserve(rows.size());
+      for (auto& r : rows) ms.push_back(std::move(r.m));
+      vision::FlagWidthOutliers(ms);
+      for (size_t i = 0; i < rows.size(); ++i) rows[i].m = std::move(ms[i]);
+    }
+    int valid = 0;
+    for (const Row& r : rows) {
+      csv.stream() << FormatRow(r, o.scale_um_per_px) << "\n";
+      valid += r.m.valid();
+    }
+    csv.stream().flush();
+    for (const auto& [row, image] : keep) {
+      const std::string name = (fs::path(o.overlay_dir) / OverlayName(rows[row], from_video, &overlay_names)).string();
+      vision::WriteImageAtomically(
+          name, vision::DrawOverlay(image, rows[row].m, o.scale_um_per_px.value_or(0.0)));
+      ++summary.overlays_written;
+    }
+    ++summary.inputs_ok;
+    summary.frames += static_cast<int>(rows.size());
+    summary.valid_frames += valid;
+    spdlog::info("{}: {} of {} frames valid ({:.0f} frames/s)", input, valid, rows.size(),
+                 rows.size() / std::max(secs, 1e-9));
+    if (valid < static_cast<int>(rows.size())) {
+      // Say why, once per reason, so a user sees the cause without opening the CSV.
+      std::map<std::string, int> reasons;
+      for (const Row& r : rows) {
+        if (!r.m.valid()) ++reasons[vision::FrameStatusName(r.m.status)];
+      }
+      for (const auto& [reason, n] : reasons) spdlog::warn("{}: {} frame(s) {}", input, n, reason);
+    }
+  }
+  csv.Commit();
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return summary;
+}
+
+int RunMeasure(int argc, char** argv) {
+  CLI::App app{"Measure the strand width in every frame of images, image directories or videos.",
+               "clogscope measure"};
+  MeasureCommandOptions o;
+  std::string roi, polarity = "auto";
+  double min_contrast_levels = 0;
+  bool no_outliers = false;
+  app.add_option("inputs", o.inputs, "Images, directories of images, or video files")->required();
+  app.add_option("--scale-um-per-px", o.scale_um_per_px, "Pixel scale; widths in µm need it");
+  app.add_option("--out-frames", o.out_frames, "Per-frame CSV to write")->required();
+  app.add_option("--overlay", o.overlay_dir, "Directory for annotated PNGs");
+  app.add_option("--overlay-every", o.overlay_every,
+                 "Overlay every Nth frame (default: every image, every 25th video frame)");
+  app.add_option("--roi", roi, "Search only inside x,y,w,h (px)");
+  app.add_option("--band-start-um", o.band_start_um, "Band start below the tip (default 50 µm)");
+  app.add_option("--band-height-um", o.band_height_um, "Band height (default 150 µm)");
+  app.add_option("--band-start-px", o.band_start_px, "Band start in px (default 50 µm at 3 µm/px)");
+  app.add_option("--band-height-px", o.band_height_px, "Band height in px (default 150 µm at 3 µm/px)");
+  app.add_option("--caliper-px", o.strand.caliper_spacing_px, "Caliper thickness along the axis")
+      ->capture_default_str();
+  app.add_option("--polarity", polarity, "auto, bright (lit strand) or dark (silhouette)")
+      ->capture_default_str();
+  app.add_option("--max-blur-px", o.strand.max_blur_px, "Frames blurrier than this are out of focus")
+      ->capture_default_str();
+  app.add_option("--min-contrast", min_contrast_levels,
+                 "Minimum edge contrast in 8-bit grey levels (default 15)");
+  app.add_flag("--no-outlier-flags", no_outliers, "Do not mark width outliers between frames");
+  app.footer(
+      "Examples:\n"
+      "  clogscope measure step1.mp4 --scale-um-per-px 3.0 --out-frames frames.csv\n"
+      "  clogscope measure frames/ --out-frames frames.csv --overlay overlays/\n"
+      "  clogscope measure a.png b.png --roi 400,150,480,400 --polarity dark --out-frames f.csv\n"
+      "Exit status: 0 all inputs read, 2 some inputs unreadable, 1 nothing measured.");
+  CLI11_PARSE(app, argc, argv);
+  if (!roi.empty()) o.strand.roi = ParseRoi(roi);
+  o.strand.polarity = vision::ParsePolarity(polarity);
+  if (app.count("--min-contrast")) {
+    if (!(min_contrast_levels > 0 && min_contrast_levels < 255))
+      throw std::invalid_argument("--min-contrast: must be in (0, 255) grey levels");
+    o.strand.min_contrast_fraction = min_contrast_levels / 255.0;
+  }
+  o.flag_outliers = !no_outliers;
+  const MeasureSummary s = MeasureInputs(o);
+  spdlog::info("{} of {} frames valid from {} input(s) in {:.2f} s; wrote {}", s.valid_frames,
+               s.frames, s.inputs_ok, s.seconds, o.out_frames);
+  if (s.valid_frames == 0) {
+    spdlog::error("nothing could be measured{}", s.frames ? " (see the reason column)" : "");
+    return 1;
+  }
+  return s.inputs_failed > 0 ? 2 : 0;
+}
+
+}  // namespace clogscope::apps

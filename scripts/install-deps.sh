@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages ClogScope builds and runs with. Idempotent: does nothing when every
+# package is present. Runs as root, or through sudo when not root.
+set -euo pipefail
+
+packages=(
+  build-essential cmake pkg-config
+  libopencv-dev          # frames, video I/O (FFmpeg backend), drawing
+  libceres-dev           # calibration and predictor fits (pulls Eigen)
+  libeigen3-dev          # small linear algebra in the edge fitter and the model
+  libgtest-dev           # unit tests
+  libcli11-dev           # command line
+  libspdlog-dev libfmt-dev  # logging and formatting
+  nlohmann-json3-dev     # JSON ground truth and tables
+  libyaml-cpp-dev        # manifests and parameter files with line numbers in errors
+  ffmpeg                 # codec libraries for OpenCV's FFmpeg backend; ffmpeg CLI for decode benchmarks
+  gnuplot-nox            # plots (optional at run time)
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed'; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#packages[@]} packages present"
+  exit 0
+fi
+
+echo "install-deps: installing ${missing[*]}"
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then
+  if command -v sudo >/dev/null 2>&1; then SUDO="sudo"; else
+    echo "install-deps: not root and no sudo; install these packages: ${missing[*]}" >&2
+    exit 1
+  fi
+fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

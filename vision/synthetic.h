@@ -1,0 +1,94 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+namespace clogscope::vision {
+
+// Which way the strand differs from the background.
+enum class Polarity {
+  kAuto,         // measurement only: decide from the frame
+  kBrightOnDark,  // lit strand on a dark background
+  kDarkOnBright,  // silhouette on a backlight
+};
+const char* PolarityName(Polarity p);
+// Parses "auto", "bright" or "dark"; throws std::invalid_argument otherwise.
+Polarity ParsePolarity(const std::string& name);
+
+// A side view of a nozzle tip and the strand below it, with exactly known geometry.
+//
+// Image frame: x to the right, y down, pixel centres at integer coordinates. The scene is tilted by
+// tilt_deg about the nozzle tip; the strand axis leans by tilt_deg (+ per-frame sway), positive when
+// the strand moves to +x going down.
+struct SceneParams {
+  int width_px = 1280;
+  int height_px = 720;
+  double scale_um_per_px = 3.0;
+  double strand_width_um = 400.0;
+  double tip_x_px = 640.0;
+  double tip_y_px = 240.0;
+  double tilt_deg = 0.0;
+  double blur_sigma_px = 1.5;   // Gaussian PSF
+  double noise_sigma = 3.0;     // sensor noise, grey levels (8-bit scale)
+  double background_level = 40.0;  // grey levels (8-bit scale)
+  double strand_level = 200.0;
+  double nozzle_level = 150.0;
+  double bed_level = 120.0;
+  // Illumination falls off linearly along gradient_angle_deg: the relative change across the frame
+  // diagonal (0.3 = 30 % darker at one corner than at the other).
+  double gradient_fraction = 0.0;
+  double gradient_angle_deg = 0.0;
+  // Glossy-melt highlight: a bright stripe inside the strand, parallel to its axis.
+  bool highlight = false;
+  double highlight_offset_fraction = -0.2;  // stripe centre from the axis, in strand widths
+  double highlight_width_fraction = 0.12;   // stripe width, in strand widths
+  double highlight_gain = 45.0;             // grey levels added at the stripe
+  // Print bed (perpendicular to the scene axis) bed_gap_um below the tip; hides the strand below it.
+  bool bed = false;
+  double bed_gap_um = 200.0;
+  // Nozzle: a flat tip face nozzle_tip_width_um wide, flanks opening upward at the cone angle.
+  double nozzle_tip_width_um = 1000.0;
+  double nozzle_cone_half_angle_deg = 40.0;
+  // Per-frame variation (standard deviations): strand axis angle and strand width.
+  double sway_deg = 0.0;
+  double width_jitter_um = 0.0;
+  bool colour = false;  // BGR output with an orange tint instead of grey
+  int bit_depth = 8;    // 8 or 16
+  uint64_t seed = 1;
+
+  // True when the parameters make a renderable scene; otherwise says why.
+  bool Validate(std::string* why) const;
+  // Makes this a silhouette on a backlight (dark strand, nozzle and bed on a bright background).
+  void SetSilhouette();
+};
+
+// The exact geometry of one rendered frame.
+struct FrameTruth {
+  int frame = 0;
+  double width_um = 0;
+  double width_px = 0;
+  double angle_deg = 0;  // strand axis angle, image frame
+  double tip_x_px = 0;
+  double tip_y_px = 0;
+};
+
+// Renders frame `frame_index` of a sequence. The same params, seed and index give the same image.
+// Throws std::invalid_argument when params do not validate.
+cv::Mat RenderFrame(const SceneParams& params, int frame_index, FrameTruth* truth);
+
+// The truth of frame `frame_index` without rendering it.
+FrameTruth FrameTruthFor(const SceneParams& params, int frame_index);
+
+// Writes `frame_count` frames: to a directory of PNGs (frame_000000.png …) when `out_path` has no
+// video extension, or to a video: .avi (MJPEG) or .mp4 (H.264, OpenCV's FFmpeg backend). Writes the
+// truth as JSON to `truth_path` (atomically). Throws std::invalid_argument on bad paths/params.
+std::vector<FrameTruth> RenderSequence(const SceneParams& params, int frame_count, double fps,
+                                       const std::string& out_path, const std::string& truth_path);
+
+// Ground truth as JSON text: the scene parameters and one entry per frame.
+std::string TruthToJson(const SceneParams& params, const std::vector<FrameTruth>& truth);
+
+}  // namespace clogscope::vision

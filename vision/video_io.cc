@@ -1,0 +1,92 @@
+#include "vision/video_io.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "common/atomic_file.h"
+
+namespace clogscope::vision {
+namespace {
+std::string LowerExtension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext;
+}
+}  // namespace
+
+VideoKind VideoKindForPath(const std::string& path) {
+  const std::string ext = LowerExtension(path);
+  if (ext == ".avi") return VideoKind::kMjpegAvi;
+  if (ext == ".mp4" || ext == ".m4v" || ext == ".mov" || ext == ".mkv") return VideoKind::kH264Mp4;
+  return VideoKind::kNone;
+}
+
+bool IsImagePath(const std::string& path) {
+  static const char* kExts[] = {".png", ".tif", ".tiff", ".bmp", ".jpg", ".jpeg", ".pgm", ".ppm"};
+  const std::string ext = LowerExtension(path);
+  return std::any_of(std::begin(kExts), std::end(kExts), [&](const char* e) { return ext == e; });
+}
+
+bool IsVideoPath(const std::string& path) {
+  const std::string ext = LowerExtension(path);
+  return VideoKindForPath(path) != VideoKind::kNone || ext == ".webm" || ext == ".mpg" ||
+         ext == ".mpeg" || ext == ".h264" || ext == ".264";
+}
+
+VideoFileWriter::VideoFileWriter(const std::string& path, VideoKind kind, double fps,
+                                 cv::Size size)
+    : path_(path) {
+  // The temporary name keeps the extension: FFmpeg picks the container from it.
+  std::filesystem::path p(path);
+  temp_path_ = (p.parent_path() / (p.stem().string() + ".partial" + p.extension().string())).string();
+  if (!(fps > 0)) throw std::invalid_argument(path + ": frame rate must be positive");
+  const int fourcc = kind == VideoKind::kMjpegAvi ? cv::VideoWriter::fourcc('M', 'J', 'P', 'G')
+                                                  : cv::VideoWriter::fourcc('a', 'v', 'c', '1');
+  // Always a colour stream: grey input is expanded in Write(), which every codec and player accepts.
+  writer_.open(temp_path_, cv::CAP_FFMPEG, fourcc, fps, size, true);
+  if (!writer_.isOpened()) {
+    throw std::invalid_argument(path + ": cannot open a video encoder for this file type");
+  }
+}
+
+VideoFileWriter::~VideoFileWriter() {
+  if (!committed_) {
+    writer_.release();
+    std::remove(temp_path_.c_str());
+  }
+}
+
+void VideoFileWriter::Write(const cv::Mat& frame) {
+  if (frame.channels() == 1) {
+    cv::Mat bgr;
+    cv::cvtColor(frame, bgr, cv::COLOR_GRAY2BGR);
+    writer_.write(bgr);
+  } else {
+    writer_.write(frame);
+  }
+}
+
+void VideoFileWriter::Commit() {
+  writer_.release();
+  if (std::rename(temp_path_.c_str(), path_.c_str()) != 0) {
+    throw std::runtime_error(path_ + ": cannot rename from " + temp_path_);
+  }
+  committed_ = true;
+}
+
+void WriteImageAtomically(const std::string& path, const cv::Mat& image) {
+  std::vector<uchar> bytes;
+  const std::string ext = LowerExtension(path);
+  if (!cv::imencode(ext.empty() ? ".png" : ext, image, bytes)) {
+    throw std::invalid_argument(path + ": cannot encode image for this extension");
+  }
+  WriteFileAtomically(path, std::string(bytes.begin(), bytes.end()));
+}
+
+}  // namespace clogscope::vision
