@@ -1,12 +1,12 @@
 #include "apps/cli_util.h"
 
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
 #include <cstdio>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
-
-#include <spdlog/sinks/stdout_color_sinks.h>
-#include <spdlog/spdlog.h>
 
 namespace clogscope::apps {
 
@@ -35,7 +35,8 @@ cv::Rect ParseRoi(const std::string& text) {
       throw std::invalid_argument("--roi '" + text + "': expected x,y,w,h in whole px");
     }
   }
-  if (v.size() != 4) throw std::invalid_argument("--roi '" + text + "': expected x,y,w,h in whole px");
+  if (v.size() != 4)
+    throw std::invalid_argument("--roi '" + text + "': expected x,y,w,h in whole px");
   if (v[0] < 0 || v[1] < 0 || v[2] <= 0 || v[3] <= 0)
     throw std::invalid_argument("--roi '" + text + "': x and y must be >= 0, w and h > 0");
   return cv::Rect(v[0], v[1], v[2], v[3]);

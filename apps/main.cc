@@ -1,11 +1,11 @@
 // clogscope: one binary, subcommands dispatched to RunX(argc, argv).
+#include <spdlog/spdlog.h>
+
 #include <cstdio>
 #include <cstring>
 #include <exception>
 #include <stdexcept>
 #include <string>
-
-#include <spdlog/spdlog.h>
 
 #include "apps/cli_util.h"
 #include "apps/commands.h"

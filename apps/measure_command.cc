@@ -1,13 +1,13 @@
-#include <chrono>
-#include <cmath>
-#include <map>
-#include <set>
-#include <filesystem>
-#include <stdexcept>
-
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <set>
+#include <stdexcept>
 
 #include "apps/cli_util.h"
 #include "apps/commands.h"
@@ -77,25 +77,33 @@ std::string OverlayName(const Row& r, bool from_video, std::set<std::string>* us
 
 const std::vector<std::string>& FrameCsvColumns() {
   static const std::vector<std::string> kColumns = {
-      "source",        "frame",          "time_s",     "valid",      "width_px",
-      "width_sigma_px", "width_um",      "width_sigma_um", "angle_deg", "contrast",
-      "blur_px",       "tip_x_px",       "tip_y_px",   "calipers_used", "calipers_total",
-      "polarity",      "reason",         "detail"};
+      "source",   "frame",          "time_s",         "valid",    "width_px", "width_sigma_px",
+      "width_um", "width_sigma_um", "angle_deg",      "contrast", "blur_px",  "tip_x_px",
+      "tip_y_px", "calipers_used",  "calipers_total", "polarity", "reason",   "detail"};
   return kColumns;
 }
 
 bool MeasureCommandOptions::Validate(std::string* why) const {
-  if (inputs.empty()) *why = "no input given";
+  if (inputs.empty())
+    *why = "no input given";
   else if (scale_um_per_px && !(*scale_um_per_px > 0 && std::isfinite(*scale_um_per_px)))
     *why = fmt::format("--scale-um-per-px {}: must be a positive number", *scale_um_per_px);
-  else if (out_frames.empty()) *why = "--out-frames is required";
-  else if (overlay_every < 0) *why = "--overlay-every must not be negative";
-  else if (!strand.Validate(why)) return false;
-  else return true;
+  else if (out_frames.empty())
+    *why = "--out-frames is required";
+  else if (overlay_every < 0)
+    *why = "--overlay-every must not be negative";
+  else if (!strand.Validate(why))
+    return false;
+  else
+    return true;
   return false;
 }
 
 void MeasureCommandOptions::ResolveBand() {
+  if (scale_um_per_px && !(*scale_um_per_px > 0 && std::isfinite(*scale_um_per_px))) {
+    throw std::invalid_argument(
+        fmt::format("--scale-um-per-px {}: must be a positive number", *scale_um_per_px));
+  }
   if ((band_start_um || band_height_um) && !scale_um_per_px) {
     throw std::invalid_argument(
         "--band-start-um/--band-height-um need --scale-um-per-px (or give the band in px)");
@@ -104,7 +112,8 @@ void MeasureCommandOptions::ResolveBand() {
     throw std::invalid_argument("give the band either in µm or in px, not both");
   }
   const double scale = scale_um_per_px.value_or(kNominalScaleUmPerPx);
-  strand.band_start_px = band_start_px ? *band_start_px : band_start_um.value_or(kDefaultBandStartUm) / scale;
+  strand.band_start_px =
+      band_start_px ? *band_start_px : band_start_um.value_or(kDefaultBandStartUm) / scale;
   strand.band_height_px =
       band_height_px ? *band_height_px : band_height_um.value_or(kDefaultBandHeightUm) / scale;
   if (!(strand.band_start_px >= 0)) throw std::invalid_argument("band start: must not be negative");
@@ -146,13 +155,15 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
     std::vector<Row> rows;
     std::vector<std::pair<size_t, cv::Mat>> keep;  // frames to draw overlays of, by row
     const auto ts = std::chrono::steady_clock::now();
-    vision::MeasureFrames(*source, o.strand, [&](vision::InputFrame& f, vision::StrandMeasurement& m) {
-      if (!o.overlay_dir.empty() && !f.image.empty() && f.index % every == 0) {
-        keep.emplace_back(rows.size(), f.image);
-      }
-      rows.push_back({f.source, f.index, f.time_s, std::move(m)});
-    });
-    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - ts).count();
+    vision::MeasureFrames(
+        *source, o.strand, [&](vision::InputFrame& f, vision::StrandMeasurement& m) {
+          if (!o.overlay_dir.empty() && !f.image.empty() && f.index % every == 0) {
+            keep.emplace_back(rows.size(), f.image);
+          }
+          rows.push_back({f.source, f.index, f.time_s, std::move(m)});
+        });
+    const double secs =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - ts).count();
     if (o.flag_outliers) {
       std::vector<vision::StrandMeasurement> ms;
       ms.reserve(rows.size());
@@ -167,7 +178,8 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
     }
     csv.stream().flush();
     for (const auto& [row, image] : keep) {
-      const std::string name = (fs::path(o.overlay_dir) / OverlayName(rows[row], from_video, &overlay_names)).string();
+      const std::string name =
+          (fs::path(o.overlay_dir) / OverlayName(rows[row], from_video, &overlay_names)).string();
       vision::WriteImageAtomically(
           name, vision::DrawOverlay(image, rows[row].m, o.scale_um_per_px.value_or(0.0)));
       ++summary.overlays_written;
@@ -208,12 +220,14 @@ int RunMeasure(int argc, char** argv) {
   app.add_option("--band-start-um", o.band_start_um, "Band start below the tip (default 50 µm)");
   app.add_option("--band-height-um", o.band_height_um, "Band height (default 150 µm)");
   app.add_option("--band-start-px", o.band_start_px, "Band start in px (default 50 µm at 3 µm/px)");
-  app.add_option("--band-height-px", o.band_height_px, "Band height in px (default 150 µm at 3 µm/px)");
+  app.add_option("--band-height-px", o.band_height_px,
+                 "Band height in px (default 150 µm at 3 µm/px)");
   app.add_option("--caliper-px", o.strand.caliper_spacing_px, "Caliper thickness along the axis")
       ->capture_default_str();
   app.add_option("--polarity", polarity, "auto, bright (lit strand) or dark (silhouette)")
       ->capture_default_str();
-  app.add_option("--max-blur-px", o.strand.max_blur_px, "Frames blurrier than this are out of focus")
+  app.add_option("--max-blur-px", o.strand.max_blur_px,
+                 "Frames blurrier than this are out of focus")
       ->capture_default_str();
   app.add_option("--min-contrast", min_contrast_levels,
                  "Minimum edge contrast in 8-bit grey levels (default 15)");

@@ -1,21 +1,25 @@
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
 #include <filesystem>
 #include <stdexcept>
 
-#include <CLI/CLI.hpp>
-#include <spdlog/spdlog.h>
-
-#include "apps/commands.h"
 #include "apps/cli_util.h"
+#include "apps/commands.h"
 #include "vision/video_io.h"
 
 namespace clogscope::apps {
 
 bool RenderCommandOptions::Validate(std::string* why) const {
   if (!scene.Validate(why)) return false;
-  if (frames < 1) *why = "--frames must be at least 1";
-  else if (!(fps > 0 && fps <= 1000)) *why = "--fps must be in (0, 1000]";
-  else if (out.empty()) *why = "--out is required";
-  else return true;
+  if (frames < 1)
+    *why = "--frames must be at least 1";
+  else if (!(fps > 0 && fps <= 1000))
+    *why = "--fps must be in (0, 1000]";
+  else if (out.empty())
+    *why = "--out is required";
+  else
+    return true;
   return false;
 }
 
@@ -37,38 +41,48 @@ std::string RenderToFiles(const RenderCommandOptions& o) {
 }
 
 int RunRender(int argc, char** argv) {
-  CLI::App app{"Render synthetic side-view frames of a nozzle tip and strand with exact ground truth.",
-               "clogscope render"};
+  CLI::App app{
+      "Render synthetic side-view frames of a nozzle tip and strand with exact ground truth.",
+      "clogscope render"};
   RenderCommandOptions o;
   vision::SceneParams& s = o.scene;
   bool silhouette = false;
-  app.add_option("--out", o.out, "Output: a directory (PNG frames) or a .avi (MJPEG) / .mp4 (H.264) file")
+  app.add_option("--out", o.out,
+                 "Output: a directory (PNG frames) or a .avi (MJPEG) / .mp4 (H.264) file")
       ->required();
-  app.add_option("--truth", o.truth_path, "Ground-truth JSON (default: DIR/truth.json or NAME.truth.json)");
+  app.add_option("--truth", o.truth_path,
+                 "Ground-truth JSON (default: DIR/truth.json or NAME.truth.json)");
   app.add_option("--frames", o.frames, "Number of frames")->capture_default_str();
   app.add_option("--fps", o.fps, "Video frame rate")->capture_default_str();
-  app.add_option("--size", [&s](const CLI::results_t& r) {
-        return ParseSize(r[0], &s.width_px, &s.height_px);
-      }, "Frame size WxH in px (default 1280x720)");
+  app.add_option(
+      "--size",
+      [&s](const CLI::results_t& r) { return ParseSize(r[0], &s.width_px, &s.height_px); },
+      "Frame size WxH in px (default 1280x720)");
   app.add_option("--scale-um-per-px", s.scale_um_per_px, "Pixel scale")->capture_default_str();
   app.add_option("--strand-width-um", s.strand_width_um, "Strand width")->capture_default_str();
   app.add_option("--tip-x-px", s.tip_x_px, "Nozzle tip x")->capture_default_str();
   app.add_option("--tip-y-px", s.tip_y_px, "Nozzle tip y")->capture_default_str();
-  app.add_option("--tilt-deg", s.tilt_deg, "Scene and strand axis tilt (+: strand leans to +x going down)")
+  app.add_option("--tilt-deg", s.tilt_deg,
+                 "Scene and strand axis tilt (+: strand leans to +x going down)")
       ->capture_default_str();
   app.add_option("--blur-px", s.blur_sigma_px, "Gaussian PSF sigma")->capture_default_str();
-  app.add_option("--noise", s.noise_sigma, "Sensor noise sigma, grey levels")->capture_default_str();
-  app.add_option("--background", s.background_level, "Background grey level")->capture_default_str();
+  app.add_option("--noise", s.noise_sigma, "Sensor noise sigma, grey levels")
+      ->capture_default_str();
+  app.add_option("--background", s.background_level, "Background grey level")
+      ->capture_default_str();
   app.add_option("--strand-level", s.strand_level, "Strand grey level")->capture_default_str();
   app.add_flag("--silhouette", silhouette, "Dark strand on a backlight (sets the grey levels)");
   app.add_flag("--highlight", s.highlight, "Add a specular highlight stripe inside the strand");
-  app.add_option("--gradient", s.gradient_fraction, "Illumination change across the frame diagonal (0.3 = 30 %)")
+  app.add_option("--gradient", s.gradient_fraction,
+                 "Illumination change across the frame diagonal (0.3 = 30 %)")
       ->capture_default_str();
-  app.add_option("--gradient-angle-deg", s.gradient_angle_deg, "Direction of the illumination gradient")
+  app.add_option("--gradient-angle-deg", s.gradient_angle_deg,
+                 "Direction of the illumination gradient")
       ->capture_default_str();
   app.add_flag("--bed", s.bed, "Add a print bed below the tip");
   app.add_option("--bed-gap-um", s.bed_gap_um, "Bed distance below the tip")->capture_default_str();
-  app.add_option("--sway-deg", s.sway_deg, "Per-frame sigma of the strand axis angle")->capture_default_str();
+  app.add_option("--sway-deg", s.sway_deg, "Per-frame sigma of the strand axis angle")
+      ->capture_default_str();
   app.add_option("--width-jitter-um", s.width_jitter_um, "Per-frame sigma of the strand width")
       ->capture_default_str();
   app.add_flag("--colour,--color", s.colour, "BGR frames with an orange tint");

@@ -26,7 +26,8 @@ struct CsvTable {
   int Column(const std::string& name) const;
 };
 
-// Parses CSV text; throws std::invalid_argument naming `source_name` and the line on a malformed row.
+// Parses CSV text; throws std::invalid_argument naming `source_name` and the line on a malformed
+// row.
 CsvTable ParseCsv(const std::string& text, const std::string& source_name);
 
 }  // namespace clogscope

@@ -1,8 +1,7 @@
 #include "vision/edge_fit.h"
 
-#include <cmath>
-
 #include <Eigen/Dense>
+#include <cmath>
 
 namespace clogscope::vision {
 namespace {

@@ -3,11 +3,10 @@
 #include <algorithm>
 #include <deque>
 #include <filesystem>
-#include <stdexcept>
-#include <vector>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
+#include <stdexcept>
+#include <vector>
 
 #include "vision/video_io.h"
 

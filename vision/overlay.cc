@@ -1,9 +1,9 @@
 #include "vision/overlay.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
-
-#include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
 
 namespace clogscope::vision {

@@ -1,12 +1,12 @@
 #include "vision/strand_measure.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <stdexcept>
-
-#include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
+#include <stdexcept>
 
 #include "vision/edge_fit.h"
 
@@ -14,8 +14,8 @@ namespace clogscope::vision {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
-constexpr int kGridStride = 4;   // sub-sampling of the coarse search, px
-constexpr int kMinRunPx = 3;     // shorter object runs are noise
+constexpr int kGridStride = 4;  // sub-sampling of the coarse search, px
+constexpr int kMinRunPx = 3;    // shorter object runs are noise
 
 double Median(std::vector<double> v) {
   if (v.empty()) return 0;
@@ -63,7 +63,8 @@ struct GreyImage {
   const cv::Mat& m;
   bool is16;
   float At(int x, int y) const {
-    return is16 ? static_cast<float>(m.ptr<uint16_t>(y)[x]) : static_cast<float>(m.ptr<uint8_t>(y)[x]);
+    return is16 ? static_cast<float>(m.ptr<uint16_t>(y)[x])
+                : static_cast<float>(m.ptr<uint8_t>(y)[x]);
   }
   // Bilinear, inside the image only (caller checks).
   float Bilinear(double x, double y) const {
@@ -127,7 +128,8 @@ bool SplitLevels(const GreyImage& img, Polarity forced, double full_scale, Level
   const double m_hi = (sum_all - s_lo) / n_hi * scale;
   Polarity pol = forced;
   // The background fills most of a side view; the strand, nozzle and bed are the minority class.
-  if (pol == Polarity::kAuto) pol = n_lo >= n_hi ? Polarity::kBrightOnDark : Polarity::kDarkOnBright;
+  if (pol == Polarity::kAuto)
+    pol = n_lo >= n_hi ? Polarity::kBrightOnDark : Polarity::kDarkOnBright;
   out->polarity = pol;
   out->background = pol == Polarity::kBrightOnDark ? m_lo : m_hi;
   out->object = pol == Polarity::kBrightOnDark ? m_hi : m_lo;
@@ -189,7 +191,8 @@ bool FindStrandRows(const std::vector<RowRun>& rows, int roi_width, double max_t
       std::vector<double> widths;
       for (const auto& r : current) widths.push_back(r.run.width());
       const double w = Median(widths);
-      if (w < best_width - 1e-9 || (std::abs(w - best_width) < 1e-9 && current.size() > best->size())) {
+      if (w < best_width - 1e-9 ||
+          (std::abs(w - best_width) < 1e-9 && current.size() > best->size())) {
         best_width = w;
         *best = current;
       }
@@ -221,26 +224,32 @@ struct Frame2D {
 // In this frame the across-axis unit vector is n = (dy, -dx), so u grows to the right of a
 // downward axis; s grows down the strand.
 
+// Where a walk along a line parallel to the axis stopped: at object pixels (hit) or where it left
+// the image.
+struct ScanEnd {
+  double s = NAN;
+  bool hit = false;
+};
+
 // Walks along a line parallel to the axis at offset u from s_from in steps of dir (±1 px) until it
-// reaches object pixels; returns the interpolated crossing s, or NaN when it leaves the image.
-double ScanForObject(const GreyImage& img, const Frame2D& f, const Levels& lv, double u,
-                     double s_from, double dir) {
+// reaches object pixels (interpolated crossing) or leaves the image.
+ScanEnd ScanForObject(const GreyImage& img, const Frame2D& f, const Levels& lv, double u,
+                      double s_from, double dir) {
   const bool bright = lv.polarity == Polarity::kBrightOnDark;
   const double thr = lv.threshold;
   double prev_v = NAN;
-  for (int i = 0; i < 100000; ++i) {
+  for (int i = 0;; ++i) {
     const double s = s_from + dir * i;
     const double x = f.ImageX(s, u), y = f.ImageY(s, u);
-    if (!img.InsideForBilinear(x, y)) return NAN;
+    if (!img.InsideForBilinear(x, y)) return {s - dir, false};
     const double v = img.Bilinear(x, y);
     if ((v > thr) == bright) {
-      if (std::isnan(prev_v)) return NAN;  // started inside an object: no clean crossing
+      if (std::isnan(prev_v)) return {};  // started inside an object: no clean crossing
       const double frac = (thr - prev_v) / (v - prev_v);
-      return s - dir + dir * frac;
+      return {s - dir + dir * frac, true};
     }
     prev_v = v;
   }
-  return NAN;
 }
 
 struct EdgeWindow {
@@ -294,17 +303,28 @@ bool GatherEdgeSamples(const GreyImage& img, const Frame2D& f, double s0, double
 
 const char* FrameStatusName(FrameStatus status) {
   switch (status) {
-    case FrameStatus::kValid: return "";
-    case FrameStatus::kUnreadable: return "unreadable";
-    case FrameStatus::kNoStrand: return "no_strand";
-    case FrameStatus::kNoTip: return "no_tip";
-    case FrameStatus::kTouchesBorder: return "touches_border";
-    case FrameStatus::kBandOutsideFrame: return "band_outside_frame";
-    case FrameStatus::kLowContrast: return "low_contrast";
-    case FrameStatus::kOutOfFocus: return "out_of_focus";
-    case FrameStatus::kSaturated: return "saturated";
-    case FrameStatus::kOccluded: return "occluded";
-    case FrameStatus::kWidthOutlier: return "width_outlier";
+    case FrameStatus::kValid:
+      return "";
+    case FrameStatus::kUnreadable:
+      return "unreadable";
+    case FrameStatus::kNoStrand:
+      return "no_strand";
+    case FrameStatus::kNoTip:
+      return "no_tip";
+    case FrameStatus::kTouchesBorder:
+      return "touches_border";
+    case FrameStatus::kBandOutsideFrame:
+      return "band_outside_frame";
+    case FrameStatus::kLowContrast:
+      return "low_contrast";
+    case FrameStatus::kOutOfFocus:
+      return "out_of_focus";
+    case FrameStatus::kSaturated:
+      return "saturated";
+    case FrameStatus::kOccluded:
+      return "occluded";
+    case FrameStatus::kWidthOutlier:
+      return "width_outlier";
   }
   return "?";
 }
@@ -316,7 +336,8 @@ bool StrandMeasureOptions::Validate(std::string* why) const {
   };
   if (roi.x < 0 || roi.y < 0 || roi.width < 0 || roi.height < 0)
     return fail("roi must have non-negative x, y, width and height");
-  if (!roi.empty() && (roi.width < 16 || roi.height < 16)) return fail("roi must be at least 16x16 px");
+  if (!roi.empty() && (roi.width < 16 || roi.height < 16))
+    return fail("roi must be at least 16x16 px");
   if (!(band_start_px >= 0)) return fail("band start must not be negative");
   if (!(band_height_px >= 4)) return fail("band height must be at least 4 px");
   if (!(caliper_spacing_px >= 1 && caliper_spacing_px <= band_height_px))
@@ -364,13 +385,15 @@ StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions
                             std::abs(lv.object - lv.background), min_contrast));
 
   // 2. Coarse strand: rows of constant width; its axis by a line fit through the run centres. In
-  // auto mode the other polarity is tried too: a bed can fill more of the frame than the background.
+  // auto mode the other polarity is tried too: a bed can fill more of the frame than the
+  // background.
   std::vector<RowRun> strand_rows;
   const bool auto_polarity = opt.polarity == Polarity::kAuto;
-  if (!FindStrandRows(LongestRuns(img, lv, false), img.m.cols, opt.max_tilt_deg, &strand_rows) && auto_polarity) {
+  if (!FindStrandRows(LongestRuns(img, lv, false), img.m.cols, opt.max_tilt_deg, &strand_rows) &&
+      auto_polarity) {
     std::swap(lv.background, lv.object);
-    lv.polarity = lv.polarity == Polarity::kBrightOnDark ? Polarity::kDarkOnBright
-                                                         : Polarity::kBrightOnDark;
+    lv.polarity =
+        lv.polarity == Polarity::kBrightOnDark ? Polarity::kDarkOnBright : Polarity::kBrightOnDark;
     if (!FindStrandRows(LongestRuns(img, lv, false), img.m.cols, opt.max_tilt_deg, &strand_rows)) {
       std::swap(lv.background, lv.object);
       lv.polarity = lv.polarity == Polarity::kBrightOnDark ? Polarity::kDarkOnBright
@@ -401,7 +424,8 @@ StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions
   const double y_top = strand_rows.front().y, y_bottom = strand_rows.back().y;
   Frame2D f{x_at + slope * y_top, y_top, std::sin(theta0), std::cos(theta0)};
   // Scans start from the middle of the strand rows: in the axis frame the nozzle face and a bed are
-  // at constant s, so beside the strand at that s there is background even when the scene is tilted.
+  // at constant s, so beside the strand at that s there is background even when the scene is
+  // tilted.
   const double s_mid = 0.5 * (y_bottom - y_top) / std::cos(theta0);
 
   // 3. Tip: walk up beside the strand, on both sides, to the nozzle's face; walk down for a bed.
@@ -410,13 +434,14 @@ StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions
   double s_tip = 0, s_end = 1e30;
   for (int side = 0; side < 2; ++side) {
     const double u = side == 0 ? -side_u : side_u;
-    const double tip_hit = ScanForObject(img, f, lv, u, s_mid, -1.0);
-    const double end_hit = ScanForObject(img, f, lv, u, s_mid, +1.0);
-    if (!std::isnan(tip_hit)) {
-      s_tip += tip_hit;
+    const ScanEnd tip = ScanForObject(img, f, lv, u, s_mid, -1.0);
+    const ScanEnd end = ScanForObject(img, f, lv, u, s_mid, +1.0);
+    if (tip.hit) {
+      s_tip += tip.s;
       ++n_tip;
     }
-    if (!std::isnan(end_hit)) s_end = std::min(s_end, end_hit);
+    // Below the strand: a bed or obstacle, or the frame's edge, ends the band.
+    if (!std::isnan(end.s)) s_end = std::min(s_end, end.s);
   }
   if (n_tip == 0) return fail(FrameStatus::kNoTip, "no nozzle tip above the strand");
   s_tip /= n_tip;
@@ -430,7 +455,7 @@ StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions
   // exact across-axis distance (no interpolation, which would blur and bias the edge).
   const double band_s0 = opt.band_start_px;
   double band_s1 = opt.band_start_px + opt.band_height_px;
-  const double end_margin = 10.0;
+  const double end_margin = 10.0;  // > 3 blur sigma + caliper window at the usual blur
   if (s_end - end_margin < band_s1) band_s1 = s_end - end_margin;
   if (band_s1 - band_s0 < std::max(3.0 * opt.caliper_spacing_px, 0.3 * opt.band_height_px)) {
     return fail(FrameStatus::kBandOutsideFrame,
@@ -503,13 +528,15 @@ StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions
     }
     if (n < 2) break;
     const double var_s = sss - ss * ss / n;
-    const double new_slope = var_s > 1e-9 ? ((sls - sl * ss / n) + (srs - sr * ss / n)) / (2 * var_s) : 0.0;
+    const double new_slope =
+        var_s > 1e-9 ? ((sls - sl * ss / n) + (srs - sr * ss / n)) / (2 * var_s) : 0.0;
     const double new_left = (sl - new_slope * ss) / n;
     const double new_right = (sr - new_slope * ss) / n;
     const double new_sigma = Median(sigmas);
     const double s_mid = 0.5 * (band_s0 + band_s1);
-    const bool recentre = std::abs(new_left + new_slope * s_mid - (left_guess + slope_guess * s_mid)) > 1.0 ||
-                          std::abs(new_right + new_slope * s_mid - (right_guess + slope_guess * s_mid)) > 1.0;
+    const bool recentre =
+        std::abs(new_left + new_slope * s_mid - (left_guess + slope_guess * s_mid)) > 1.0 ||
+        std::abs(new_right + new_slope * s_mid - (right_guess + slope_guess * s_mid)) > 1.0;
     const bool widen = 3.5 * new_sigma + 4.0 > 1.25 * outer;
     left_guess = new_left;
     right_guess = new_right;
@@ -517,7 +544,8 @@ StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions
     sigma_guess = new_sigma;
     if (!(recentre || widen)) break;
   }
-  if (border) return fail(FrameStatus::kTouchesBorder, "edge windows reach the frame or ROI border");
+  if (border)
+    return fail(FrameStatus::kTouchesBorder, "edge windows reach the frame or ROI border");
   if (total_samples > 0 && total_saturated > opt.max_saturated_fraction * total_samples) {
     return fail(FrameStatus::kSaturated,
                 fmt::format("{} of {} edge pixels clipped", total_saturated, total_samples));
@@ -586,8 +614,7 @@ StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions
     return fail(FrameStatus::kOutOfFocus,
                 fmt::format("edge blur {:.2f} px above {:.2f} px", m.blur_px, opt.max_blur_px));
   if (used < opt.min_caliper_fraction * n_cal)
-    return fail(FrameStatus::kOccluded,
-                fmt::format("{} of {} calipers consistent", used, n_cal));
+    return fail(FrameStatus::kOccluded, fmt::format("{} of {} calipers consistent", used, n_cal));
   m.status = FrameStatus::kValid;
   m.detail.clear();
   return m;

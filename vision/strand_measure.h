@@ -1,9 +1,8 @@
 #pragma once
 
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "vision/synthetic.h"
 
@@ -17,11 +16,11 @@ struct StrandMeasureOptions {
   // 50 µm and 150 µm at the nominal 3 µm/px.
   double band_start_px = 50.0 / 3.0;
   double band_height_px = 50.0;
-  double caliper_spacing_px = 4.0;       // thickness of one caliper along the axis
-  double min_contrast_fraction = 0.06;   // edge step below this fraction of full scale: low contrast
-  double max_blur_px = 6.0;              // fitted PSF sigma above this: out of focus
-  double max_tilt_deg = 45.0;            // strand axes leaning more than this are not strands
-  double min_caliper_fraction = 0.5;     // fewer consistent calipers than this: occluded
+  double caliper_spacing_px = 4.0;      // thickness of one caliper along the axis
+  double min_contrast_fraction = 0.06;  // edge step below this fraction of full scale: low contrast
+  double max_blur_px = 6.0;             // fitted PSF sigma above this: out of focus
+  double max_tilt_deg = 45.0;           // strand axes leaning more than this are not strands
+  double min_caliper_fraction = 0.5;    // fewer consistent calipers than this: occluded
   double max_saturated_fraction = 0.05;  // more clipped pixels at the edges than this: saturated
 
   bool Validate(std::string* why) const;
@@ -45,12 +44,12 @@ const char* FrameStatusName(FrameStatus status);
 
 // One caliper: a thin slab across the strand. Positions are across (u) and along (s) the axis.
 struct Caliper {
-  double s_px = 0;        // slab centre below the tip
-  double left_u_px = 0;   // fitted edges
+  double s_px = 0;       // slab centre below the tip
+  double left_u_px = 0;  // fitted edges
   double right_u_px = 0;
-  double width_px = 0;    // perpendicular width (edges corrected for the axis tilt)
-  bool fitted = false;    // both edges fitted
-  bool inlier = false;    // used in the frame's width
+  double width_px = 0;  // perpendicular width (edges corrected for the axis tilt)
+  bool fitted = false;  // both edges fitted
+  bool inlier = false;  // used in the frame's width
 };
 
 // The result for one frame. Geometry is in full-frame pixel coordinates (ROI offset added).

@@ -1,14 +1,14 @@
 #include "vision/synthetic.h"
 
-#include <filesystem>
-#include <cmath>
-#include <random>
-#include <stdexcept>
-
 #include <fmt/format.h>
+
+#include <cmath>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
+#include <random>
+#include <stdexcept>
 
 #include "common/atomic_file.h"
 #include "vision/edge_profile.h"
@@ -139,14 +139,12 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
   const double phi = p.nozzle_cone_half_angle_deg * kDegToRad;
   const SoftHalfPlane nozzle_face{{-d_scene.x, -d_scene.y}, 0.0};
   // Right flank: inside when (half_tip - s tan(phi) - u) cos(phi) > 0.
-  const SoftHalfPlane nozzle_right{
-      {-std::cos(phi) * n_scene.x - std::sin(phi) * d_scene.x,
-       -std::cos(phi) * n_scene.y - std::sin(phi) * d_scene.y},
-      -half_tip * std::cos(phi)};
-  const SoftHalfPlane nozzle_left{
-      {std::cos(phi) * n_scene.x - std::sin(phi) * d_scene.x,
-       std::cos(phi) * n_scene.y - std::sin(phi) * d_scene.y},
-      -half_tip * std::cos(phi)};
+  const SoftHalfPlane nozzle_right{{-std::cos(phi) * n_scene.x - std::sin(phi) * d_scene.x,
+                                    -std::cos(phi) * n_scene.y - std::sin(phi) * d_scene.y},
+                                   -half_tip * std::cos(phi)};
+  const SoftHalfPlane nozzle_left{{std::cos(phi) * n_scene.x - std::sin(phi) * d_scene.x,
+                                   std::cos(phi) * n_scene.y - std::sin(phi) * d_scene.y},
+                                  -half_tip * std::cos(phi)};
 
   const double ga = p.gradient_angle_deg * kDegToRad;
   const Vec2 g_dir{std::cos(ga), std::sin(ga)};
@@ -248,8 +246,7 @@ std::string TruthToJson(const SceneParams& p, const std::vector<FrameTruth>& tru
 }
 
 std::vector<FrameTruth> RenderSequence(const SceneParams& p, int frame_count, double fps,
-                                       const std::string& out_path,
-                                       const std::string& truth_path) {
+                                       const std::string& out_path, const std::string& truth_path) {
   std::string why;
   if (!p.Validate(&why)) throw std::invalid_argument("scene: " + why);
   if (frame_count < 1) throw std::invalid_argument("--frames: must be at least 1");
@@ -257,7 +254,8 @@ std::vector<FrameTruth> RenderSequence(const SceneParams& p, int frame_count, do
   std::vector<FrameTruth> truth;
   const VideoKind kind = VideoKindForPath(out_path);
   if (kind != VideoKind::kNone) {
-    if (p.bit_depth != 8) throw std::invalid_argument(out_path + ": video output needs bit_depth 8");
+    if (p.bit_depth != 8)
+      throw std::invalid_argument(out_path + ": video output needs bit_depth 8");
     VideoFileWriter writer(out_path, kind, fps, cv::Size(p.width_px, p.height_px));
     for (int i = 0; i < frame_count; ++i) {
       FrameTruth t;

@@ -1,16 +1,15 @@
 #pragma once
 
 #include <cstdint>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 namespace clogscope::vision {
 
 // Which way the strand differs from the background.
 enum class Polarity {
-  kAuto,         // measurement only: decide from the frame
+  kAuto,          // measurement only: decide from the frame
   kBrightOnDark,  // lit strand on a dark background
   kDarkOnBright,  // silhouette on a backlight
 };
@@ -21,8 +20,8 @@ Polarity ParsePolarity(const std::string& name);
 // A side view of a nozzle tip and the strand below it, with exactly known geometry.
 //
 // Image frame: x to the right, y down, pixel centres at integer coordinates. The scene is tilted by
-// tilt_deg about the nozzle tip; the strand axis leans by tilt_deg (+ per-frame sway), positive when
-// the strand moves to +x going down.
+// tilt_deg about the nozzle tip; the strand axis leans by tilt_deg (+ per-frame sway), positive
+// when the strand moves to +x going down.
 struct SceneParams {
   int width_px = 1280;
   int height_px = 720;
@@ -31,8 +30,8 @@ struct SceneParams {
   double tip_x_px = 640.0;
   double tip_y_px = 240.0;
   double tilt_deg = 0.0;
-  double blur_sigma_px = 1.5;   // Gaussian PSF
-  double noise_sigma = 3.0;     // sensor noise, grey levels (8-bit scale)
+  double blur_sigma_px = 1.5;      // Gaussian PSF
+  double noise_sigma = 3.0;        // sensor noise, grey levels (8-bit scale)
   double background_level = 40.0;  // grey levels (8-bit scale)
   double strand_level = 200.0;
   double nozzle_level = 150.0;
@@ -46,7 +45,8 @@ struct SceneParams {
   double highlight_offset_fraction = -0.2;  // stripe centre from the axis, in strand widths
   double highlight_width_fraction = 0.12;   // stripe width, in strand widths
   double highlight_gain = 45.0;             // grey levels added at the stripe
-  // Print bed (perpendicular to the scene axis) bed_gap_um below the tip; hides the strand below it.
+  // Print bed (perpendicular to the scene axis) bed_gap_um below the tip; hides the strand below
+  // it.
   bool bed = false;
   double bed_gap_um = 200.0;
   // Nozzle: a flat tip face nozzle_tip_width_um wide, flanks opening upward at the cone angle.

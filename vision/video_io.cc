@@ -3,11 +3,10 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
-#include <stdexcept>
-#include <vector>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <stdexcept>
+#include <vector>
 
 #include "common/atomic_file.h"
 
@@ -15,7 +14,8 @@ namespace clogscope::vision {
 namespace {
 std::string LowerExtension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   return ext;
 }
 }  // namespace
@@ -39,16 +39,17 @@ bool IsVideoPath(const std::string& path) {
          ext == ".mpeg" || ext == ".h264" || ext == ".264";
 }
 
-VideoFileWriter::VideoFileWriter(const std::string& path, VideoKind kind, double fps,
-                                 cv::Size size)
+VideoFileWriter::VideoFileWriter(const std::string& path, VideoKind kind, double fps, cv::Size size)
     : path_(path) {
   // The temporary name keeps the extension: FFmpeg picks the container from it.
   std::filesystem::path p(path);
-  temp_path_ = (p.parent_path() / (p.stem().string() + ".partial" + p.extension().string())).string();
+  temp_path_ =
+      (p.parent_path() / (p.stem().string() + ".partial" + p.extension().string())).string();
   if (!(fps > 0)) throw std::invalid_argument(path + ": frame rate must be positive");
   const int fourcc = kind == VideoKind::kMjpegAvi ? cv::VideoWriter::fourcc('M', 'J', 'P', 'G')
                                                   : cv::VideoWriter::fourcc('a', 'v', 'c', '1');
-  // Always a colour stream: grey input is expanded in Write(), which every codec and player accepts.
+  // Always a colour stream: grey input is expanded in Write(), which every codec and player
+  // accepts.
   writer_.open(temp_path_, cv::CAP_FFMPEG, fourcc, fps, size, true);
   if (!writer_.isOpened()) {
     throw std::invalid_argument(path + ": cannot open a video encoder for this file type");

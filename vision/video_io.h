@@ -1,16 +1,16 @@
 #pragma once
 
 #include <memory>
-#include <string>
-
 #include <opencv2/core.hpp>
 #include <opencv2/videoio.hpp>
+#include <string>
 
 namespace clogscope::vision {
 
 enum class VideoKind { kNone, kMjpegAvi, kH264Mp4 };
 
-// kMjpegAvi for ".avi", kH264Mp4 for ".mp4"/".m4v"/".mov"/".mkv", otherwise kNone (case-insensitive).
+// kMjpegAvi for ".avi", kH264Mp4 for ".mp4"/".m4v"/".mov"/".mkv", otherwise kNone
+// (case-insensitive).
 VideoKind VideoKindForPath(const std::string& path);
 
 // True for the file extensions `measure` reads as images.

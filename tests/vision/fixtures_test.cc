@@ -1,0 +1,56 @@
+// Measures the committed fixture frames (testdata/README.md says how they were rendered) against
+// their committed truth: guards the detector against changes in the renderer or the measurement.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "vision/frame_source.h"
+#include "vision/strand_measure.h"
+
+namespace clogscope::vision {
+namespace {
+
+namespace fs = std::filesystem;
+const fs::path kData = CLOGSCOPE_TESTDATA_DIR;
+
+void CheckAgainstTruth(const std::string& input, const std::string& truth_file, double tol_px,
+                       double tol_deg = 0.2) {
+  std::ifstream in(kData / truth_file);
+  ASSERT_TRUE(in) << truth_file;
+  const auto truth = nlohmann::json::parse(in);
+  const double scale = truth["scene"]["scale_um_per_px"].get<double>();
+  StrandMeasureOptions opt;
+  opt.band_start_px = 50.0 / scale;
+  opt.band_height_px = 150.0 / scale;
+  auto src = FrameSource::Open((kData / input).string());
+  InputFrame f;
+  int n = 0;
+  while (src->Next(&f)) {
+    const StrandMeasurement m = MeasureStrand(f.image, opt);
+    const double expected = truth["frames"][f.index]["width_px"].get<double>();
+    ASSERT_TRUE(m.valid()) << input << " frame " << f.index << ": " << m.detail;
+    EXPECT_NEAR(m.width_px, expected, tol_px) << input << " frame " << f.index;
+    EXPECT_NEAR(m.angle_deg, truth["frames"][f.index]["angle_deg"].get<double>(), tol_deg);
+    ++n;
+  }
+  EXPECT_EQ(n, static_cast<int>(truth["frames"].size()));
+}
+
+TEST(FixturesTest, BrightTilted) {
+  CheckAgainstTruth("frames/bright_tilt5.png", "frames/bright_tilt5.json", 0.1);
+}
+TEST(FixturesTest, SilhouetteHighlightGradient) {
+  CheckAgainstTruth("frames/silhouette_tilt-12.png", "frames/silhouette_tilt-12.json", 0.1);
+}
+TEST(FixturesTest, ColourWithBed) {
+  CheckAgainstTruth("frames/colour_bed.png", "frames/colour_bed.json", 0.1);
+}
+TEST(FixturesTest, H264WithJitterAndSway) {
+  // The band is 50 px tall: compression noise moves its edges' slope by up to ~0.3°.
+  CheckAgainstTruth("video/jitter_sway.mp4", "video/jitter_sway.truth.json", 0.15, 0.5);
+}
+
+}  // namespace
+}  // namespace clogscope::vision

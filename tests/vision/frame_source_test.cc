@@ -1,0 +1,122 @@
+#include "vision/frame_source.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+
+#include "common/atomic_file.h"
+#include "vision/batch.h"
+#include "vision/synthetic.h"
+
+namespace clogscope::vision {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path FreshDir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("clogscope_fs_" + name);
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+SceneParams SmallScene() {
+  SceneParams p;
+  p.width_px = 400;
+  p.height_px = 300;
+  p.tip_x_px = 200;
+  p.tip_y_px = 80;
+  return p;
+}
+
+std::string MessageOf(const std::string& path) {
+  try {
+    FrameSource::Open(path);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(FrameSourceTest, BadPathsNameThePathAndTheProblem) {
+  const fs::path dir = FreshDir("bad");
+  EXPECT_NE(MessageOf((dir / "missing.mp4").string()).find("no such file"), std::string::npos);
+  EXPECT_NE(MessageOf(dir.string()).find("holds no images"), std::string::npos);
+  WriteFileAtomically((dir / "corrupt.png").string(), "definitely not a png");
+  const std::string msg = MessageOf((dir / "corrupt.png").string());
+  EXPECT_NE(msg.find("corrupt.png"), std::string::npos);
+  EXPECT_NE(msg.find("cannot decode"), std::string::npos);
+  WriteFileAtomically((dir / "empty.mp4").string(), "");
+  EXPECT_NE(MessageOf((dir / "empty.mp4").string()).find("empty.mp4"), std::string::npos);
+  WriteFileAtomically((dir / "notes.txt").string(), "hello");
+  EXPECT_NE(MessageOf((dir / "notes.txt").string()).find("neither"), std::string::npos);
+}
+
+TEST(FrameSourceTest, DirectoryIsSortedAndBadImagesAreReportedNotFatal) {
+  const fs::path dir = FreshDir("dir");
+  const SceneParams p = SmallScene();
+  for (int i : {2, 0, 1}) {
+    cv::imwrite((dir / ("f" + std::to_string(i) + ".png")).string(), RenderFrame(p, i, nullptr));
+  }
+  WriteFileAtomically((dir / "f1b.png").string(), "garbage");
+  auto src = FrameSource::Open(dir.string());
+  EXPECT_EQ(src->expected_frames(), 4);
+  std::vector<std::string> names;
+  std::vector<bool> ok;
+  InputFrame f;
+  while (src->Next(&f)) {
+    names.push_back(fs::path(f.source).filename().string());
+    ok.push_back(!f.image.empty());
+  }
+  EXPECT_EQ(names, (std::vector<std::string>{"f0.png", "f1.png", "f1b.png", "f2.png"}));
+  EXPECT_EQ(ok, (std::vector<bool>{true, true, false, true}));
+}
+
+TEST(FrameSourceTest, SixteenBitAndColourImagesAreRead) {
+  const fs::path dir = FreshDir("depth");
+  SceneParams p = SmallScene();
+  p.bit_depth = 16;
+  cv::imwrite((dir / "deep.png").string(), RenderFrame(p, 0, nullptr));
+  p.bit_depth = 8;
+  p.colour = true;
+  cv::imwrite((dir / "colour.png").string(), RenderFrame(p, 0, nullptr));
+  InputFrame f;
+  auto deep = FrameSource::Open((dir / "deep.png").string());
+  ASSERT_TRUE(deep->Next(&f));
+  EXPECT_EQ(f.image.type(), CV_16UC1);
+  auto colour = FrameSource::Open((dir / "colour.png").string());
+  ASSERT_TRUE(colour->Next(&f));
+  EXPECT_EQ(f.image.type(), CV_8UC3);
+}
+
+TEST(FrameSourceTest, DamagedVideoKeepsGoingInOrder) {
+  const fs::path dir = FreshDir("damaged");
+  const std::string path = (dir / "v.avi").string();
+  RenderSequence(SmallScene(), 20, 25.0, path, "");
+  // Overwrite a stretch in the middle of the file with zeros.
+  {
+    std::fstream io(path, std::ios::in | std::ios::out | std::ios::binary);
+    io.seekp(0, std::ios::end);
+    const auto size = static_cast<long>(io.tellp());
+    io.seekp(size / 2);
+    const std::string zeros(size / 10, '\0');
+    io.write(zeros.data(), zeros.size());
+  }
+  auto src = FrameSource::Open(path);
+  StrandMeasureOptions opt;
+  opt.band_start_px = 10;
+  opt.band_height_px = 40;
+  int expected_index = 0, valid = 0;
+  const int n = MeasureFrames(*src, opt, [&](InputFrame& f, StrandMeasurement& m) {
+    EXPECT_EQ(f.index, expected_index++);
+    valid += m.valid();
+    if (f.image.empty()) EXPECT_EQ(m.status, FrameStatus::kUnreadable);
+  });
+  EXPECT_GE(n, 10);
+  EXPECT_GE(valid, 10);
+}
+
+}  // namespace
+}  // namespace clogscope::vision
