@@ -150,29 +150,39 @@ struct RowRun {
 
 // The longest object run of each sampled row; runs touching the left or right border are skipped
 // unless allow_border (a strand is never cut by the border when it can be measured).
-std::vector<RowRun> LongestRuns(const GreyImage& img, const Levels& lv, bool allow_border) {
+template <typename Pixel>
+std::vector<RowRun> LongestRunsT(const cv::Mat& m, const Levels& lv, bool allow_border) {
   std::vector<RowRun> rows;
   const bool bright = lv.polarity == Polarity::kBrightOnDark;
-  const float thr = static_cast<float>(lv.threshold);
-  for (int y = kGridStride / 2; y < img.m.rows; y += kGridStride) {
+  // Integer compare against the threshold: v > thr <=> v >= floor(thr) + 1.
+  const int above = static_cast<int>(std::floor(lv.threshold)) + 1;
+  for (int y = kGridStride / 2; y < m.rows; y += kGridStride) {
+    const Pixel* row = m.ptr<Pixel>(y);
     Run best;
     int best_w = 0;
     int start = -1;
-    for (int x = 0; x <= img.m.cols; ++x) {
-      const bool obj = x < img.m.cols && ((img.At(x, y) > thr) == bright);
-      if (obj && start < 0) start = x;
-      if (!obj && start >= 0) {
-        const bool at_border = start == 0 || x == img.m.cols;
-        if (x - start > best_w && (allow_border || !at_border)) {
-          best_w = x - start;
-          best = {start, x - 1};
-        }
-        start = -1;
+    for (int x = 0; x <= m.cols; ++x) {
+      const bool obj = x < m.cols && ((row[x] >= above) == bright);
+      if (obj == (start >= 0)) continue;
+      if (obj) {
+        start = x;
+        continue;
       }
+      const bool at_border = start == 0 || x == m.cols;
+      if (x - start > best_w && (allow_border || !at_border)) {
+        best_w = x - start;
+        best = {start, x - 1};
+      }
+      start = -1;
     }
     if (best_w >= kMinRunPx) rows.push_back({y, best});
   }
   return rows;
+}
+
+std::vector<RowRun> LongestRuns(const GreyImage& img, const Levels& lv, bool allow_border) {
+  return img.is16 ? LongestRunsT<uint16_t>(img.m, lv, allow_border)
+                  : LongestRunsT<uint8_t>(img.m, lv, allow_border);
 }
 
 // The strand: the narrowest stretch of consecutive sampled rows whose object run keeps its width

@@ -1,0 +1,199 @@
+// clogscope_bench: the speed and accuracy figures quoted in issue closing notes.
+//   clogscope_bench [measure|accuracy|video|all]   (default all)
+// Prints Markdown tables. Timings are wall-clock on this machine; run on an idle machine.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <fmt/format.h>
+#include <opencv2/core.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "vision/batch.h"
+#include "vision/frame_source.h"
+#include "vision/strand_measure.h"
+#include "vision/synthetic.h"
+
+namespace {
+
+using clogscope::vision::FrameTruth;
+using clogscope::vision::MeasureStrand;
+using clogscope::vision::SceneParams;
+using clogscope::vision::StrandMeasureOptions;
+using Clock = std::chrono::steady_clock;
+
+double Seconds(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
+
+// Single-core throughput of MeasureStrand on 720p frames.
+void BenchMeasure() {
+  fmt::print("\n## Measurement alone, 1280x720, one core\n\n| frames | frames/s | ms/frame |\n|---|---|---|\n");
+  for (bool colour : {false, true}) {
+    SceneParams p;
+    p.colour = colour;
+    p.width_jitter_um = 2;
+    std::vector<cv::Mat> frames;
+    for (int i = 0; i < 16; ++i) frames.push_back(RenderFrame(p, i, nullptr));
+    StrandMeasureOptions opt;
+    int n = 0, valid = 0;
+    const auto t0 = Clock::now();
+    while (Seconds(t0, Clock::now()) < 3.0) {
+      for (const auto& f : frames) valid += MeasureStrand(f, opt).valid(), ++n;
+    }
+    const double s = Seconds(t0, Clock::now());
+    fmt::print("| {} ({} of {} valid) | {:.0f} | {:.3f} |\n", colour ? "colour BGR" : "grey", valid,
+               n, n / s, 1000 * s / n);
+  }
+}
+
+struct Scenario {
+  std::string name;
+  SceneParams p;
+  double target_px;
+};
+
+// Mean and spread of the width error against the rendered truth, per scenario.
+void BenchAccuracy() {
+  std::vector<Scenario> sc;
+  SceneParams ref;
+  sc.push_back({"reference (blur 1.5, noise 3, contrast 160)", ref, 0.05});
+  for (double tilt : {-20.0, -10.0, 10.0, 20.0}) {
+    SceneParams p;
+    p.tilt_deg = tilt;
+    sc.push_back({fmt::format("tilt {:+.0f}°", tilt), p, 0.1});
+  }
+  {
+    SceneParams p;
+    p.highlight = true;
+    sc.push_back({"highlight stripe", p, 0.1});
+    p = SceneParams();
+    p.gradient_fraction = 0.3;
+    p.gradient_angle_deg = 30;
+    sc.push_back({"illumination gradient 30 %", p, 0.1});
+    p = SceneParams();
+    p.SetSilhouette();
+    sc.push_back({"silhouette (dark on backlight)", p, 0.1});
+    p = SceneParams();
+    p.blur_sigma_px = 3;
+    sc.push_back({"blur 3 px", p, 0.1});
+    p = SceneParams();
+    p.tilt_deg = -20;
+    p.blur_sigma_px = 3;
+    p.SetSilhouette();
+    p.highlight = true;
+    p.gradient_fraction = 0.3;
+    sc.push_back({"all: tilt -20°, blur 3, silhouette, highlight, gradient", p, 0.1});
+    p = SceneParams();
+    p.tilt_deg = 20;
+    p.blur_sigma_px = 3;
+    p.highlight = true;
+    p.gradient_fraction = -0.3;
+    sc.push_back({"all: tilt +20°, blur 3, bright, highlight, gradient", p, 0.1});
+    p = SceneParams();
+    p.bed = true;
+    p.tilt_deg = 10;
+    sc.push_back({"bed 0.2 mm below tip, tilt 10°", p, 0.1});
+    p = SceneParams();
+    p.colour = true;
+    sc.push_back({"colour frame", p, 0.05});
+  }
+  fmt::print("\n## Accuracy against rendered truth (1280x720, 3 µm/px, 400 µm strand), 40 frames each\n\n");
+  fmt::print("| scenario | valid | mean error px | std px | max abs px | target |mean| px |\n|---|---|---|---|---|---|\n");
+  for (auto& s : sc) {
+    double s1 = 0, s2 = 0, mx = 0;
+    int valid = 0;
+    const int n = 40;
+    for (int i = 0; i < n; ++i) {
+      s.p.seed = 1000 + i;
+      FrameTruth t;
+      const auto m = MeasureStrand(RenderFrame(s.p, 0, &t), {});
+      if (!m.valid()) continue;
+      const double e = m.width_px - t.width_px;
+      s1 += e;
+      s2 += e * e;
+      mx = std::max(mx, std::abs(e));
+      ++valid;
+    }
+    const double mean = s1 / std::max(valid, 1);
+    const double sd = std::sqrt(std::max(0.0, s2 / std::max(valid, 1) - mean * mean));
+    fmt::print("| {} | {}/{} | {:+.4f} | {:.4f} | {:.4f} | {} |\n", s.name, valid, n, mean, sd, mx,
+               s.target_px);
+  }
+}
+
+// `measure` on a 10 s 720p H.264 video against decoding alone, in the same run.
+void BenchVideo() {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "clogscope_bench";
+  fs::create_directories(dir);
+  const std::string path = (dir / "bench_720p.mp4").string();
+  SceneParams p;
+  p.width_jitter_um = 2;
+  p.sway_deg = 0.3;
+  const auto truth = clogscope::vision::RenderSequence(p, 250, 25.0, path, "");
+
+  auto decode_only = [&]() {
+    cv::VideoCapture cap(path, cv::CAP_FFMPEG);
+    cv::Mat f;
+    int n = 0;
+    const auto t0 = Clock::now();
+    while (cap.read(f)) ++n;
+    return std::make_pair(n, Seconds(t0, Clock::now()));
+  };
+  auto measure = [&]() {
+    auto src = clogscope::vision::FrameSource::Open(path);
+    StrandMeasureOptions opt;
+    double s1 = 0, s2 = 0;
+    int valid = 0;
+    const auto t0 = Clock::now();
+    const int n = clogscope::vision::MeasureFrames(
+        *src, opt, [&](clogscope::vision::InputFrame& f, clogscope::vision::StrandMeasurement& m) {
+          if (!m.valid()) return;
+          const double e = m.width_px - truth[f.index].width_px;
+          s1 += e;
+          s2 += e * e;
+          ++valid;
+        });
+    const double secs = Seconds(t0, Clock::now());
+    const double mean = s1 / std::max(valid, 1);
+    return std::make_tuple(n, secs, valid, mean, std::sqrt(std::max(0.0, s2 / valid - mean * mean)));
+  };
+  const auto d1 = decode_only();
+  const auto [n, ms, valid, mean, sd] = measure();
+  const auto d2 = decode_only();
+  const double decode_fps = 0.5 * (d1.first / d1.second + d2.first / d2.second);
+  const double measure_fps = n / ms;
+  fmt::print("\n## Video: 250 frames 1280x720 H.264 (OpenCV/libx264, crf 23), 2 cores\n\n");
+  fmt::print("| pass | frames | frames/s |\n|---|---|---|\n");
+  fmt::print("| decode only (OpenCV FFmpeg, mean of before/after) | {} | {:.0f} |\n", d1.first, decode_fps);
+  fmt::print("| decode + measure (clogscope pipeline) | {} | {:.0f} |\n", n, measure_fps);
+  fmt::print("\nmeasure / decode-only throughput: **{:.2f}**; width error on these frames: mean {:+.4f} px, "
+             "std {:.4f} px ({} valid of {})\n",
+             measure_fps / decode_fps, mean, sd, valid, n);
+  const std::string ff = "ffmpeg -v error -i " + path + " -f null - 2>/dev/null";
+  const auto t0 = Clock::now();
+  if (std::system(ff.c_str()) == 0) {
+    fmt::print("ffmpeg -f null decode of the same file: {:.0f} frames/s\n", 250 / Seconds(t0, Clock::now()));
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string what = argc > 1 ? argv[1] : "all";
+  if (what != "all" && what != "measure" && what != "accuracy" && what != "video") {
+    std::fprintf(stderr, "usage: clogscope_bench [measure|accuracy|video|all]\n");
+    return 2;
+  }
+  fmt::print("# clogscope benchmarks ({} hardware threads)\n", std::thread::hardware_concurrency());
+  if (what == "all" || what == "measure") BenchMeasure();
+  if (what == "all" || what == "accuracy") BenchAccuracy();
+  if (what == "all" || what == "video") BenchVideo();
+  return 0;
+}
