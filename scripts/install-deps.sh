@@ -13,6 +13,7 @@ packages=(
   libspdlog-dev libfmt-dev  # logging and formatting
   nlohmann-json3-dev     # JSON ground truth and tables
   libyaml-cpp-dev        # manifests and parameter files with line numbers in errors
+  libavformat-dev libavcodec-dev libavutil-dev libswscale-dev  # video decoding straight to luma
   ffmpeg                 # codec libraries for OpenCV's FFmpeg backend; ffmpeg CLI for decode benchmarks
   gnuplot-nox            # plots (optional at run time)
 )

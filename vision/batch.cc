@@ -57,6 +57,7 @@ int MeasureFrames(FrameSource& source, const StrandMeasureOptions& options,
         m.detail = f.error;
       } else {
         m = MeasureStrand(f.image, options);
+        if (!f.error.empty() && m.detail.empty()) m.detail = f.error;  // e.g. damaged but decoded
       }
       on_frame(f, m);
       ++count;

@@ -23,17 +23,18 @@ inline void CdfPdf(double z, double* cdf, double* pdf) {
   const double x = std::abs(z) * kInvSqrt2;
   const double t = 1.0 / (1.0 + 0.3275911 * x);
   const double poly =
-      t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
+      t *
+      (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
   const double half_erfc = 0.5 * poly * g;  // (1 - erf(x)) / 2
   *cdf = z >= 0 ? 1.0 - half_erfc : half_erfc;
 }
 
-// Residuals' sum of squares with the Gauss-Newton system J^T J and J^T r at p.
+// Residuals' sum of squares with the Gauss-Newton system J^T J and J^T r at p. The upper triangle
+// is accumulated by hand: this loop is most of the measurement's time.
 double Evaluate(const std::vector<EdgeSample>& samples, const Params& p, double u_ref,
                 Eigen::Matrix<double, 5, 5>* jtj, Eigen::Matrix<double, 5, 1>* jtr) {
+  double h[5][5] = {}, g[5] = {};
   double cost = 0;
-  jtj->setZero();
-  jtr->setZero();
   const double inv_s = 1.0 / p.s;
   for (const auto& smp : samples) {
     const double du = smp.u_px - u_ref;
@@ -42,12 +43,17 @@ double Evaluate(const std::vector<EdgeSample>& samples, const Params& p, double 
     CdfPdf(z, &cdf, &pdf);
     const double r = p.a + p.b * du + p.c * cdf - smp.value;
     cost += r * r;
-    Eigen::Matrix<double, 5, 1> j;
-    j << 1.0, du, cdf, -p.c * pdf * inv_s, -p.c * pdf * z * inv_s;
-    jtj->selfadjointView<Eigen::Lower>().rankUpdate(j);
-    *jtr += j * r;
+    const double de = -p.c * pdf * inv_s;
+    const double j[5] = {1.0, du, cdf, de, de * z};
+    for (int i = 0; i < 5; ++i) {
+      g[i] += j[i] * r;
+      for (int k = i; k < 5; ++k) h[i][k] += j[i] * j[k];
+    }
   }
-  *jtj = jtj->selfadjointView<Eigen::Lower>();
+  for (int i = 0; i < 5; ++i) {
+    (*jtr)(i) = g[i];
+    for (int k = i; k < 5; ++k) (*jtj)(i, k) = (*jtj)(k, i) = h[i][k];
+  }
   return cost;
 }
 

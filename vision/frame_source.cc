@@ -4,10 +4,10 @@
 #include <deque>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
-#include <opencv2/videoio.hpp>
 #include <stdexcept>
 #include <vector>
 
+#include "vision/video_decoder.h"
 #include "vision/video_io.h"
 
 namespace clogscope::vision {
@@ -49,12 +49,7 @@ class ImageListSource : public FrameSource {
 
 class VideoSource : public FrameSource {
  public:
-  explicit VideoSource(std::string path) : FrameSource(std::move(path)) {
-    if (!cap_.open(path_, cv::CAP_FFMPEG)) {
-      throw std::invalid_argument(path_ + ": cannot open as video");
-    }
-    expected_ = static_cast<int>(cap_.get(cv::CAP_PROP_FRAME_COUNT));
-    fps_ = cap_.get(cv::CAP_PROP_FPS);
+  explicit VideoSource(std::string path) : FrameSource(std::move(path)), decoder_(path_) {
     if (!Fill()) throw std::invalid_argument(path_ + ": video has no frames");
   }
   bool Next(InputFrame* frame) override {
@@ -63,41 +58,36 @@ class VideoSource : public FrameSource {
     pending_.pop_front();
     return true;
   }
-  int expected_frames() const override { return expected_; }
-  double fps() const override { return fps_; }
+  int expected_frames() const override { return decoder_.frame_count_estimate(); }
+  double fps() const override { return decoder_.fps(); }
 
  private:
-  // Queues the next decodable frame. A failed read before the expected end is retried; frames
-  // that failed are queued as undecodable only when a later frame decodes (the container's count is
-  // approximate, so failures at the very end are just the end).
+  // Queues the next decoded frame, preceded by an undecodable entry for each frame number the
+  // decoder skipped (damaged data leaves a gap in the timestamps).
   bool Fill() {
-    constexpr int kMaxConsecutiveFailures = 25;
-    int failures = 0;
-    cv::Mat img;
-    while (!(cap_.read(img) && !img.empty())) {
-      ++failures;
-      if (index_ + failures >= expected_ || failures >= kMaxConsecutiveFailures) return false;
-    }
-    for (int i = 0; i < failures; ++i) {
+    DecodedFrame d;
+    if (!decoder_.Read(&d)) return false;
+    for (int missing = next_index_; missing < d.index; ++missing) {
       InputFrame bad;
       bad.source = path_;
-      bad.index = index_++;
+      bad.index = missing;
+      bad.time_s = decoder_.fps() > 0 ? missing / decoder_.fps() : -1;
       bad.error = "cannot decode frame";
       pending_.push_back(std::move(bad));
     }
     InputFrame good;
     good.source = path_;
-    good.index = index_++;
-    good.time_s = fps_ > 0 ? good.index / fps_ : cap_.get(cv::CAP_PROP_POS_MSEC) / 1000.0;
-    good.image = img;
+    good.index = d.index;
+    good.time_s = d.time_s;
+    good.image = std::move(d.grey);
+    if (d.corrupt) good.error = "decoder reported damage";
     pending_.push_back(std::move(good));
+    next_index_ = d.index + 1;
     return true;
   }
 
-  cv::VideoCapture cap_;
-  int expected_ = -1;
-  double fps_ = 0;
-  int index_ = 0;
+  VideoDecoder decoder_;
+  int next_index_ = 0;
   std::deque<InputFrame> pending_;
 };
 

@@ -11,8 +11,8 @@ struct InputFrame {
   std::string source;  // the file the frame came from (the image, or the video)
   int index = 0;       // frame number within the input, from 0
   double time_s = -1;  // position in a video, seconds; -1 for still images
-  cv::Mat image;       // empty when the frame could not be decoded
-  std::string error;   // why image is empty
+  cv::Mat image;       // empty when the frame could not be decoded; video frames are grey (luma)
+  std::string error;   // why image is empty, or a warning about a damaged but decoded frame
 };
 
 // Frames of an image file, a directory of images (sorted by name) or a video file.

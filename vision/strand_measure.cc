@@ -14,7 +14,9 @@ namespace clogscope::vision {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
-constexpr int kGridStride = 4;  // sub-sampling of the coarse search, px
+constexpr int kGridStride = 4;  // rows of the coarse search, px apart
+constexpr int kRunStride = 2;   // pixels along a coarse row, px apart
+constexpr int kHistStride = 8;  // grid of the grey-level histogram, px
 constexpr int kMinRunPx = 3;    // shorter object runs are noise
 
 double Median(std::vector<double> v) {
@@ -93,8 +95,8 @@ bool SplitLevels(const GreyImage& img, Polarity forced, double full_scale, Level
   std::array<double, 256> hist{};
   const int shift = img.is16 ? 8 : 0;
   double total = 0;
-  for (int y = kGridStride / 2; y < img.m.rows; y += kGridStride) {
-    for (int x = kGridStride / 2; x < img.m.cols; x += kGridStride) {
+  for (int y = kHistStride / 2; y < img.m.rows; y += kHistStride) {
+    for (int x = kHistStride / 2; x < img.m.cols; x += kHistStride) {
       hist[static_cast<int>(img.At(x, y)) >> shift] += 1;
       total += 1;
     }
@@ -156,24 +158,24 @@ std::vector<RowRun> LongestRunsT(const cv::Mat& m, const Levels& lv, bool allow_
   const bool bright = lv.polarity == Polarity::kBrightOnDark;
   // Integer compare against the threshold: v > thr <=> v >= floor(thr) + 1.
   const int above = static_cast<int>(std::floor(lv.threshold)) + 1;
+  const int last = (m.cols - 1) / kRunStride * kRunStride;  // last sampled column
   for (int y = kGridStride / 2; y < m.rows; y += kGridStride) {
     const Pixel* row = m.ptr<Pixel>(y);
     Run best;
     int best_w = 0;
-    int start = -1;
-    for (int x = 0; x <= m.cols; ++x) {
-      const bool obj = x < m.cols && ((row[x] >= above) == bright);
-      if (obj == (start >= 0)) continue;
-      if (obj) {
-        start = x;
-        continue;
-      }
-      const bool at_border = start == 0 || x == m.cols;
+    int x = 0;
+    while (x <= last) {
+      // Skip background, then object: two tight loops instead of a per-pixel state machine.
+      while (x <= last && ((row[x] >= above) != bright)) x += kRunStride;
+      if (x > last) break;
+      const int start = x;
+      while (x <= last && ((row[x] >= above) == bright)) x += kRunStride;
+      // The run covers samples start .. x - kRunStride; its width is known to ±kRunStride px.
+      const bool at_border = start == 0 || x > last;
       if (x - start > best_w && (allow_border || !at_border)) {
         best_w = x - start;
         best = {start, x - 1};
       }
-      start = -1;
     }
     if (best_w >= kMinRunPx) rows.push_back({y, best});
   }
@@ -262,11 +264,37 @@ ScanEnd ScanForObject(const GreyImage& img, const Frame2D& f, const Levels& lv, 
   }
 }
 
-struct EdgeWindow {
-  double centre_u;
-  double outer_px;  // window extent away from the strand
-  double inner_px;  // window extent into the strand
-};
+// Sub-pixel start for an edge fit: along the normal at s, from u_guess - half to u_guess + half in
+// half-pixel steps, the crossing of the local mid-level (between the profile's extremes) nearest to
+// u_guess. Returns u_guess when the profile has no clear step.
+double RefineEdgeGuess(const GreyImage& img, const Frame2D& f, double s, double u_guess,
+                       double half, double min_step) {
+  constexpr double kStep = 0.5;
+  const int n = static_cast<int>(2 * half / kStep) + 1;
+  std::array<float, 128> v;
+  if (n > static_cast<int>(v.size())) return u_guess;
+  float lo = 1e30f, hi = -1e30f;
+  for (int i = 0; i < n; ++i) {
+    const double u = u_guess - half + i * kStep;
+    const double x = f.ImageX(s, u), y = f.ImageY(s, u);
+    if (!img.InsideForBilinear(x, y)) return u_guess;
+    v[i] = img.Bilinear(x, y);
+    lo = std::min(lo, v[i]);
+    hi = std::max(hi, v[i]);
+  }
+  if (hi - lo < min_step) return u_guess;
+  const float mid = 0.5f * (lo + hi);
+  double best = u_guess, best_dist = 1e30;
+  for (int i = 0; i + 1 < n; ++i) {
+    if ((v[i] < mid) == (v[i + 1] < mid)) continue;
+    const double u = u_guess - half + (i + (mid - v[i]) / (v[i + 1] - v[i])) * kStep;
+    if (std::abs(u - u_guess) < best_dist) {
+      best_dist = std::abs(u - u_guess);
+      best = u;
+    }
+  }
+  return best;
+}
 
 struct CaliperFit {
   EdgeFit left, right;
@@ -484,6 +512,19 @@ StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions
   samples.reserve(512);
   double sigma_guess = 1.5;
   double left_guess = -0.5 * width0, right_guess = 0.5 * width0, slope_guess = 0.0;
+  {
+    // Sub-pixel starting edges at the top and bottom of the band: most frames then need one pass.
+    const double sa = band_s0 + 0.5 * opt.caliper_spacing_px;
+    const double sb = band_s0 + (n_cal - 0.5) * opt.caliper_spacing_px;
+    const double half = std::min(10.0, 0.25 * width0);
+    const double la = RefineEdgeGuess(img, f, sa, left_guess, half, min_contrast);
+    const double lb = RefineEdgeGuess(img, f, sb, left_guess, half, min_contrast);
+    const double ra = RefineEdgeGuess(img, f, sa, right_guess, half, min_contrast);
+    const double rb = RefineEdgeGuess(img, f, sb, right_guess, half, min_contrast);
+    if (sb > sa) slope_guess = 0.5 * ((lb - la) + (rb - ra)) / (sb - sa);
+    left_guess = 0.5 * (la + lb) - slope_guess * 0.5 * (sa + sb);
+    right_guess = 0.5 * (ra + rb) - slope_guess * 0.5 * (sa + sb);
+  }
   int total_samples = 0, total_saturated = 0;
   bool border = false;
   // Two passes at most: the second re-centres the windows on the fitted edge lines and widens them

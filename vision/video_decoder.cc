@@ -1,0 +1,192 @@
+#include "vision/video_decoder.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+
+extern "C" {
+#include <libavcodec/avcodec.h>
+#include <libavformat/avformat.h>
+#include <libavutil/imgutils.h>
+#include <libavutil/pixdesc.h>
+#include <libswscale/swscale.h>
+}
+
+namespace clogscope::vision {
+
+struct VideoDecoder::Impl {
+  AVFormatContext* format = nullptr;
+  AVCodecContext* codec = nullptr;
+  AVPacket* packet = nullptr;
+  AVFrame* frame = nullptr;
+  SwsContext* sws = nullptr;  // only for formats without a luma plane (RGB, palette)
+  int stream = -1;
+  double time_base = 0;
+  int64_t start_pts = 0;
+  bool flushing = false;
+  bool finished = false;
+
+  ~Impl() {
+    sws_freeContext(sws);
+    av_frame_free(&frame);
+    av_packet_free(&packet);
+    avcodec_free_context(&codec);
+    avformat_close_input(&format);
+  }
+};
+
+namespace {
+
+std::string AvError(int code) {
+  char buf[AV_ERROR_MAX_STRING_SIZE] = {0};
+  av_strerror(code, buf, sizeof(buf));
+  return buf;
+}
+
+// True when plane 0 of the format is luma (YUV, grey): it is the grey image as is.
+bool HasLumaPlane(AVPixelFormat fmt) {
+  const AVPixFmtDescriptor* d = av_pix_fmt_desc_get(fmt);
+  if (!d) return false;
+  if (d->flags & (AV_PIX_FMT_FLAG_RGB | AV_PIX_FMT_FLAG_PAL | AV_PIX_FMT_FLAG_BITSTREAM))
+    return false;
+  if (!(d->flags & AV_PIX_FMT_FLAG_PLANAR) && d->nb_components > 1) return false;  // packed YUYV …
+  return d->comp[0].plane == 0 && d->comp[0].step <= 2;
+}
+
+}  // namespace
+
+VideoDecoder::VideoDecoder(const std::string& path, int threads)
+    : impl_(std::make_unique<Impl>()), path_(path) {
+  av_log_set_level(AV_LOG_QUIET);
+  Impl& d = *impl_;
+  int err = avformat_open_input(&d.format, path.c_str(), nullptr, nullptr);
+  if (err < 0) throw std::invalid_argument(path + ": cannot open as video (" + AvError(err) + ")");
+  err = avformat_find_stream_info(d.format, nullptr);
+  if (err < 0) throw std::invalid_argument(path + ": unreadable container (" + AvError(err) + ")");
+  const AVCodec* codec = nullptr;
+  d.stream = av_find_best_stream(d.format, AVMEDIA_TYPE_VIDEO, -1, -1, &codec, 0);
+  if (d.stream < 0 || !codec) throw std::invalid_argument(path + ": no decodable video stream");
+  AVStream* st = d.format->streams[d.stream];
+  d.codec = avcodec_alloc_context3(codec);
+  avcodec_parameters_to_context(d.codec, st->codecpar);
+  d.codec->thread_count = threads;
+  d.codec->thread_type = FF_THREAD_FRAME | FF_THREAD_SLICE;
+  err = avcodec_open2(d.codec, codec, nullptr);
+  if (err < 0) throw std::invalid_argument(path + ": cannot open decoder (" + AvError(err) + ")");
+  d.packet = av_packet_alloc();
+  d.frame = av_frame_alloc();
+  d.time_base = av_q2d(st->time_base);
+  d.start_pts = st->start_time != AV_NOPTS_VALUE ? st->start_time : 0;
+  const AVRational rate = st->avg_frame_rate.num ? st->avg_frame_rate : st->r_frame_rate;
+  fps_ = rate.num && rate.den ? av_q2d(rate) : 0;
+  if (st->duration != AV_NOPTS_VALUE) {
+    duration_s_ = st->duration * d.time_base;
+  } else if (d.format->duration != AV_NOPTS_VALUE) {
+    duration_s_ = d.format->duration / double(AV_TIME_BASE);
+  }
+  frame_count_ = st->nb_frames > 0
+                     ? static_cast<int>(st->nb_frames)
+                     : (fps_ > 0 ? static_cast<int>(std::lround(duration_s_ * fps_)) : -1);
+}
+
+VideoDecoder::~VideoDecoder() = default;
+
+int VideoDecoder::width() const { return impl_->codec->width; }
+int VideoDecoder::height() const { return impl_->codec->height; }
+
+bool VideoDecoder::Read(DecodedFrame* out) {
+  Impl& d = *impl_;
+  while (!d.finished) {
+    int err = avcodec_receive_frame(d.codec, d.frame);
+    if (err == 0) {
+      const int64_t pts = d.frame->best_effort_timestamp != AV_NOPTS_VALUE
+                              ? d.frame->best_effort_timestamp
+                              : d.frame->pts;
+      const double t = pts != AV_NOPTS_VALUE ? (pts - d.start_pts) * d.time_base
+                                             : (fps_ > 0 ? next_index_ / fps_ : 0.0);
+      if (skip_before_s_ >= 0 && t < skip_before_s_ - 1e-6) {
+        av_frame_unref(d.frame);
+        continue;
+      }
+      skip_before_s_ = -1;
+      const AVPixelFormat fmt = static_cast<AVPixelFormat>(d.frame->format);
+      const int w = d.frame->width, h = d.frame->height;
+      if (HasLumaPlane(fmt)) {
+        const AVPixFmtDescriptor* desc = av_pix_fmt_desc_get(fmt);
+        const bool deep = desc->comp[0].depth > 8;
+        const cv::Mat view(h, w, deep ? CV_16UC1 : CV_8UC1, d.frame->data[0], d.frame->linesize[0]);
+        if (deep) {
+          // Scale to the full 16-bit range so thresholds in fractions of full scale hold.
+          view.convertTo(out->grey, CV_16U, double(1 << (16 - desc->comp[0].depth)));
+        } else {
+          out->grey = view.clone();
+        }
+      } else {
+        d.sws = sws_getCachedContext(d.sws, w, h, fmt, w, h, AV_PIX_FMT_GRAY8, SWS_POINT, nullptr,
+                                     nullptr, nullptr);
+        out->grey.create(h, w, CV_8UC1);
+        uint8_t* dst[4] = {out->grey.data, nullptr, nullptr, nullptr};
+        int dst_stride[4] = {static_cast<int>(out->grey.step), 0, 0, 0};
+        sws_scale(d.sws, d.frame->data, d.frame->linesize, 0, h, dst, dst_stride);
+      }
+      // Index from the timestamp, so frames lost to damage leave a visible gap.
+      out->index =
+          fps_ > 0 ? std::max(next_index_, static_cast<int>(std::lround(t * fps_))) : next_index_;
+      next_index_ = out->index + 1;
+      out->time_s = t;
+      out->corrupt =
+          (d.frame->flags & AV_FRAME_FLAG_CORRUPT) != 0 || d.frame->decode_error_flags != 0;
+      av_frame_unref(d.frame);
+      return true;
+    }
+    if (err == AVERROR_EOF) {
+      d.finished = true;
+      break;
+    }
+    if (err != AVERROR(EAGAIN)) {
+      // A frame the decoder could not reconstruct: count it and go on.
+      ++corrupt_packets_;
+      continue;
+    }
+    if (d.flushing) {
+      d.finished = true;
+      break;
+    }
+    // Feed the next packet of our stream.
+    while (true) {
+      err = av_read_frame(d.format, d.packet);
+      if (err < 0) {
+        avcodec_send_packet(d.codec, nullptr);  // drain
+        d.flushing = true;
+        break;
+      }
+      if (d.packet->stream_index != d.stream) {
+        av_packet_unref(d.packet);
+        continue;
+      }
+      err = avcodec_send_packet(d.codec, d.packet);
+      av_packet_unref(d.packet);
+      if (err < 0 && err != AVERROR(EAGAIN)) {
+        ++corrupt_packets_;
+        continue;
+      }
+      break;
+    }
+  }
+  return false;
+}
+
+bool VideoDecoder::SeekToTime(double time_s) {
+  Impl& d = *impl_;
+  const int64_t target = d.start_pts + static_cast<int64_t>(std::floor(time_s / d.time_base));
+  if (av_seek_frame(d.format, d.stream, target, AVSEEK_FLAG_BACKWARD) < 0) return false;
+  avcodec_flush_buffers(d.codec);
+  d.flushing = false;
+  d.finished = false;
+  skip_before_s_ = time_s;
+  next_index_ = fps_ > 0 ? static_cast<int>(std::lround(time_s * fps_)) : 0;
+  return true;
+}
+
+}  // namespace clogscope::vision

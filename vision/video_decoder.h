@@ -1,0 +1,55 @@
+#pragma once
+
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+
+namespace clogscope::vision {
+
+// One decoded video frame as a grey image: the luma plane straight from the decoder (8-bit, or
+// 16-bit for deeper formats), so no colour conversion is spent on what the measurement drops.
+struct DecodedFrame {
+  cv::Mat grey;
+  int index = 0;      // frame number: from the timestamp at constant frame rate, else decode order
+  double time_s = 0;  // presentation time from the stream start
+  bool corrupt = false;  // the decoder reported damage in this frame's data
+};
+
+// Reads video files through libavformat/libavcodec (FFmpeg from Debian).
+class VideoDecoder {
+ public:
+  // Throws std::invalid_argument naming the path when it cannot be opened or has no video stream.
+  // threads: decoder threads, 0 = FFmpeg's choice.
+  explicit VideoDecoder(const std::string& path, int threads = 0);
+  ~VideoDecoder();
+  VideoDecoder(const VideoDecoder&) = delete;
+  VideoDecoder& operator=(const VideoDecoder&) = delete;
+
+  // Next frame in presentation order; false at the end of the stream. A packet the decoder rejects
+  // is skipped and counted in corrupt_packets().
+  bool Read(DecodedFrame* frame);
+  // Positions the stream so that the next Read() returns the first frame at or after time_s
+  // (decodes forward from the preceding key frame). Returns false when the container cannot seek.
+  bool SeekToTime(double time_s);
+
+  double fps() const { return fps_; }
+  double duration_s() const { return duration_s_; }
+  int frame_count_estimate() const { return frame_count_; }
+  int width() const;
+  int height() const;
+  int corrupt_packets() const { return corrupt_packets_; }
+  const std::string& path() const { return path_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::string path_;
+  double fps_ = 0;
+  double duration_s_ = 0;
+  int frame_count_ = -1;
+  int next_index_ = 0;
+  int corrupt_packets_ = 0;
+  double skip_before_s_ = -1;  // after a seek: drop frames earlier than this
+};
+
+}  // namespace clogscope::vision
