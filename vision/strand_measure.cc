@@ -337,6 +337,47 @@ bool GatherEdgeSamples(const GreyImage& img, const Frame2D& f, double s0, double
   return true;
 }
 
+// The two edges as lines u = u0 + slope·s with a shared slope (parallel edges), least squares over
+// the calipers whose width agrees with the median (an occluded or damaged caliper must not tilt the
+// lines: the width's tilt correction depends on the slope).
+struct EdgeLines {
+  double left_u0 = 0, right_u0 = 0, slope = 0;
+  int calipers = 0;
+};
+
+EdgeLines FitEdgeLines(const std::vector<CaliperFit>& fits, double band_s0, double spacing) {
+  std::vector<double> widths;
+  for (const auto& cf : fits) {
+    if (cf.left.converged && cf.right.converged)
+      widths.push_back(cf.right.edge_px - cf.left.edge_px);
+  }
+  EdgeLines out;
+  if (widths.size() < 2) return out;
+  const double med = Median(widths);
+  const double tol = std::max(4.0 * 1.4826 * Mad(widths, med), 0.1);
+  double n = 0, ss = 0, sss = 0, sl = 0, sr = 0, sls = 0, srs = 0;
+  for (size_t k = 0; k < fits.size(); ++k) {
+    const CaliperFit& cf = fits[k];
+    if (!cf.left.converged || !cf.right.converged) continue;
+    if (std::abs(cf.right.edge_px - cf.left.edge_px - med) > tol) continue;
+    const double s = band_s0 + (k + 0.5) * spacing;
+    n += 1;
+    ss += s;
+    sss += s * s;
+    sl += cf.left.edge_px;
+    sr += cf.right.edge_px;
+    sls += cf.left.edge_px * s;
+    srs += cf.right.edge_px * s;
+  }
+  if (n < 2) return out;
+  const double var_s = sss - ss * ss / n;
+  out.slope = var_s > 1e-9 ? ((sls - sl * ss / n) + (srs - sr * ss / n)) / (2 * var_s) : 0.0;
+  out.left_u0 = (sl - out.slope * ss) / n;
+  out.right_u0 = (sr - out.slope * ss) / n;
+  out.calipers = static_cast<int>(n);
+  return out;
+}
+
 }  // namespace
 
 const char* FrameStatusName(FrameStatus status) {
@@ -561,28 +602,15 @@ StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions
       total_samples += cf.samples;
       total_saturated += cf.saturated;
     }
-    // Edge lines u = a + slope·s with a shared slope (parallel edges), least squares over calipers.
-    double n = 0, ss = 0, sss = 0, sl = 0, sr = 0, sls = 0, srs = 0;
+    const EdgeLines lines = FitEdgeLines(fits, band_s0, opt.caliper_spacing_px);
+    if (lines.calipers < 2) break;
+    const double new_slope = lines.slope, new_left = lines.left_u0, new_right = lines.right_u0;
     std::vector<double> sigmas;
-    for (int k = 0; k < n_cal; ++k) {
-      if (!fits[k].left.converged || !fits[k].right.converged) continue;
-      const double s = band_s0 + (k + 0.5) * opt.caliper_spacing_px;
-      n += 1;
-      ss += s;
-      sss += s * s;
-      sl += fits[k].left.edge_px;
-      sr += fits[k].right.edge_px;
-      sls += fits[k].left.edge_px * s;
-      srs += fits[k].right.edge_px * s;
-      sigmas.push_back(fits[k].left.sigma_px);
-      sigmas.push_back(fits[k].right.sigma_px);
+    for (const auto& cf : fits) {
+      if (!cf.left.converged || !cf.right.converged) continue;
+      sigmas.push_back(cf.left.sigma_px);
+      sigmas.push_back(cf.right.sigma_px);
     }
-    if (n < 2) break;
-    const double var_s = sss - ss * ss / n;
-    const double new_slope =
-        var_s > 1e-9 ? ((sls - sl * ss / n) + (srs - sr * ss / n)) / (2 * var_s) : 0.0;
-    const double new_left = (sl - new_slope * ss) / n;
-    const double new_right = (sr - new_slope * ss) / n;
     const double new_sigma = Median(sigmas);
     const double s_mid = 0.5 * (band_s0 + band_s1);
     const bool recentre =
