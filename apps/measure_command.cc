@@ -191,11 +191,15 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
                  rows.size() / std::max(secs, 1e-9));
     if (valid < static_cast<int>(rows.size())) {
       // Say why, once per reason, so a user sees the cause without opening the CSV.
-      std::map<std::string, int> reasons;
+      std::map<std::string, std::pair<int, std::string>> reasons;  // count, first detail
       for (const Row& r : rows) {
-        if (!r.m.valid()) ++reasons[vision::FrameStatusName(r.m.status)];
+        if (r.m.valid()) continue;
+        auto& [count, detail] = reasons[vision::FrameStatusName(r.m.status)];
+        if (count++ == 0) detail = r.m.detail;
       }
-      for (const auto& [reason, n] : reasons) spdlog::warn("{}: {} frame(s) {}", input, n, reason);
+      for (const auto& [reason, info] : reasons) {
+        spdlog::warn("{}: {} frame(s) {} (first: {})", input, info.first, reason, info.second);
+      }
     }
   }
   csv.Commit();
