@@ -4,6 +4,9 @@
 #include <string>
 #include <vector>
 
+#include "model/fit.h"
+#include "model/parameters.h"
+#include "model/predictor.h"
 #include "vision/strand_measure.h"
 #include "vision/synthetic.h"
 
@@ -14,6 +17,7 @@ namespace clogscope::apps {
 // std::invalid_argument, which main() reports as one line.
 int RunRender(int argc, char** argv);
 int RunMeasure(int argc, char** argv);
+int RunPredict(int argc, char** argv);
 
 // --- render --------------------------------------------------------------------------------
 struct RenderCommandOptions {
@@ -59,5 +63,35 @@ MeasureSummary MeasureInputs(MeasureCommandOptions options);
 
 // The per-frame CSV's columns, in order.
 const std::vector<std::string>& FrameCsvColumns();
+
+// --- predict -------------------------------------------------------------------------------
+struct PredictCommandOptions {
+  std::string extruder = "direct-pla";  // preset name or YAML file
+  std::vector<std::string> set;         // "name=value" overrides, applied in order
+  std::string diameters;                // diameter table CSV (step, temperature_c, mean_um, …)
+  std::string out_dir = "predict-out";
+  std::string fit_measured;             // measured CSV; empty: no fit
+  std::vector<std::string> fit_params;  // names of the unknowns
+  bool plots = true;
+  bool Validate(std::string* why) const;
+};
+
+struct PredictResult {
+  model::ExtruderParams params;  // as loaded and overridden (the fit's start)
+  std::vector<model::StepInput> steps;
+  std::optional<model::FitSummary> fit;
+  model::Prediction prediction;  // with the fitted parameters when a fit was asked for and usable
+};
+
+// Reads the inputs, fits when asked and predicts; writes nothing. Throws std::invalid_argument
+// naming the file, row or parameter for bad input. A fit that is not usable comes back with
+// fit->usable false and no prediction.
+PredictResult ComputePrediction(const PredictCommandOptions& options);
+
+// Writes predictions.csv/.json, plots, and with a fit fitted_params.yaml and fit_residuals.png into
+// out_dir, each atomically. Returns the files written; plot problems go to `warnings`.
+std::vector<std::string> WritePredictionOutputs(const PredictResult& result,
+                                                const std::string& out_dir, bool plots,
+                                                std::vector<std::string>* warnings);
 
 }  // namespace clogscope::apps

@@ -23,6 +23,8 @@ struct Command {
 const Command kCommands[] = {
     {"render", clogscope::apps::RunRender, "synthetic frames with exact ground truth"},
     {"measure", clogscope::apps::RunMeasure, "strand width per frame from images or videos"},
+    {"predict", clogscope::apps::RunPredict,
+     "diameter table -> predicted vibration and motor current; fits"},
 };
 
 void PrintUsage() {
@@ -36,6 +38,7 @@ void PrintUsage() {
       "\nExamples:\n"
       "  clogscope render --out frames/ --frames 10 --tilt-deg 5\n"
       "  clogscope measure frames/ --scale-um-per-px 3 --out-frames frames.csv --overlay ov/\n"
+      "  clogscope predict --extruder direct-pla --diameters diameters.csv --out pred/\n"
       "\nEnvironment: CLOGSCOPE_LOG=debug|info|warn|error sets the log level (default info).\n");
 }
 

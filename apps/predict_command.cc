@@ -1,0 +1,262 @@
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+#include <stdexcept>
+
+#include "apps/commands.h"
+#include "common/atomic_file.h"
+#include "common/plot.h"
+#include "common/provenance.h"
+#include "model/io.h"
+
+namespace clogscope::apps {
+namespace {
+
+namespace fs = std::filesystem;
+using model::InfoOf;
+using model::Param;
+
+std::string Fixed(double v, int d) { return fmt::format("{:.{}f}", v, d); }
+
+void PrintTable(const PredictResult& r) {
+  const auto& pr = r.prediction;
+  const bool amp = pr.gain_m_s2_per_n.has_value();
+  const bool cur = !pr.steps.empty() && pr.steps[0].current_ma.has_value();
+  fmt::print("{:>4} {:>7} {:>9} {:>11} {:>9} {:>9} {:>8}{}{}\n", "step", "T °C", "D µm",
+             "dp_total Pa", "F_bp N", "load N", "A/A0", amp ? "   A m/s²" : "",
+             cur ? "   I mA" : "");
+  for (const auto& s : pr.steps) {
+    fmt::print("{:>4} {:>7.1f} {:>9.1f} {:>11.0f} {:>9.4f} {:>9.3f} {:>8.4f}{}{}\n", s.step,
+               s.temperature_c, s.diameter_um, s.dp_total_pa, s.f_bp_n, s.load_n,
+               s.relative_amplitude, amp ? fmt::format(" {:>8.4f}", *s.amplitude_m_s2) : "",
+               cur ? fmt::format(" {:>7.1f}", *s.current_ma) : "");
+  }
+  fmt::print(
+      "feed force {:.2f} N, reference load W0 {:.3f} N, natural frequency {:.1f} Hz "
+      "(bar alone: {:.0f} Hz), gain {}\n",
+      pr.feed_force_n, pr.reference_load_n, r.params.Get(Param::kNaturalFrequencyHz),
+      pr.beam_frequency_hz,
+      amp ? fmt::format("{:.6g} m/s² per N ({})", *pr.gain_m_s2_per_n, pr.gain_source)
+          : "unknown (relative amplitudes only)");
+}
+
+void PrintFit(const model::FitSummary& f) {
+  const auto& worst = f.residuals[f.worst_index];
+  int beyond = 0;
+  for (const auto& r : f.residuals) beyond += std::abs(r.relative) > 3 * f.rms_relative;
+  fmt::print(
+      "fit {}: {} residuals, RMS {:.2f} %, worst {:+.2f} % (step {} {}), {} of {} beyond 3×RMS, {} "
+      "iterations\n",
+      f.usable ? "converged" : "NOT USABLE", f.residuals.size(), 100 * f.rms_relative,
+      100 * worst.relative, worst.step, worst.quantity, beyond, f.residuals.size(), f.iterations);
+  for (const auto& v : f.values) {
+    fmt::print("  {} = {:.6g} ± {:.3g}{}  (start {:.6g})\n", InfoOf(v.param).name, v.value, v.sigma,
+               v.at_bound ? " AT BOUND" : "", v.initial);
+  }
+}
+
+}  // namespace
+
+bool PredictCommandOptions::Validate(std::string* why) const {
+  if (diameters.empty())
+    *why = "--diameters is required";
+  else if (out_dir.empty())
+    *why = "--out must not be empty";
+  else if (fit_measured.empty() != fit_params.empty())
+    *why = "--fit and --fit-params go together";
+  else
+    return true;
+  return false;
+}
+
+PredictResult ComputePrediction(const PredictCommandOptions& o) {
+  std::string why;
+  if (!o.Validate(&why)) throw std::invalid_argument(why);
+  PredictResult r;
+  r.params = model::LoadExtruder(o.extruder);
+  for (const std::string& kv : o.set) {
+    const size_t eq = kv.find('=');
+    if (eq == std::string::npos || eq == 0) {
+      throw std::invalid_argument("--set '" + kv + "': expected name=value");
+    }
+    try {
+      r.params.SetByName(kv.substr(0, eq), kv.substr(eq + 1));
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(std::string("--set: ") + e.what());
+    }
+  }
+  if (!r.params.Validate(&why)) throw std::invalid_argument("extruder parameters: " + why);
+  r.steps = model::ReadDiameterTable(o.diameters, r.params.Get(Param::kReferenceTemperatureC));
+  model::CheckSteps(r.params, r.steps);
+  model::ExtruderParams use = r.params;
+  if (!o.fit_measured.empty()) {
+    const auto measured = model::ReadMeasurements(o.fit_measured, r.steps);
+    model::FitOptions fo;
+    for (const auto& name : o.fit_params) {
+      try {
+        fo.params.push_back(model::ParamByName(name));
+      } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument(std::string("--fit-params: ") + e.what());
+      }
+    }
+    r.fit = model::FitParameters(r.params, r.steps, measured, fo);
+    if (!r.fit->usable) return r;
+    use = r.fit->fitted;
+  }
+  r.prediction = model::Predict(use, r.steps);
+  return r;
+}
+
+std::vector<std::string> WritePredictionOutputs(const PredictResult& r, const std::string& out_dir,
+                                                bool plots, std::vector<std::string>* warnings) {
+  std::error_code ec;
+  fs::create_directories(out_dir, ec);
+  if (ec || !fs::is_directory(out_dir))
+    throw std::invalid_argument(out_dir + ": cannot create output directory");
+  const Provenance prov = CurrentProvenance();
+  const auto& pr = r.prediction;
+  const model::FitSummary* fit = r.fit ? &*r.fit : nullptr;
+  const model::ExtruderParams& used = fit ? fit->fitted : r.params;
+  std::vector<std::string> written;
+  auto path = [&](const char* name) { return (fs::path(out_dir) / name).string(); };
+  WriteFileAtomically(path("predictions.csv"), model::PredictionsCsv(pr, prov));
+  written.push_back(path("predictions.csv"));
+  WriteFileAtomically(path("predictions.json"), model::PredictionsJson(pr, used, prov, fit));
+  written.push_back(path("predictions.json"));
+  if (fit) {
+    WriteFileAtomically(path("fitted_params.yaml"),
+                        model::ExtruderToYaml(fit->fitted, prov, fit->values));
+    written.push_back(path("fitted_params.yaml"));
+  }
+  if (!plots) return written;
+
+  auto plot = [&](const PlotSpec& spec, const char* name) {
+    std::string why;
+    if (PlotToPng(spec, path(name), &why)) {
+      written.push_back(path(name));
+    } else {
+      warnings->push_back(fmt::format("{}: not drawn: {}", name, why));
+    }
+  };
+  const bool absolute = pr.gain_m_s2_per_n.has_value();
+  PlotSpec amp;
+  amp.title = fmt::format("Bar-mount vibration at {:.1f} Hz against effective nozzle diameter ({})",
+                          used.Get(Param::kNaturalFrequencyHz), used.origin);
+  amp.x_label = "effective diameter (µm)";
+  amp.y_label = absolute ? "amplitude (m/s²)" : "relative amplitude A/A_0";
+  PlotSeries model_series{"model", {}, {}, {}, "linespoints"};
+  for (const auto& s : pr.steps) {
+    model_series.x.push_back(s.diameter_um);
+    model_series.y.push_back(absolute ? *s.amplitude_m_s2 : s.relative_amplitude);
+  }
+  amp.series.push_back(model_series);
+  if (fit) {
+    PlotSeries measured{"measured", {}, {}, {}, "points pt 7 ps 1.5"};
+    for (const auto& res : fit->residuals) {
+      if (res.quantity != "amplitude_m_s2" || !absolute) continue;
+      for (const auto& s : pr.steps) {
+        if (s.step == res.step) {
+          measured.x.push_back(s.diameter_um);
+          measured.y.push_back(res.measured);
+        }
+      }
+    }
+    if (!measured.x.empty()) amp.series.push_back(measured);
+  }
+  plot(amp, "amplitude_vs_diameter.png");
+
+  PlotSpec spec;
+  spec.title = fmt::format("Spectra near the natural frequency (damping ratio {:g})",
+                           used.Get(Param::kDampingRatio));
+  spec.x_label = "frequency (Hz)";
+  spec.y_label = pr.spectrum_absolute ? "acceleration (m/s²)" : "relative amplitude";
+  for (size_t i = 0; i < pr.steps.size(); ++i) {
+    spec.series.push_back({fmt::format("step {}: {:.0f} °C, {:.1f} µm", pr.steps[i].step,
+                                       pr.steps[i].temperature_c, pr.steps[i].diameter_um),
+                           pr.spectrum_frequency_hz,
+                           pr.spectra[i],
+                           {},
+                           "lines lw 2"});
+  }
+  plot(spec, "spectra.png");
+
+  if (fit) {
+    PlotSpec res;
+    res.title = fmt::format("Fit residuals: RMS {:.2f} %", 100 * fit->rms_relative);
+    res.x_label = "step";
+    res.y_label = "(model − measured) / measured (%)";
+    res.zero_line = true;
+    for (const char* q : {"amplitude_m_s2", "current_ma"}) {
+      PlotSeries s{q, {}, {}, {}, "points pt 7 ps 1.5"};
+      for (const auto& rr : fit->residuals) {
+        if (rr.quantity != q) continue;
+        s.x.push_back(rr.step);
+        s.y.push_back(100 * rr.relative);
+      }
+      if (!s.x.empty()) res.series.push_back(s);
+    }
+    plot(res, "fit_residuals.png");
+  }
+  return written;
+}
+
+int RunPredict(int argc, char** argv) {
+  CLI::App app{
+      "Predict bar-mount vibration and motor current from an effective-diameter table; "
+      "optionally fit unknown parameters to measurements.",
+      "clogscope predict"};
+  PredictCommandOptions o;
+  std::string fit_params;
+  bool no_plots = false;
+  app.add_option("--extruder", o.extruder, "Preset (direct-pla, bowden-pla) or YAML parameter file")
+      ->capture_default_str();
+  app.add_option("--diameters", o.diameters, "Diameter table CSV (step, temperature_c, mean_um)")
+      ->required();
+  app.add_option("--set", o.set, "Override a parameter: name=value (repeatable)");
+  app.add_option("--out", o.out_dir, "Output directory")->capture_default_str();
+  app.add_option("--fit", o.fit_measured,
+                 "Measured CSV: step or temperature_c, amplitude_m_s2 and/or current_ma");
+  app.add_option("--fit-params", fit_params,
+                 "Unknowns to fit, comma-separated (e.g. activation_temperature_k,gain)");
+  app.add_flag("--no-plots", no_plots, "Skip the PNG plots");
+  app.footer(
+      "Examples:\n"
+      "  clogscope predict --extruder direct-pla --diameters diameters.csv --out pred/\n"
+      "  clogscope predict --extruder bowden-pla --set damping_ratio=0.05 --diameters d.csv\n"
+      "  clogscope predict --diameters d.csv --fit accel.csv --fit-params "
+      "activation_temperature_k,gain\n"
+      "Parameters (SI units; see ../shared/spec/predictor.md): " +
+      [] {
+        std::string names;
+        for (const auto& i : model::AllParams())
+          names += std::string(names.empty() ? "" : ", ") + i.name;
+        return names + ", load_model (sum|difference)";
+      }());
+  CLI11_PARSE(app, argc, argv);
+  if (!fit_params.empty()) {
+    std::string item;
+    std::stringstream ss(fit_params);
+    while (std::getline(ss, item, ',')) {
+      if (!item.empty()) o.fit_params.push_back(item);
+    }
+  }
+  o.plots = !no_plots;
+  const PredictResult r = ComputePrediction(o);
+  if (r.fit) PrintFit(*r.fit);
+  if (r.fit && !r.fit->usable) {
+    spdlog::error("fit not usable: {}; nothing written", r.fit->message);
+    return 1;
+  }
+  PrintTable(r);
+  std::vector<std::string> warnings;
+  const auto written = WritePredictionOutputs(r, o.out_dir, o.plots, &warnings);
+  for (const auto& w : warnings) spdlog::warn("{}", w);
+  spdlog::info("wrote {}", fmt::join(written, ", "));
+  return 0;
+}
+
+}  // namespace clogscope::apps

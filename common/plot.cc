@@ -1,0 +1,82 @@
+#include "common/plot.h"
+
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+
+#include "common/atomic_file.h"
+
+namespace clogscope {
+namespace {
+
+std::string Quote(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out + "\"";
+}
+
+}  // namespace
+
+bool PlotToPng(const PlotSpec& spec, const std::string& png_path, std::string* why) {
+  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) {
+    *why = "gnuplot is not installed (apt-get install gnuplot-nox)";
+    return false;
+  }
+  const std::string partial = png_path + ".partial.png";
+  std::string script = fmt::format(
+      "set terminal pngcairo size {},{} enhanced font 'sans,11'\nset output {}\nset title {}\n"
+      "set xlabel {}\nset ylabel {}\nset grid\nset key outside right top\nset autoscale xfix\n"
+      "set offsets graph 0.02, graph 0.02, graph 0.05, graph 0.05\n",
+      spec.width_px, spec.height_px, Quote(partial), Quote(spec.title), Quote(spec.x_label),
+      Quote(spec.y_label));
+  if (spec.zero_line) script += "set xzeroaxis lt -1\n";
+  for (size_t i = 0; i < spec.series.size(); ++i) {
+    const PlotSeries& s = spec.series[i];
+    script += fmt::format("$d{} << EOD\n", i);
+    for (size_t k = 0; k < s.x.size(); ++k) {
+      script += fmt::format("{:.10g} {:.10g}", s.x[k], s.y[k]);
+      if (!s.y_error.empty()) script += fmt::format(" {:.10g}", s.y_error[k]);
+      script += "\n";
+    }
+    script += "EOD\n";
+  }
+  script += "plot ";
+  for (size_t i = 0; i < spec.series.size(); ++i) {
+    const PlotSeries& s = spec.series[i];
+    if (i) script += ", \\\n     ";
+    if (!s.y_error.empty()) {
+      script += fmt::format("$d{} using 1:2:3 with yerrorbars title {}", i, Quote(s.title));
+    } else {
+      script += fmt::format("$d{} using 1:2 with {} title {}", i, s.style, Quote(s.title));
+    }
+  }
+  script += "\n";
+  const std::string script_path = png_path + ".gnuplot";
+  WriteFileAtomically(script_path, script);
+  const std::string cmd = "gnuplot " + Quote(script_path) + " 2>" + Quote(script_path + ".err");
+  const int rc = std::system(cmd.c_str());
+  std::string err;
+  try {
+    err = ReadFile(script_path + ".err");
+  } catch (const std::exception&) {
+  }
+  std::remove(script_path.c_str());
+  std::remove((script_path + ".err").c_str());
+  if (rc != 0 || !std::filesystem::exists(partial)) {
+    std::remove(partial.c_str());
+    *why = "gnuplot failed: " + err.substr(0, err.find('\n'));
+    return false;
+  }
+  if (std::rename(partial.c_str(), png_path.c_str()) != 0) {
+    *why = "cannot rename " + partial;
+    return false;
+  }
+  return true;
+}
+
+}  // namespace clogscope
