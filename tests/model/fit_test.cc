@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/model/reference_data.h"
+
 #include <cmath>
 #include <random>
 
@@ -10,26 +12,10 @@
 namespace clogscope::model {
 namespace {
 
-std::vector<StepInput> ReferenceSteps() {
-  const double t[] = {220, 210, 200, 190, 180, 170};
-  const double d_mm[] = {0.4000, 0.3969, 0.3901, 0.3813, 0.3659, 0.3454};
-  std::vector<StepInput> steps;
-  for (int i = 0; i < 6; ++i) steps.push_back({i + 1, t[i], d_mm[i] * 1e-3});
-  return steps;
-}
+using testing::ExampleAmplitudes;
+using testing::ReferenceSteps;
 
-// predictor.md §6's example data.
-std::vector<Measurement> ExampleAmplitudes() {
-  const double a[] = {0.6479, 0.6554, 0.6848, 0.7414, 0.8769, 1.1128};
-  std::vector<Measurement> m;
-  for (int i = 0; i < 6; ++i) {
-    Measurement x;
-    x.step = i + 1;
-    x.amplitude_m_s2 = a[i];
-    m.push_back(x);
-  }
-  return m;
-}
+
 
 TEST(FitTest, ExampleDataGivesAboutTwoAndAHalfPercent) {
   FitOptions o;

@@ -2,12 +2,16 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/model/reference_data.h"
+
 #include <cmath>
 
 #include "model/physics.h"
 
 namespace clogscope::model {
 namespace {
+
+using testing::ReferenceSteps;
 
 constexpr double kPi = 3.14159265358979323846;
 
@@ -17,13 +21,6 @@ std::array<double, kParamCount> Values(const ExtruderParams& p) {
   return v;
 }
 
-std::vector<StepInput> ReferenceSteps() {
-  const double t[] = {220, 210, 200, 190, 180, 170};
-  const double d_mm[] = {0.4000, 0.3969, 0.3901, 0.3813, 0.3659, 0.3454};
-  std::vector<StepInput> steps;
-  for (int i = 0; i < 6; ++i) steps.push_back({i + 1, t[i], d_mm[i] * 1e-3});
-  return steps;
-}
 
 // For n = 1 the power-law drops are Hagen–Poiseuille's: 8 μ L Q / (π R⁴) in the cylinders, and
 // its integral along the cone, 8 μ Q (R2⁻³ − R1⁻³) / (3 π tanθ).

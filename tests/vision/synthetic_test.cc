@@ -57,7 +57,8 @@ TEST(SyntheticTest, EdgesHoldTheTruthExactly) {
   ExpectRowsHoldTheTruth(odd);
 }
 
-TEST(SyntheticTest, SameSeedSameFrame) {
+// A 320x240 scene with a 150 µm strand: fast to render.
+SceneParams SmallScene() {
   SceneParams p;
   p.width_px = 320;
   p.height_px = 240;
@@ -65,6 +66,11 @@ TEST(SyntheticTest, SameSeedSameFrame) {
   p.tip_y_px = 60;
   p.strand_width_um = 150;
   p.nozzle_tip_width_um = 400;
+  return p;
+}
+
+TEST(SyntheticTest, SameSeedSameFrame) {
+  SceneParams p = SmallScene();
   p.width_jitter_um = 2;
   p.sway_deg = 1;
   FrameTruth a, b, c;
@@ -89,13 +95,7 @@ TEST(SyntheticTest, SameSeedSameFrame) {
 }
 
 TEST(SyntheticTest, OutputKinds) {
-  SceneParams p;
-  p.width_px = 200;
-  p.height_px = 160;
-  p.tip_x_px = 100;
-  p.tip_y_px = 40;
-  p.strand_width_um = 120;
-  p.nozzle_tip_width_um = 300;
+  SceneParams p = SmallScene();
   EXPECT_EQ(RenderFrame(p, 0, nullptr).type(), CV_8UC1);
   p.colour = true;
   EXPECT_EQ(RenderFrame(p, 0, nullptr).type(), CV_8UC3);
@@ -123,13 +123,7 @@ TEST(SyntheticTest, ValidateNamesTheProblem) {
 TEST(SyntheticTest, SequencesAsPngAviAndMp4WithTruth) {
   const fs::path dir = fs::temp_directory_path() / "clogscope_synthetic_seq";
   fs::remove_all(dir);
-  SceneParams p;
-  p.width_px = 320;
-  p.height_px = 240;
-  p.tip_x_px = 160;
-  p.tip_y_px = 60;
-  p.strand_width_um = 150;
-  p.nozzle_tip_width_um = 400;
+  SceneParams p = SmallScene();
   p.width_jitter_um = 1;
   for (const char* out : {"png", "v.avi", "v.mp4"}) {
     const std::string out_path = (dir / out).string();
