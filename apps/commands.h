@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "calib/pixel_scale.h"
 #include "model/fit.h"
 #include "model/parameters.h"
 #include "model/predictor.h"
@@ -18,6 +19,7 @@ namespace clogscope::apps {
 int RunRender(int argc, char** argv);
 int RunMeasure(int argc, char** argv);
 int RunPredict(int argc, char** argv);
+int RunCalibrate(int argc, char** argv);
 
 // --- render --------------------------------------------------------------------------------
 struct RenderCommandOptions {
@@ -33,8 +35,9 @@ std::string RenderToFiles(const RenderCommandOptions& options);
 
 // --- measure -------------------------------------------------------------------------------
 struct MeasureCommandOptions {
-  std::vector<std::string> inputs;                      // images, directories of images, videos
-  std::optional<double> scale_um_per_px;                // converts widths to µm when given
+  std::vector<std::string> inputs;                     // images, directories of images, videos
+  std::optional<double> scale_um_per_px;               // converts widths to µm when given
+  std::optional<calib::ScaleCalibration> calibration;  // or a calibration (--calib): scale and bias
   std::optional<double> band_start_um, band_height_um;  // need a scale
   std::optional<double> band_start_px, band_height_px;  // defaults: the µm values at 3 µm/px
   vision::StrandMeasureOptions strand;                  // band fields are filled from the above
@@ -63,6 +66,30 @@ MeasureSummary MeasureInputs(MeasureCommandOptions options);
 
 // The per-frame CSV's columns, in order.
 const std::vector<std::string>& FrameCsvColumns();
+
+// --- calibrate -----------------------------------------------------------------------------
+struct CalibrateCommandOptions {
+  std::string pins_csv;                        // pin gauges: image,diameter_um[,tolerance_um]
+  std::vector<std::string> micrometer_images;  // or stage micrometer images
+  double pitch_um = 0;                         // micrometer line pitch
+  bool fit_distortion = false;                 // micrometer: second-order term
+  std::optional<double>
+      expect_scale_um_per_px;                // micrometer: refuse a pitch that gives far from this
+  std::string out;                           // calibration YAML
+  std::string plot;                          // residual plot PNG; empty: next to out
+  vision::StrandMeasureOptions pin_measure;  // roi, polarity for the pins
+  bool Validate(std::string* why) const;
+};
+
+struct CalibrateResult {
+  calib::ScaleCalibration calibration;
+  std::vector<std::string> inputs;  // files read
+};
+
+// Measures the reference images and fits the scale; writes nothing. Throws std::invalid_argument
+// naming the image or CSV row for bad input (unreadable image, pin or lines not found, missing
+// diameter, too few targets, a pitch that does not fit).
+CalibrateResult ComputeCalibration(const CalibrateCommandOptions& options);
 
 // --- predict -------------------------------------------------------------------------------
 struct PredictCommandOptions {

@@ -22,6 +22,8 @@ struct Command {
 
 const Command kCommands[] = {
     {"render", clogscope::apps::RunRender, "synthetic frames with exact ground truth"},
+    {"calibrate", clogscope::apps::RunCalibrate,
+     "pixel scale from pin gauges or a stage micrometer"},
     {"measure", clogscope::apps::RunMeasure, "strand width per frame from images or videos"},
     {"predict", clogscope::apps::RunPredict,
      "diameter table -> predicted vibration and motor current; fits"},
@@ -37,6 +39,7 @@ void PrintUsage() {
   std::printf(
       "\nExamples:\n"
       "  clogscope render --out frames/ --frames 10 --tilt-deg 5\n"
+      "  clogscope calibrate --pins pins/pins.csv --out calib.yaml\n"
       "  clogscope measure frames/ --scale-um-per-px 3 --out-frames frames.csv --overlay ov/\n"
       "  clogscope predict --extruder direct-pla --diameters diameters.csv --out pred/\n"
       "\nEnvironment: CLOGSCOPE_LOG=debug|info|warn|error sets the log level (default info).\n");

@@ -11,6 +11,7 @@
 
 #include "apps/cli_util.h"
 #include "apps/commands.h"
+#include "calib/calibration_file.h"
 #include "common/atomic_file.h"
 #include "common/csv.h"
 #include "common/provenance.h"
@@ -36,7 +37,19 @@ struct Row {
   vision::StrandMeasurement m;
 };
 
-std::string FormatRow(const Row& r, std::optional<double> scale) {
+// Pixel widths to µm: a calibration's (w − b)·s with its σ carried, a plain scale, or none.
+struct Conversion {
+  std::optional<calib::ScaleCalibration> cal;
+  std::optional<double> scale;
+  bool known() const { return cal || scale; }
+  double Um(double px) const { return cal ? cal->ToMicrons(px) : px * *scale; }
+  double SigmaUm(double px, double sigma_px) const {
+    return cal ? cal->MicronsSigma(px, sigma_px) : sigma_px * *scale;
+  }
+  double ScaleUmPerPx() const { return cal ? cal->scale_um_per_px : scale.value_or(0.0); }
+};
+
+std::string FormatRow(const Row& r, const Conversion& conv) {
   const auto& m = r.m;
   const bool ok = m.valid();
   auto num = [&](double v, int d) { return ok ? CsvNumber(v, d) : std::string(); };
@@ -48,8 +61,8 @@ std::string FormatRow(const Row& r, std::optional<double> scale) {
       ok ? "1" : "0",
       num(m.width_px, 4),
       num(m.width_sigma_px, 4),
-      scale ? num(m.width_px * *scale, 3) : "",
-      scale ? num(m.width_sigma_px * *scale, 3) : "",
+      conv.known() ? num(conv.Um(m.width_px), 3) : "",
+      conv.known() ? num(conv.SigmaUm(m.width_px, m.width_sigma_px), 3) : "",
       geo(m.angle_deg, 3),
       geo(m.contrast, 1),
       geo(m.blur_px, 3),
@@ -104,14 +117,19 @@ void MeasureCommandOptions::ResolveBand() {
     throw std::invalid_argument(
         fmt::format("--scale-um-per-px {}: must be a positive number", *scale_um_per_px));
   }
-  if ((band_start_um || band_height_um) && !scale_um_per_px) {
+  if (scale_um_per_px && calibration) {
+    throw std::invalid_argument("give either --scale-um-per-px or --calib, not both");
+  }
+  if ((band_start_um || band_height_um) && !scale_um_per_px && !calibration) {
     throw std::invalid_argument(
-        "--band-start-um/--band-height-um need --scale-um-per-px (or give the band in px)");
+        "--band-start-um/--band-height-um need --scale-um-per-px or --calib (or give the band in "
+        "px)");
   }
   if ((band_start_um && band_start_px) || (band_height_um && band_height_px)) {
     throw std::invalid_argument("give the band either in µm or in px, not both");
   }
-  const double scale = scale_um_per_px.value_or(kNominalScaleUmPerPx);
+  const double scale =
+      calibration ? calibration->scale_um_per_px : scale_um_per_px.value_or(kNominalScaleUmPerPx);
   strand.band_start_px =
       band_start_px ? *band_start_px : band_start_um.value_or(kDefaultBandStartUm) / scale;
   strand.band_height_px =
@@ -138,7 +156,15 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
   const auto t0 = std::chrono::steady_clock::now();
   // Rows go to "<out>.partial" as each input completes, so an interrupted run keeps what it did.
   AtomicTextFile csv(o.out_frames, /*keep_partial=*/true);
-  csv.stream() << ProvenanceCsvComment(CurrentProvenance()) << CsvLine(FrameCsvColumns()) << "\n";
+  const Conversion conv{o.calibration, o.scale_um_per_px};
+  csv.stream() << ProvenanceCsvComment(CurrentProvenance());
+  if (o.calibration) {
+    csv.stream() << fmt::format(
+        "# calibration {}: scale {:.6f} ± {:.6f} µm/px, edge bias {:+.4f} ± {:.4f} px\n",
+        o.calibration->method, o.calibration->scale_um_per_px, o.calibration->scale_sigma_um_per_px,
+        o.calibration->edge_bias_px, o.calibration->edge_bias_sigma_px);
+  }
+  csv.stream() << CsvLine(FrameCsvColumns()) << "\n";
 
   for (const std::string& input : o.inputs) {
     std::unique_ptr<vision::FrameSource> source;
@@ -173,15 +199,15 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
     }
     int valid = 0;
     for (const Row& r : rows) {
-      csv.stream() << FormatRow(r, o.scale_um_per_px) << "\n";
+      csv.stream() << FormatRow(r, conv) << "\n";
       valid += r.m.valid();
     }
     csv.stream().flush();
     for (const auto& [row, image] : keep) {
       const std::string name =
           (fs::path(o.overlay_dir) / OverlayName(rows[row], from_video, &overlay_names)).string();
-      vision::WriteImageAtomically(
-          name, vision::DrawOverlay(image, rows[row].m, o.scale_um_per_px.value_or(0.0)));
+      vision::WriteImageAtomically(name,
+                                   vision::DrawOverlay(image, rows[row].m, conv.ScaleUmPerPx()));
       ++summary.overlays_written;
     }
     ++summary.inputs_ok;
@@ -215,7 +241,11 @@ int RunMeasure(int argc, char** argv) {
   double min_contrast_levels = 0;
   bool no_outliers = false;
   app.add_option("inputs", o.inputs, "Images, directories of images, or video files")->required();
-  app.add_option("--scale-um-per-px", o.scale_um_per_px, "Pixel scale; widths in µm need it");
+  std::string calib_path;
+  app.add_option("--scale-um-per-px", o.scale_um_per_px,
+                 "Pixel scale; widths in µm need it or --calib");
+  app.add_option("--calib", calib_path,
+                 "Calibration file from clogscope calibrate (scale and edge bias)");
   app.add_option("--out-frames", o.out_frames, "Per-frame CSV to write")->required();
   app.add_option("--overlay", o.overlay_dir, "Directory for annotated PNGs");
   app.add_option("--overlay-every", o.overlay_every,
@@ -240,10 +270,12 @@ int RunMeasure(int argc, char** argv) {
       "Examples:\n"
       "  clogscope measure step1.mp4 --scale-um-per-px 3.0 --out-frames frames.csv\n"
       "  clogscope measure frames/ --out-frames frames.csv --overlay overlays/\n"
+      "  clogscope measure step1.mp4 --calib calib.yaml --out-frames frames.csv\n"
       "  clogscope measure a.png b.png --roi 400,150,480,400 --polarity dark --out-frames f.csv\n"
       "Exit status: 0 all inputs read, 2 some inputs unreadable, 1 nothing measured.");
   CLI11_PARSE(app, argc, argv);
   if (!roi.empty()) o.strand.roi = ParseRoi(roi);
+  if (!calib_path.empty()) o.calibration = calib::ReadCalibrationFile(calib_path);
   o.strand.polarity = vision::ParsePolarity(polarity);
   if (app.count("--min-contrast")) {
     if (!(min_contrast_levels > 0 && min_contrast_levels < 255))

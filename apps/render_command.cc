@@ -47,11 +47,15 @@ int RunRender(int argc, char** argv) {
   RenderCommandOptions o;
   vision::SceneParams& s = o.scene;
   bool silhouette = false;
+  std::string target = "strand";
   app.add_option("--out", o.out,
                  "Output: a directory (PNG frames) or a .avi (MJPEG) / .mp4 (H.264) file")
       ->required();
   app.add_option("--truth", o.truth_path,
                  "Ground-truth JSON (default: DIR/truth.json or NAME.truth.json)");
+  app.add_option("--target", target,
+                 "strand (below a nozzle), pin (gauge across the frame) or micrometer")
+      ->capture_default_str();
   app.add_option("--frames", o.frames, "Number of frames")->capture_default_str();
   app.add_option("--fps", o.fps, "Video frame rate")->capture_default_str();
   app.add_option(
@@ -85,6 +89,12 @@ int RunRender(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--width-jitter-um", s.width_jitter_um, "Per-frame sigma of the strand width")
       ->capture_default_str();
+  app.add_option("--edge-bias-px", s.edge_bias_px,
+                 "Objects appear this much wider than width/scale (the optics' edge bias)")
+      ->capture_default_str();
+  app.add_option("--pitch-um", s.pitch_um, "Micrometer line pitch")->capture_default_str();
+  app.add_option("--line-width-um", s.line_width_um, "Micrometer line width")
+      ->capture_default_str();
   app.add_flag("--colour,--color", s.colour, "BGR frames with an orange tint");
   app.add_option("--bit-depth", s.bit_depth, "8 or 16 (PNG only)")->capture_default_str();
   app.add_option("--seed", s.seed, "Random seed")->capture_default_str();
@@ -92,8 +102,12 @@ int RunRender(int argc, char** argv) {
       "Examples:\n"
       "  clogscope render --out frames/ --frames 10\n"
       "  clogscope render --out step.mp4 --frames 250 --strand-width-um 390.1 --width-jitter-um 2\n"
-      "  clogscope render --out tilted/ --tilt-deg 15 --silhouette --highlight --gradient 0.3");
+      "  clogscope render --out tilted/ --tilt-deg 15 --silhouette --highlight --gradient 0.3\n"
+      "  clogscope render --target pin --strand-width-um 300 --edge-bias-px 0.4 --out pin300/\n"
+      "  clogscope render --target micrometer --pitch-um 100 --tilt-deg 2 --silhouette --out "
+      "micro/");
   CLI11_PARSE(app, argc, argv);
+  s.target = vision::ParseTarget(target);
   if (silhouette) {
     const double bg = s.background_level, st = s.strand_level;
     s.SetSilhouette();

@@ -32,4 +32,10 @@ struct EdgeFit {
 EdgeFit FitBlurredStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
                        double sigma_guess_px, double u_ref);
 
+// Fit of a thin line's profile, value(u) = base + slope·(u − centre_guess) + depth·exp(−z²/2),
+// z = (u − centre)/width. The result's edge_px is the line centre, sigma_px its Gaussian width,
+// step its (signed) depth.
+EdgeFit FitLineProfile(const std::vector<EdgeSample>& samples, double centre_guess_px,
+                       double width_guess_px);
+
 }  // namespace clogscope::vision

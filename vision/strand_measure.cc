@@ -510,7 +510,7 @@ StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions
   // 3. Tip: walk up beside the strand, on both sides, to the nozzle's face; walk down for a bed.
   const double side_u = 0.5 * width0 + std::max(4.0, 0.2 * width0);
   int n_tip = 0;
-  double s_tip = 0, s_end = 1e30;
+  double s_tip = 0, s_end = 1e30, s_top_edge = -1e30;
   for (int side = 0; side < 2; ++side) {
     const double u = side == 0 ? -side_u : side_u;
     const ScanEnd tip = ScanForObject(img, f, lv, u, s_mid, -1.0);
@@ -518,12 +518,19 @@ StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions
     if (tip.hit) {
       s_tip += tip.s;
       ++n_tip;
+    } else if (!std::isnan(tip.s)) {
+      s_top_edge = std::max(s_top_edge, tip.s);
     }
     // Below the strand: a bed or obstacle, or the frame's edge, ends the band.
     if (!std::isnan(end.s)) s_end = std::min(s_end, end.s);
   }
-  if (n_tip == 0) return fail(FrameStatus::kNoTip, "no nozzle tip above the strand");
-  s_tip /= n_tip;
+  if (n_tip > 0) {
+    s_tip /= n_tip;
+  } else if (!opt.require_tip && s_top_edge > -1e29) {
+    s_tip = s_top_edge;  // an object across the frame (a pin gauge): the band starts at the edge
+  } else {
+    return fail(FrameStatus::kNoTip, "no nozzle tip above the strand");
+  }
   f.ox += s_tip * f.dx;
   f.oy += s_tip * f.dy;
   s_end -= s_tip;
@@ -536,7 +543,10 @@ StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions
   double band_s1 = opt.band_start_px + opt.band_height_px;
   const double end_margin = 10.0;  // > 3 blur sigma + caliper window at the usual blur
   if (s_end - end_margin < band_s1) band_s1 = s_end - end_margin;
-  if (band_s1 - band_s0 < std::max(3.0 * opt.caliper_spacing_px, 0.3 * opt.band_height_px)) {
+  const double min_band = opt.require_tip
+                              ? std::max(3.0 * opt.caliper_spacing_px, 0.3 * opt.band_height_px)
+                              : 3.0 * opt.caliper_spacing_px;
+  if (band_s1 - band_s0 < min_band) {
     return fail(FrameStatus::kBandOutsideFrame,
                 fmt::format("band {:.0f}-{:.0f} px below the tip runs into an object or the frame "
                             "edge {:.0f} px below the tip",

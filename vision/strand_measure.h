@@ -20,7 +20,10 @@ struct StrandMeasureOptions {
   double min_contrast_fraction = 0.06;  // edge step below this fraction of full scale: low contrast
   double max_blur_px = 6.0;             // fitted PSF sigma above this: out of focus
   double max_tilt_deg = 45.0;           // strand axes leaning more than this are not strands
-  double min_caliper_fraction = 0.5;    // fewer consistent calipers than this: occluded
+  // False for objects across the whole frame (calibration pins): without a nozzle tip the band
+  // starts band_start_px below where the object leaves the frame, and runs as far as it can.
+  bool require_tip = true;
+  double min_caliper_fraction = 0.5;     // fewer consistent calipers than this: occluded
   double max_saturated_fraction = 0.05;  // more clipped pixels at the edges than this: saturated
 
   bool Validate(std::string* why) const;

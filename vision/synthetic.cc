@@ -43,6 +43,25 @@ std::mt19937_64 FrameRng(uint64_t seed, int frame, uint64_t stream) {
 
 }  // namespace
 
+const char* TargetName(Target t) {
+  switch (t) {
+    case Target::kStrand:
+      return "strand";
+    case Target::kPin:
+      return "pin";
+    case Target::kMicrometer:
+      return "micrometer";
+  }
+  return "?";
+}
+
+Target ParseTarget(const std::string& name) {
+  if (name == "strand") return Target::kStrand;
+  if (name == "pin") return Target::kPin;
+  if (name == "micrometer") return Target::kMicrometer;
+  throw std::invalid_argument("target '" + name + "': expected strand, pin or micrometer");
+}
+
 const char* PolarityName(Polarity p) {
   switch (p) {
     case Polarity::kAuto:
@@ -76,13 +95,19 @@ bool SceneParams::Validate(std::string* why) const {
   if (std::abs(tilt_deg) > 60) return fail("tilt_deg must be within ±60");
   if (!(sway_deg >= 0) || !(width_jitter_um >= 0))
     return fail("sway_deg and width_jitter_um must not be negative");
-  if (nozzle_tip_width_um <= strand_width_um)
+  if (target == Target::kStrand && nozzle_tip_width_um <= strand_width_um)
     return fail("nozzle_tip_width_um must exceed strand_width_um");
   if (!(nozzle_cone_half_angle_deg > 0 && nozzle_cone_half_angle_deg < 85))
     return fail("nozzle_cone_half_angle_deg must be in (0, 85)");
   if (bed && !(bed_gap_um > 0)) return fail("bed_gap_um must be positive");
   if (std::abs(gradient_fraction) >= 1) return fail("gradient_fraction must be within (-1, 1)");
   if (bit_depth != 8 && bit_depth != 16) return fail("bit_depth must be 8 or 16");
+  if (std::abs(edge_bias_px) > 10) return fail("edge_bias_px must be within ±10 px");
+  if (target == Target::kMicrometer) {
+    if (!(line_width_um > 0)) return fail("line_width_um must be positive");
+    if (!(pitch_um > 2 * line_width_um)) return fail("pitch_um must exceed twice the line width");
+    if (pitch_um / scale_um_per_px < 4) return fail("micrometer lines closer than 4 px");
+  }
   for (double level : {background_level, strand_level, nozzle_level, bed_level}) {
     if (level < 0 || level > 255) return fail("grey levels must be within 0..255 (8-bit scale)");
   }
@@ -104,7 +129,8 @@ FrameTruth FrameTruthFor(const SceneParams& p, int frame_index) {
   double sway = normal(rng) * p.sway_deg;
   double jitter = normal(rng) * p.width_jitter_um;
   t.width_um = p.strand_width_um + jitter;
-  t.width_px = t.width_um / p.scale_um_per_px;
+  if (p.target == Target::kMicrometer) t.width_um = p.line_width_um;
+  t.width_px = t.width_um / p.scale_um_per_px + p.edge_bias_px;
   t.angle_deg = p.tilt_deg + sway;
   t.tip_x_px = p.tip_x_px;
   t.tip_y_px = p.tip_y_px;
@@ -119,6 +145,7 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
 
   const double sigma = p.blur_sigma_px;
   const double w = truth.width_px;
+  const double pitch_px = p.pitch_um / p.scale_um_per_px;
   const double th_strand = truth.angle_deg * kDegToRad;
   const double th_scene = p.tilt_deg * kDegToRad;
   const Vec2 n_strand{std::cos(th_strand), -std::sin(th_strand)};
@@ -156,18 +183,34 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
     double* row = radiance.ptr<double>(y);
     for (int x = 0; x < p.width_px; ++x) {
       const Vec2 d{x - p.tip_x_px, y - p.tip_y_px};
-      double cov = strand_left.Eval(d, sigma) - strand_right.Eval(d, sigma);
-      double v = p.background_level + (p.strand_level - p.background_level) * cov;
-      if (p.highlight) v += p.highlight_gain * (hl_left.Eval(d, sigma) - hl_right.Eval(d, sigma));
-      if (p.bed) {
-        double a = bed.Eval(d, sigma);
-        v = v * (1 - a) + p.bed_level * a;
+      double v;
+      if (p.target == Target::kMicrometer) {
+        // The nearest lines only: they are at least 4 px apart and the reach of one is 9 sigma.
+        const double u = Dot(n_strand, d);
+        const long k0 = std::lround(u / pitch_px);
+        double cov = 0;
+        for (long k = k0 - 2; k <= k0 + 2; ++k) {
+          const double c = k * pitch_px;
+          cov += PixelMeanOfBlurredStep(u - c + 0.5 * w, sigma, n_strand.x, n_strand.y) -
+                 PixelMeanOfBlurredStep(u - c - 0.5 * w, sigma, n_strand.x, n_strand.y);
+        }
+        v = p.background_level + (p.strand_level - p.background_level) * cov;
+      } else {
+        const double cov = strand_left.Eval(d, sigma) - strand_right.Eval(d, sigma);
+        v = p.background_level + (p.strand_level - p.background_level) * cov;
+        if (p.highlight) v += p.highlight_gain * (hl_left.Eval(d, sigma) - hl_right.Eval(d, sigma));
       }
-      // The product of three soft half-planes is exact away from the two flank corners, which lie
-      // far from the measurement band.
-      double a = nozzle_face.Eval(d, sigma);
-      if (a > 0) a *= nozzle_right.Eval(d, sigma) * nozzle_left.Eval(d, sigma);
-      v = v * (1 - a) + p.nozzle_level * a;
+      if (p.target == Target::kStrand) {
+        if (p.bed) {
+          const double a = bed.Eval(d, sigma);
+          v = v * (1 - a) + p.bed_level * a;
+        }
+        // The product of three soft half-planes is exact away from the two flank corners, which
+        // lie far from the measurement band.
+        double a = nozzle_face.Eval(d, sigma);
+        if (a > 0) a *= nozzle_right.Eval(d, sigma) * nozzle_left.Eval(d, sigma);
+        v = v * (1 - a) + p.nozzle_level * a;
+      }
       if (p.gradient_fraction != 0) {
         const Vec2 c{x - centre.x, y - centre.y};
         v *= 1.0 - p.gradient_fraction * Dot(c, g_dir) / diag;
@@ -228,6 +271,10 @@ std::string TruthToJson(const SceneParams& p, const std::vector<FrameTruth>& tru
       {"bed_gap_um", p.bed_gap_um},
       {"sway_deg", p.sway_deg},
       {"width_jitter_um", p.width_jitter_um},
+      {"target", TargetName(p.target)},
+      {"edge_bias_px", p.edge_bias_px},
+      {"pitch_um", p.pitch_um},
+      {"line_width_um", p.line_width_um},
       {"colour", p.colour},
       {"bit_depth", p.bit_depth},
       {"seed", p.seed},

@@ -17,12 +17,20 @@ const char* PolarityName(Polarity p);
 // Parses "auto", "bright" or "dark"; throws std::invalid_argument otherwise.
 Polarity ParsePolarity(const std::string& name);
 
+// What the scene shows: the strand below a nozzle, a calibration pin gauge (a cylinder across the
+// whole frame, no nozzle), or a stage micrometer (parallel lines at a known pitch).
+enum class Target { kStrand, kPin, kMicrometer };
+const char* TargetName(Target t);
+// Parses "strand", "pin" or "micrometer"; throws std::invalid_argument otherwise.
+Target ParseTarget(const std::string& name);
+
 // A side view of a nozzle tip and the strand below it, with exactly known geometry.
 //
 // Image frame: x to the right, y down, pixel centres at integer coordinates. The scene is tilted by
 // tilt_deg about the nozzle tip; the strand axis leans by tilt_deg (+ per-frame sway), positive
 // when the strand moves to +x going down.
 struct SceneParams {
+  Target target = Target::kStrand;
   int width_px = 1280;
   int height_px = 720;
   double scale_um_per_px = 3.0;
@@ -55,6 +63,13 @@ struct SceneParams {
   // Per-frame variation (standard deviations): strand axis angle and strand width.
   double sway_deg = 0.0;
   double width_jitter_um = 0.0;
+  // The optics' edge bias: every object appears this many px wider than width/scale (blur,
+  // diffraction, edge convention). Calibration fits it; 0 renders the geometric edge.
+  double edge_bias_px = 0.0;
+  // Stage micrometer (target kMicrometer): lines across the axis direction, centred on the tip
+  // point. The pin (kPin) is strand_width_um wide along the axis through the tip point.
+  double pitch_um = 100.0;
+  double line_width_um = 8.0;
   bool colour = false;  // BGR output with an orange tint instead of grey
   int bit_depth = 8;    // 8 or 16
   uint64_t seed = 1;
@@ -68,8 +83,8 @@ struct SceneParams {
 // The exact geometry of one rendered frame.
 struct FrameTruth {
   int frame = 0;
-  double width_um = 0;
-  double width_px = 0;
+  double width_um = 0;   // physical width (strand or pin; the micrometer's line width)
+  double width_px = 0;   // apparent width in the image: width_um / scale + edge bias
   double angle_deg = 0;  // strand axis angle, image frame
   double tip_x_px = 0;
   double tip_y_px = 0;

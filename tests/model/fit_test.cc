@@ -2,20 +2,17 @@
 
 #include <gtest/gtest.h>
 
-#include "tests/model/reference_data.h"
-
 #include <cmath>
 #include <random>
 
 #include "model/io.h"
+#include "tests/model/reference_data.h"
 
 namespace clogscope::model {
 namespace {
 
 using testing::ExampleAmplitudes;
 using testing::ReferenceSteps;
-
-
 
 TEST(FitTest, ExampleDataGivesAboutTwoAndAHalfPercent) {
   FitOptions o;

@@ -2,11 +2,10 @@
 
 #include <gtest/gtest.h>
 
-#include "tests/model/reference_data.h"
-
 #include <cmath>
 
 #include "model/physics.h"
+#include "tests/model/reference_data.h"
 
 namespace clogscope::model {
 namespace {
@@ -20,7 +19,6 @@ std::array<double, kParamCount> Values(const ExtruderParams& p) {
   for (int i = 0; i < kParamCount; ++i) v[i] = p.Get(static_cast<Param>(i));
   return v;
 }
-
 
 // For n = 1 the power-law drops are Hagen–Poiseuille's: 8 μ L Q / (π R⁴) in the cylinders, and
 // its integral along the cone, 8 μ Q (R2⁻³ − R1⁻³) / (3 π tanθ).
