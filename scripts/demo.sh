@@ -9,14 +9,26 @@ mkdir -p "$out/videos"
 temps=(220 210 200 190 180 170)
 diams=(400.0 396.9 390.1 381.3 365.9 345.4)   # µm, the reference study's means
 frames=50
-echo "Rendering 6 steps x $frames frames (1280x720, 3 µm/px, width jitter 2 µm, sway 0.3°) to $out/videos"
+bias=0.4   # the rendered optics' edge bias, px: objects look 0.4 px wider than width/scale
+echo "Rendering five pin gauges 300..500 µm (3 µm/px, edge bias $bias px) to $out/pins"
+mkdir -p "$out/pins"
+echo "image,diameter_um,tolerance_um" > "$out/pins/pins.csv"
+for d in 300 350 400 450 500; do
+  "$bin" render --target pin --strand-width-um $d --edge-bias-px $bias --tilt-deg 1.5 \
+    --out "$out/pins/pin$d" --seed $d 2>/dev/null
+  echo "pin$d/frame_000000.png,$d,0.5" >> "$out/pins/pins.csv"
+done
+echo "Calibrating (clogscope calibrate --pins)"
+"$bin" calibrate --pins "$out/pins/pins.csv" --out "$out/calibration.yaml" 2>/dev/null | head -3
+echo
+echo "Rendering 6 steps x $frames frames (1280x720, width jitter 2 µm, sway 0.3°) to $out/videos"
 for i in "${!temps[@]}"; do
   "$bin" render --out "$out/videos/step$((i + 1))_${temps[$i]}C.mp4" --frames $frames \
     --strand-width-um "${diams[$i]}" --width-jitter-um 2 --sway-deg 0.3 --highlight \
-    --gradient 0.2 --seed $((i + 1)) 2>/dev/null
+    --gradient 0.2 --edge-bias-px $bias --seed $((i + 1)) 2>/dev/null
 done
-echo "Measuring (clogscope measure, scale 3.000 µm/px)"
-"$bin" measure "$out"/videos/step*.mp4 --scale-um-per-px 3.0 --out-frames "$out/frames.csv" \
+echo "Measuring (clogscope measure --calib)"
+"$bin" measure "$out"/videos/step*.mp4 --calib "$out/calibration.yaml" --out-frames "$out/frames.csv" \
   --overlay "$out/overlays"
 echo
 echo "Effective nozzle diameter per step (mean of the valid frames):"
