@@ -6,6 +6,7 @@
 
 #include "calib/pixel_scale.h"
 #include "model/fit.h"
+#include "pipeline/experiment.h"
 #include "model/parameters.h"
 #include "model/predictor.h"
 #include "vision/strand_measure.h"
@@ -20,6 +21,7 @@ int RunRender(int argc, char** argv);
 int RunMeasure(int argc, char** argv);
 int RunPredict(int argc, char** argv);
 int RunCalibrate(int argc, char** argv);
+int RunRun(int argc, char** argv);
 
 // --- render --------------------------------------------------------------------------------
 struct RenderCommandOptions {
@@ -120,5 +122,38 @@ PredictResult ComputePrediction(const PredictCommandOptions& options);
 std::vector<std::string> WritePredictionOutputs(const PredictResult& result,
                                                 const std::string& out_dir, bool plots,
                                                 std::vector<std::string>* warnings);
+
+// --- experiments: measure --manifest, and run ----------------------------------------------
+struct ExperimentCommandOptions {
+  std::string manifest;
+  std::string out_dir;
+  std::optional<int> samples;             // overrides the manifest
+  int jobs = 0;                           // 0: all cores
+  bool resume = false;
+  std::optional<double> scale_um_per_px;  // overrides the manifest's scale or calibration
+  std::string calib_path;
+  bool full_pipeline = false;  // run: calibrate when the manifest says, measure, predict, summary
+  bool Validate(std::string* why) const;
+};
+
+struct ExperimentReport {
+  pipeline::Manifest manifest;
+  std::vector<pipeline::StepResult> steps;
+  std::optional<calib::ScaleCalibration> conversion;
+  std::optional<PredictResult> prediction;
+  std::vector<std::string> files;  // written
+  std::vector<std::string> warnings;
+  bool cancelled = false;
+};
+
+// Loads the manifest, calibrates (run only, when the manifest names reference images), measures
+// every step, writes the tables, and (run only) predicts and writes summary.md/.json. `cancel`
+// stops it early; finished steps are kept and their tables written. Throws std::invalid_argument
+// for a bad manifest or options; a step that fails is reported in its row.
+ExperimentReport RunExperimentCommand(const ExperimentCommandOptions& options, std::atomic<bool>* cancel);
+
+// The command-line side shared by `run` and `measure --manifest`: Ctrl-C handling, the printed
+// table, the exit status.
+int RunExperimentCli(const ExperimentCommandOptions& options);
 
 }  // namespace clogscope::apps

@@ -25,6 +25,7 @@ const Command kCommands[] = {
     {"calibrate", clogscope::apps::RunCalibrate,
      "pixel scale from pin gauges or a stage micrometer"},
     {"measure", clogscope::apps::RunMeasure, "strand width per frame from images or videos"},
+    {"run", clogscope::apps::RunRun, "the whole pipeline from one manifest: calibrate, measure, predict"},
     {"predict", clogscope::apps::RunPredict,
      "diameter table -> predicted vibration and motor current; fits"},
 };
@@ -41,6 +42,7 @@ void PrintUsage() {
       "  clogscope render --out frames/ --frames 10 --tilt-deg 5\n"
       "  clogscope calibrate --pins pins/pins.csv --out calib.yaml\n"
       "  clogscope measure frames/ --scale-um-per-px 3 --out-frames frames.csv --overlay ov/\n"
+      "  clogscope run experiment.yaml --out results/\n"
       "  clogscope predict --extruder direct-pla --diameters diameters.csv --out pred/\n"
       "\nEnvironment: CLOGSCOPE_LOG=debug|info|warn|error sets the log level (default info).\n");
 }

@@ -240,13 +240,20 @@ int RunMeasure(int argc, char** argv) {
   std::string roi, polarity = "auto";
   double min_contrast_levels = 0;
   bool no_outliers = false;
-  app.add_option("inputs", o.inputs, "Images, directories of images, or video files")->required();
+  ExperimentCommandOptions exp;
+  int samples = 0;
+  app.add_option("inputs", o.inputs, "Images, directories of images, or video files");
+  app.add_option("--manifest", exp.manifest, "Step manifest (YAML or CSV): measure an experiment into --out");
+  app.add_option("--out", exp.out_dir, "With --manifest: output folder for the tables");
+  app.add_option("--samples", samples, "With --manifest: valid frames per step (default 50)");
+  app.add_option("--jobs", exp.jobs, "With --manifest: steps measured at once (default: all cores)");
+  app.add_flag("--resume", exp.resume, "With --manifest: keep steps already measured in --out");
   std::string calib_path;
   app.add_option("--scale-um-per-px", o.scale_um_per_px,
                  "Pixel scale; widths in µm need it or --calib");
   app.add_option("--calib", calib_path,
                  "Calibration file from clogscope calibrate (scale and edge bias)");
-  app.add_option("--out-frames", o.out_frames, "Per-frame CSV to write")->required();
+  app.add_option("--out-frames", o.out_frames, "Per-frame CSV to write (inputs mode)");
   app.add_option("--overlay", o.overlay_dir, "Directory for annotated PNGs");
   app.add_option("--overlay-every", o.overlay_every,
                  "Overlay every Nth frame (default: every image, every 25th video frame)");
@@ -271,9 +278,18 @@ int RunMeasure(int argc, char** argv) {
       "  clogscope measure step1.mp4 --scale-um-per-px 3.0 --out-frames frames.csv\n"
       "  clogscope measure frames/ --out-frames frames.csv --overlay overlays/\n"
       "  clogscope measure step1.mp4 --calib calib.yaml --out-frames frames.csv\n"
+      "  clogscope measure --manifest steps.yaml --calib calib.yaml --out results/\n"
       "  clogscope measure a.png b.png --roi 400,150,480,400 --polarity dark --out-frames f.csv\n"
       "Exit status: 0 all inputs read, 2 some inputs unreadable, 1 nothing measured.");
   CLI11_PARSE(app, argc, argv);
+  if (!exp.manifest.empty()) {
+    if (!o.inputs.empty()) throw std::invalid_argument("give either inputs or --manifest, not both");
+    exp.scale_um_per_px = o.scale_um_per_px;
+    exp.calib_path = calib_path;
+    if (samples) exp.samples = samples;
+    return RunExperimentCli(exp);
+  }
+  if (o.inputs.empty()) throw std::invalid_argument("give inputs (images, directories, videos) or --manifest");
   if (!roi.empty()) o.strand.roi = ParseRoi(roi);
   if (!calib_path.empty()) o.calibration = calib::ReadCalibrationFile(calib_path);
   o.strand.polarity = vision::ParsePolarity(polarity);

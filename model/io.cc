@@ -49,11 +49,13 @@ std::vector<StepInput> ReadDiameterTable(const std::string& path, double default
   if (c_mean < 0)
     throw std::invalid_argument(path + ": no mean_um column (the diameter table of measure)");
   if (t.rows.empty()) throw std::invalid_argument(path + ": no rows");
+  const int c_status = t.Column("status");  // measure's table marks steps that failed: skipped
   std::vector<StepInput> steps;
   std::set<int> seen;
   for (size_t i = 0; i < t.rows.size(); ++i) {
     const auto& row = t.rows[i];
     const std::string where = fmt::format("{}:{}", path, t.row_line_numbers[i]);
+    if (c_status >= 0 && row[c_status] == "failed") continue;
     StepInput s;
     s.step = c_step >= 0 ? ParseStep(row[c_step], where) : static_cast<int>(i) + 1;
     s.source_line = t.row_line_numbers[i];
@@ -64,6 +66,7 @@ std::vector<StepInput> ReadDiameterTable(const std::string& path, double default
       throw std::invalid_argument(fmt::format("{}: step {} appears twice", where, s.step));
     steps.push_back(s);
   }
+  if (steps.empty()) throw std::invalid_argument(path + ": no step has a diameter (all failed)");
   return steps;
 }
 

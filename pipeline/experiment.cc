@@ -1,0 +1,488 @@
+#include "pipeline/experiment.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "common/atomic_file.h"
+#include "common/csv.h"
+#include "common/plot.h"
+#include "common/provenance.h"
+#include "pipeline/statistics.h"
+#include "vision/overlay.h"
+#include "vision/video_decoder.h"
+#include "vision/video_io.h"
+
+namespace clogscope::pipeline {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+// Seek instead of decoding forward when the next sample is further ahead than this.
+constexpr double kSeekAheadS = 2.0;
+// Floor on the MAD of a step's widths: identical widths must not make 0.01 px an outlier.
+constexpr double kMinMadPx = 0.02;
+
+std::string StepFileName(int step) { return fmt::format("step_{:04d}.json", step); }
+
+// What must match for a step file from an earlier run to stand for this one.
+json SpecKey(const StepSpec& s, int samples) {
+  return {{"step", s.step}, {"temperature_c", s.temperature_c}, {"video", s.video}, {"images", s.images},
+          {"start_s", s.start_s}, {"end_s", s.end_s}, {"settle_s", s.settle_s}, {"samples", samples}};
+}
+
+// A frame source for a step: video frames by time, or a directory's images by index.
+class StepFrames {
+ public:
+  virtual ~StepFrames() = default;
+  virtual bool Next(double* t, int* index, cv::Mat* img, std::string* source) = 0;
+  virtual void SeekTo(double t) = 0;
+  virtual double period() const = 0;  // time between frames (1 for images: t is the index)
+};
+
+class VideoFrames : public StepFrames {
+ public:
+  VideoFrames(const std::string& path, int threads) : dec_(path, threads), path_(path) {}
+  bool Next(double* t, int* index, cv::Mat* img, std::string* source) override {
+    vision::DecodedFrame f;
+    if (!dec_.Read(&f)) return false;
+    *t = f.time_s;
+    *index = f.index;
+    *img = f.grey;
+    *source = path_;
+    return true;
+  }
+  void SeekTo(double t) override { dec_.SeekToTime(t); }
+  double period() const override { return dec_.fps() > 0 ? 1.0 / dec_.fps() : 0.04; }
+  double duration() const { return dec_.duration_s(); }
+
+ private:
+  vision::VideoDecoder dec_;
+  std::string path_;
+};
+
+class ImageFrames : public StepFrames {
+ public:
+  explicit ImageFrames(std::vector<std::string> files) : files_(std::move(files)) {}
+  bool Next(double* t, int* index, cv::Mat* img, std::string* source) override {
+    if (next_ >= files_.size()) return false;
+    *t = static_cast<double>(next_);
+    *index = static_cast<int>(next_);
+    *source = files_[next_];
+    *img = cv::imread(files_[next_], cv::IMREAD_UNCHANGED);
+    ++next_;
+    return true;
+  }
+  void SeekTo(double t) override { next_ = static_cast<size_t>(std::max(0.0, std::floor(t))); }
+  double period() const override { return 1.0; }
+  size_t count() const { return files_.size(); }
+
+ private:
+  std::vector<std::string> files_;
+  size_t next_ = 0;
+};
+
+json ResultToJson(const StepResult& r, int samples) {
+  json frames = json::array();
+  for (const auto& f : r.frames) frames.push_back({{"fields", f.fields}, {"used", f.used}});
+  return {{"spec", SpecKey(r.spec, samples)},
+          {"line", r.spec.line},
+          {"status", r.status},
+          {"detail", r.detail},
+          {"n_examined", r.n_examined},
+          {"n_valid", r.n_valid},
+          {"n_used", r.n_used},
+          {"n_rejected", r.n_rejected},
+          {"mean_px", r.mean_px},
+          {"std_px", r.std_px},
+          {"has_um", r.has_um},
+          {"mean_um", r.mean_um},
+          {"std_um", r.std_um},
+          {"sem_um", r.sem_um},
+          {"cal_sigma_um", r.cal_sigma_um},
+          {"ci95_um", r.ci95_um},
+          {"frames", frames}};
+}
+
+bool ResultFromJson(const json& j, const StepSpec& spec, int samples, StepResult* r) {
+  if (j.at("spec") != SpecKey(spec, samples)) return false;
+  r->spec = spec;
+  r->status = j.at("status");
+  r->detail = j.at("detail");
+  r->n_examined = j.at("n_examined");
+  r->n_valid = j.at("n_valid");
+  r->n_used = j.at("n_used");
+  r->n_rejected = j.at("n_rejected");
+  r->mean_px = j.at("mean_px");
+  r->std_px = j.at("std_px");
+  r->has_um = j.at("has_um");
+  r->mean_um = j.at("mean_um");
+  r->std_um = j.at("std_um");
+  r->sem_um = j.at("sem_um");
+  r->cal_sigma_um = j.at("cal_sigma_um");
+  r->ci95_um = j.at("ci95_um");
+  for (const auto& f : j.at("frames")) {
+    FrameRecord fr;
+    fr.fields = f.at("fields").get<std::vector<std::string>>();
+    fr.used = f.at("used");
+    r->frames.push_back(std::move(fr));
+  }
+  r->resumed = true;
+  return true;
+}
+
+void Summarise(StepResult* r, const ExperimentOptions& o) {
+  std::vector<double> widths;
+  std::vector<FrameRecord*> valid;
+  for (auto& f : r->frames) {
+    if (f.m.valid()) {
+      widths.push_back(f.m.width_px);
+      valid.push_back(&f);
+    }
+  }
+  r->n_valid = static_cast<int>(widths.size());
+  if (widths.empty()) {
+    r->status = "failed";
+    if (r->detail.empty()) r->detail = "no valid frame";
+    return;
+  }
+  const SampleStats st = RobustStats(widths, o.outlier_mad_k, kMinMadPx);
+  for (size_t i = 0; i < valid.size(); ++i) valid[i]->used = st.used[i];
+  r->n_used = st.n_used;
+  r->n_rejected = st.n_rejected;
+  r->mean_px = st.mean;
+  r->std_px = st.std;
+  if (o.conversion) {
+    const auto& c = *o.conversion;
+    r->has_um = true;
+    r->mean_um = c.ToMicrons(st.mean);
+    r->std_um = st.std * c.scale_um_per_px;
+    r->sem_um = st.sem * c.scale_um_per_px;
+    r->cal_sigma_um = std::hypot((st.mean - c.edge_bias_px) * c.scale_sigma_um_per_px,
+                                 c.scale_um_per_px * c.edge_bias_sigma_px);
+    const double t = st.n_used >= 2 ? StudentT975(st.n_used - 1) : NAN;
+    r->ci95_um = std::hypot(t * r->sem_um, 1.959963984540054 * r->cal_sigma_um);
+  }
+  r->status = r->n_valid >= o.samples ? "ok" : "too_few_frames";
+  if (r->status == "too_few_frames") {
+    r->detail = fmt::format("{} valid of {} asked ({} frames examined)", r->n_valid, o.samples, r->n_examined);
+  }
+  for (auto& f : r->frames) f.fields = FrameFields(f.source, f.frame, f.time_s, f.m, o.conversion);
+}
+
+}  // namespace
+
+bool ExperimentOptions::Validate(std::string* why) const {
+  if (samples < 2) *why = "samples: need at least 2";
+  else if (jobs < 0) *why = "jobs: must not be negative";
+  else if (out_dir.empty()) *why = "an output directory is required";
+  else if (!strand.Validate(why)) return false;
+  else return true;
+  return false;
+}
+
+calib::ScaleCalibration PlainScale(double scale) {
+  calib::ScaleCalibration c;
+  c.usable = true;
+  c.method = "given";
+  c.scale_um_per_px = scale;
+  return c;
+}
+
+const std::vector<std::string>& FrameColumns() {
+  static const std::vector<std::string> kColumns = {
+      "source",   "frame",    "time_s",   "valid",         "width_px",       "width_sigma_px",
+      "width_um", "width_sigma_um", "angle_deg", "contrast", "blur_px",        "tip_x_px",
+      "tip_y_px", "calipers_used", "calipers_total", "polarity", "reason", "detail"};
+  return kColumns;
+}
+
+std::vector<std::string> FrameFields(const std::string& source, int frame, double time_s,
+                                     const vision::StrandMeasurement& m,
+                                     const std::optional<calib::ScaleCalibration>& conv) {
+  const bool ok = m.valid();
+  auto num = [&](double v, int d) { return ok ? CsvNumber(v, d) : std::string(); };
+  auto geo = [&](double v, int d) { return m.has_geometry ? CsvNumber(v, d) : std::string(); };
+  return {source,
+          std::to_string(frame),
+          time_s >= 0 ? CsvNumber(time_s, 4) : "",
+          ok ? "1" : "0",
+          num(m.width_px, 4),
+          num(m.width_sigma_px, 4),
+          conv ? num(conv->ToMicrons(m.width_px), 3) : "",
+          conv ? num(conv->MicronsSigma(m.width_px, m.width_sigma_px), 3) : "",
+          geo(m.angle_deg, 3),
+          geo(m.contrast, 1),
+          geo(m.blur_px, 3),
+          geo(m.tip_x_px, 2),
+          geo(m.tip_y_px, 2),
+          std::to_string(m.calipers_used),
+          std::to_string(m.calipers_total),
+          m.status == vision::FrameStatus::kNoStrand ? "" : vision::PolarityName(m.polarity),
+          vision::FrameStatusName(m.status),
+          m.detail};
+}
+
+StepResult MeasureStep(const StepSpec& spec, const ExperimentOptions& o, int decoder_threads,
+                       std::vector<std::pair<int, cv::Mat>>* overlay_frames) {
+  StepResult r;
+  r.spec = spec;
+  std::unique_ptr<StepFrames> frames;
+  double a = 0, b = 0;  // the settled part: [a, b) in seconds (video) or image index
+  try {
+    if (!spec.video.empty()) {
+      auto v = std::make_unique<VideoFrames>(spec.video, decoder_threads);
+      const double end = spec.end_s >= 0 ? spec.end_s : v->duration();
+      a = spec.start_s + spec.settle_s;
+      b = v->duration() > 0 ? std::min(end, v->duration()) : end;
+      frames = std::move(v);
+    } else {
+      std::vector<std::string> files;
+      std::error_code ec;
+      if (!fs::is_directory(spec.images, ec)) throw std::invalid_argument(spec.images + ": no such directory");
+      for (const auto& e : fs::directory_iterator(spec.images, ec)) {
+        if (e.is_regular_file() && vision::IsImagePath(e.path().string())) files.push_back(e.path().string());
+      }
+      if (files.empty()) throw std::invalid_argument(spec.images + ": directory holds no images");
+      std::sort(files.begin(), files.end());
+      a = 0;
+      b = static_cast<double>(files.size());
+      frames = std::make_unique<ImageFrames>(std::move(files));
+    }
+  } catch (const std::invalid_argument& e) {
+    r.status = "failed";
+    r.detail = e.what();
+    return r;
+  }
+  if (!(b > a)) {
+    r.status = "failed";
+    r.detail = fmt::format("nothing left after start {:g} s and settle {:g} s (source ends at {:g})",
+                           spec.start_s, spec.settle_s, b);
+    return r;
+  }
+
+  // N slots; in each, frames from the slot's middle on are measured until one is valid.
+  const int n = o.samples;
+  const double slot = (b - a) / n;
+  std::vector<bool> filled(n, false);
+  const std::vector<int> overlay_slots = {0, n / 2, n - 1};
+  if (a > kSeekAheadS) frames->SeekTo(a);
+  double t = 0;
+  int index = 0;
+  cv::Mat img;
+  std::string source;
+  while (frames->Next(&t, &index, &img, &source)) {
+    if (o.cancel && o.cancel->load()) break;
+    if (t < a - 1e-9) continue;
+    if (t >= b - 1e-9) break;
+    const int k = std::min(n - 1, static_cast<int>((t - a) / slot));
+    // A frame stands for [t − period/2, t + period/2): it may serve a slot whose middle it covers.
+    if (filled[k] || t + 0.5 * frames->period() < a + (k + 0.5) * slot - 1e-6) continue;
+    FrameRecord f;
+    f.source = source;
+    f.frame = index;
+    f.time_s = spec.video.empty() ? -1 : t;
+    if (img.empty()) {
+      f.m.status = vision::FrameStatus::kUnreadable;
+      f.m.detail = "cannot decode";
+    } else {
+      f.m = vision::MeasureStrand(img, o.strand);
+    }
+    ++r.n_examined;
+    if (f.m.valid()) {
+      filled[k] = true;
+      if (overlay_frames && std::find(overlay_slots.begin(), overlay_slots.end(), k) != overlay_slots.end() &&
+          static_cast<int>(overlay_frames->size()) < o.overlays_per_step) {
+        overlay_frames->push_back({static_cast<int>(r.frames.size()), img.clone()});
+      }
+    }
+    r.frames.push_back(std::move(f));
+    // Jump ahead when the next empty slot is far: decoding to it would cost more than a seek.
+    int next = k;
+    while (next < n && filled[next]) ++next;
+    if (next >= n) break;
+    const double target = a + (next + 0.5) * slot;
+    if (target - t > kSeekAheadS) frames->SeekTo(target);
+  }
+  Summarise(&r, o);
+  return r;
+}
+
+std::vector<StepResult> RunExperiment(const Manifest& m, const ExperimentOptions& o) {
+  std::string why;
+  if (!o.Validate(&why)) throw std::invalid_argument(why);
+  const fs::path out(o.out_dir), steps_dir = out / "steps", overlay_dir = out / "overlays";
+  std::error_code ec;
+  fs::create_directories(steps_dir, ec);
+  fs::create_directories(overlay_dir, ec);
+  if (!fs::is_directory(steps_dir)) throw std::invalid_argument(o.out_dir + ": cannot create output directory");
+
+  const int total = static_cast<int>(m.steps.size());
+  std::vector<std::optional<StepResult>> results(total);
+  std::vector<int> todo;
+  for (int i = 0; i < total; ++i) {
+    const std::string file = (steps_dir / StepFileName(m.steps[i].step)).string();
+    if (o.resume && fs::exists(file)) {
+      try {
+        StepResult r;
+        // A step that failed (say, its video was missing) is tried again.
+        if (ResultFromJson(json::parse(ReadFile(file)), m.steps[i], o.samples, &r) && r.status != "failed") {
+          results[i] = std::move(r);
+          continue;
+        }
+      } catch (const std::exception&) {
+        // An unreadable step file is measured again.
+      }
+    }
+    todo.push_back(i);
+  }
+  std::mutex mu;
+  int done = 0;
+  for (int i = 0; i < total; ++i) {
+    if (!results[i]) continue;
+    ++done;
+    if (o.on_step) o.on_step(*results[i], done, total);
+  }
+  std::atomic<size_t> next{0};
+  const int jobs = std::max(1, std::min<int>(o.jobs > 0 ? o.jobs : std::thread::hardware_concurrency(),
+                                             static_cast<int>(todo.size())));
+  // With several steps at once each decoder gets one thread; a lone step lets FFmpeg choose.
+  const int decoder_threads = jobs > 1 ? 1 : 0;
+  auto worker = [&]() {
+    while (true) {
+      if (o.cancel && o.cancel->load()) return;
+      const size_t j = next++;
+      if (j >= todo.size()) return;
+      const int i = todo[j];
+      std::vector<std::pair<int, cv::Mat>> overlays;
+      StepResult r = MeasureStep(m.steps[i], o, decoder_threads, &overlays);
+      if (o.cancel && o.cancel->load()) return;  // a partial step is not kept
+      for (const auto& [frame_idx, image] : overlays) {
+        const FrameRecord& f = r.frames[frame_idx];
+        const std::string name =
+            (overlay_dir / fmt::format("step{:02d}_{:.0f}C_f{:06d}.png", r.spec.step, r.spec.temperature_c, f.frame))
+                .string();
+        const double scale = o.conversion ? o.conversion->scale_um_per_px : 0.0;
+        vision::WriteImageAtomically(name, vision::DrawOverlay(image, f.m, scale));
+      }
+      WriteFileAtomically((steps_dir / StepFileName(r.spec.step)).string(), ResultToJson(r, o.samples).dump() + "\n");
+      std::lock_guard<std::mutex> lock(mu);
+      ++done;
+      if (o.on_step) o.on_step(r, done, total);
+      results[i] = std::move(r);
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int k = 0; k < jobs; ++k) pool.emplace_back(worker);
+  for (auto& th : pool) th.join();
+  std::vector<StepResult> out_results;
+  for (auto& r : results) {
+    if (r) out_results.push_back(std::move(*r));
+  }
+  return out_results;
+}
+
+std::vector<std::string> WriteExperimentTables(const Manifest& m, const std::vector<StepResult>& results,
+                                               const ExperimentOptions& o, std::vector<std::string>* warnings) {
+  const fs::path out(o.out_dir);
+  const Provenance prov = CurrentProvenance();
+  std::string conv_line;
+  if (o.conversion) {
+    conv_line = fmt::format("# conversion ({}): scale {:.6f} ± {:.6f} µm/px, edge bias {:+.4f} ± {:.4f} px\n",
+                            o.conversion->method, o.conversion->scale_um_per_px, o.conversion->scale_sigma_um_per_px,
+                            o.conversion->edge_bias_px, o.conversion->edge_bias_sigma_px);
+  }
+  std::vector<std::string> written;
+  // Per-frame rows of every step.
+  std::string frames = ProvenanceCsvComment(prov) + conv_line;
+  std::vector<std::string> cols = {"step"};
+  cols.insert(cols.end(), FrameColumns().begin(), FrameColumns().end());
+  cols.push_back("used");
+  frames += CsvLine(cols) + "\n";
+  for (const auto& r : results) {
+    for (const auto& f : r.frames) {
+      std::vector<std::string> row = {std::to_string(r.spec.step)};
+      row.insert(row.end(), f.fields.begin(), f.fields.end());
+      row.push_back(f.used ? "1" : "0");
+      frames += CsvLine(row) + "\n";
+    }
+  }
+  WriteFileAtomically((out / "frames.csv").string(), frames);
+  written.push_back((out / "frames.csv").string());
+
+  // The diameter table.
+  std::string table = ProvenanceCsvComment(prov) + conv_line;
+  table += "step,temperature_c,n,mean_um,std_um,sem_um,ci95_um,cal_sigma_um,mean_px,std_px,n_rejected,"
+           "n_valid,n_examined,status,detail\n";
+  json rows = json::array();
+  for (const auto& r : results) {
+    const bool have = r.n_used > 0;
+    auto um = [&](double v, int d) { return have && r.has_um ? CsvNumber(v, d) : std::string(); };
+    table += CsvLine({std::to_string(r.spec.step), CsvNumber(r.spec.temperature_c, 2), std::to_string(r.n_used),
+                      um(r.mean_um, 3), um(r.std_um, 3), um(r.sem_um, 3), um(r.ci95_um, 3), um(r.cal_sigma_um, 3),
+                      have ? CsvNumber(r.mean_px, 4) : "", have ? CsvNumber(r.std_px, 4) : "",
+                      std::to_string(r.n_rejected), std::to_string(r.n_valid), std::to_string(r.n_examined),
+                      r.status, r.detail}) +
+             "\n";
+    json row = {{"step", r.spec.step}, {"temperature_c", r.spec.temperature_c}, {"n", r.n_used},
+                {"mean_px", have ? json(r.mean_px) : json()}, {"std_px", have ? json(r.std_px) : json()},
+                {"n_rejected", r.n_rejected}, {"n_valid", r.n_valid}, {"n_examined", r.n_examined},
+                {"status", r.status}, {"detail", r.detail}, {"source", r.spec.video.empty() ? r.spec.images : r.spec.video}};
+    if (have && r.has_um) {
+      row["mean_um"] = r.mean_um;
+      row["std_um"] = r.std_um;
+      row["sem_um"] = r.sem_um;
+      row["ci95_um"] = r.ci95_um;
+      row["cal_sigma_um"] = r.cal_sigma_um;
+    }
+    rows.push_back(row);
+  }
+  WriteFileAtomically((out / "diameters.csv").string(), table);
+  written.push_back((out / "diameters.csv").string());
+  json j = {{"provenance", {{"version", prov.version}, {"created_utc", prov.created_utc}, {"command_line", prov.command_line}}},
+            {"experiment", m.name},
+            {"manifest", m.path},
+            {"samples", o.samples},
+            {"steps", rows}};
+  if (o.conversion) {
+    j["conversion"] = {{"method", o.conversion->method}, {"scale_um_per_px", o.conversion->scale_um_per_px},
+                       {"scale_sigma_um_per_px", o.conversion->scale_sigma_um_per_px},
+                       {"edge_bias_px", o.conversion->edge_bias_px}, {"edge_bias_sigma_px", o.conversion->edge_bias_sigma_px}};
+  }
+  WriteFileAtomically((out / "diameters.json").string(), j.dump(2) + "\n");
+  written.push_back((out / "diameters.json").string());
+
+  // Diameter against temperature with 95 % error bars.
+  PlotSeries s{"effective diameter, 95 % CI", {}, {}, {}, ""};
+  for (const auto& r : results) {
+    if (r.n_used == 0) continue;
+    s.x.push_back(r.spec.temperature_c);
+    s.y.push_back(r.has_um ? r.mean_um : r.mean_px);
+    s.y_error.push_back(r.has_um ? r.ci95_um : 0.0);
+  }
+  if (!s.x.empty()) {
+    PlotSpec spec;
+    spec.title = fmt::format("{}: effective nozzle diameter, {} samples per step", m.name, o.samples);
+    spec.x_label = "temperature (°C)";
+    spec.y_label = results.front().has_um ? "diameter (µm)" : "width (px)";
+    spec.series.push_back(s);
+    std::string why;
+    const std::string png = (out / "diameter_vs_temperature.png").string();
+    if (PlotToPng(spec, png, &why)) {
+      written.push_back(png);
+    } else {
+      warnings->push_back("diameter_vs_temperature.png not drawn: " + why);
+    }
+  }
+  return written;
+}
+
+}  // namespace clogscope::pipeline

@@ -1,0 +1,248 @@
+#include "pipeline/manifest.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <set>
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include "common/atomic_file.h"
+#include "common/csv.h"
+#include "pipeline/statistics.h"
+
+namespace clogscope::pipeline {
+namespace {
+
+namespace fs = std::filesystem;
+
+class YamlReader {
+ public:
+  explicit YamlReader(std::string source) : source_(std::move(source)) {}
+
+  [[noreturn]] void Fail(const YAML::Node& n, const std::string& msg) const {
+    throw std::invalid_argument(fmt::format("{}:{}: {}", source_, n.Mark().line + 1, msg));
+  }
+  void CheckKeys(const YAML::Node& map, const std::set<std::string>& known) const {
+    for (const auto& kv : map) {
+      const std::string key = kv.first.Scalar();
+      if (!known.count(key)) {
+        std::string list;
+        for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+        Fail(kv.first, fmt::format("unknown key '{}' (known: {})", key, list));
+      }
+    }
+  }
+  double Number(const YAML::Node& n, const std::string& key) const {
+    if (!n.IsScalar()) Fail(n, key + ": expected a number");
+    const std::string& t = n.Scalar();
+    size_t used = 0;
+    double v = NAN;
+    try {
+      v = std::stod(t, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != t.size() || !std::isfinite(v)) Fail(n, fmt::format("{}: '{}' is not a number", key, t));
+    return v;
+  }
+  int Whole(const YAML::Node& n, const std::string& key) const {
+    const double v = Number(n, key);
+    if (v != std::floor(v) || std::abs(v) > 1e9) Fail(n, fmt::format("{}: expected a whole number", key));
+    return static_cast<int>(v);
+  }
+  std::string Text(const YAML::Node& n, const std::string& key) const {
+    if (!n.IsScalar()) Fail(n, key + ": expected a single value");
+    return n.Scalar();
+  }
+  std::vector<std::string> TextList(const YAML::Node& n, const std::string& key) const {
+    if (n.IsScalar()) return {n.Scalar()};
+    if (!n.IsSequence()) Fail(n, key + ": expected a value or a list");
+    std::vector<std::string> out;
+    for (const auto& item : n) out.push_back(Text(item, key));
+    return out;
+  }
+
+ private:
+  std::string source_;
+};
+
+std::string Resolve(const fs::path& base, const std::string& p) {
+  if (p.empty() || fs::path(p).is_absolute()) return p;
+  return (base / p).lexically_normal().string();
+}
+
+// Steps from one long video and the printer's temperature log.
+std::vector<StepSpec> StepsFromLog(const Manifest& m) {
+  const CsvTable t = ParseCsv(ReadFile(m.temperature_log), m.temperature_log);
+  const int ct = t.Column("time_s"), cc = t.Column("temperature_c");
+  if (ct < 0 || cc < 0) throw std::invalid_argument(m.temperature_log + ": needs columns time_s,temperature_c");
+  std::vector<TemperatureSample> log;
+  for (size_t i = 0; i < t.rows.size(); ++i) {
+    try {
+      log.push_back({std::stod(t.rows[i][ct]), std::stod(t.rows[i][cc])});
+    } catch (const std::exception&) {
+      throw std::invalid_argument(fmt::format("{}:{}: not a number", m.temperature_log, t.row_line_numbers[i]));
+    }
+    if (i > 0 && log[i].time_s < log[i - 1].time_s) {
+      throw std::invalid_argument(fmt::format("{}:{}: time goes backwards", m.temperature_log, t.row_line_numbers[i]));
+    }
+  }
+  const auto holds = FindHolds(log, m.hold_tolerance_c, m.settle_s, m.min_step_s);
+  if (holds.empty()) {
+    throw std::invalid_argument(fmt::format(
+        "{}: the temperature never holds within ±{} °C for {} s after a {} s settle: no steps",
+        m.temperature_log, m.hold_tolerance_c, m.min_step_s, m.settle_s));
+  }
+  std::vector<StepSpec> steps;
+  for (const auto& h : holds) {
+    StepSpec s;
+    s.step = static_cast<int>(steps.size()) + 1;
+    s.temperature_c = std::round(h.temperature_c * 100) / 100;
+    s.video = m.video;
+    s.start_s = std::max(0.0, h.start_s - m.video_start_s);
+    s.end_s = h.end_s - m.video_start_s;
+    if (s.end_s <= s.start_s) continue;  // hold entirely before the video starts
+    steps.push_back(s);
+  }
+  if (steps.empty()) throw std::invalid_argument(m.temperature_log + ": no hold falls inside the video");
+  return steps;
+}
+
+Manifest LoadCsvManifest(const std::string& path) {
+  Manifest m;
+  m.path = path;
+  m.name = fs::path(path).stem().string();
+  const fs::path base = fs::path(path).parent_path();
+  const CsvTable t = ParseCsv(ReadFile(path), path);
+  const int c_step = t.Column("step"), c_t = t.Column("temperature_c"), c_src = t.Column("source");
+  const int c_a = t.Column("start_s"), c_b = t.Column("end_s");
+  if (c_step < 0 || c_t < 0 || c_src < 0) {
+    throw std::invalid_argument(path + ": needs columns step,temperature_c,source[,start_s,end_s]");
+  }
+  for (size_t i = 0; i < t.rows.size(); ++i) {
+    const auto& r = t.rows[i];
+    const std::string where = fmt::format("{}:{}", path, t.row_line_numbers[i]);
+    StepSpec s;
+    s.line = t.row_line_numbers[i];
+    try {
+      s.step = std::stoi(r[c_step]);
+      s.temperature_c = std::stod(r[c_t]);
+      if (c_a >= 0 && !r[c_a].empty()) s.start_s = std::stod(r[c_a]);
+      if (c_b >= 0 && !r[c_b].empty()) s.end_s = std::stod(r[c_b]);
+    } catch (const std::exception&) {
+      throw std::invalid_argument(where + ": step, temperature_c, start_s and end_s must be numbers");
+    }
+    if (r[c_src].empty()) throw std::invalid_argument(where + ": source is empty");
+    const std::string src = Resolve(base, r[c_src]);
+    (fs::is_directory(src) ? s.images : s.video) = src;
+    m.steps.push_back(s);
+  }
+  return m;
+}
+
+}  // namespace
+
+Manifest LoadManifest(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+  Manifest m;
+  if (ext == ".csv") {
+    m = LoadCsvManifest(path);
+  } else {
+    const std::string text = ReadFile(path);
+    YAML::Node root;
+    try {
+      root = YAML::Load(text);
+    } catch (const YAML::Exception& e) {
+      throw std::invalid_argument(fmt::format("{}:{}: {}", path, e.mark.line + 1, e.msg));
+    }
+    const YamlReader y(path);
+    if (!root.IsMap()) throw std::invalid_argument(path + ": expected a mapping (name:, steps:, …)");
+    y.CheckKeys(root, {"name", "samples", "settle_s", "scale_um_per_px", "calibration", "calibrate", "extruder",
+                       "extruder_set", "roi", "polarity", "band_start_um", "band_height_um", "steps", "video",
+                       "temperature_log", "video_start_s", "hold_tolerance_c", "min_step_s"});
+    m.path = path;
+    const fs::path base = fs::path(path).parent_path();
+    m.name = root["name"] ? y.Text(root["name"], "name") : fs::path(path).stem().string();
+    if (root["samples"]) {
+      m.samples = y.Whole(root["samples"], "samples");
+      if (m.samples < 2) y.Fail(root["samples"], "samples: need at least 2");
+    }
+    if (root["settle_s"]) m.settle_s = y.Number(root["settle_s"], "settle_s");
+    if (root["scale_um_per_px"]) m.scale_um_per_px = y.Number(root["scale_um_per_px"], "scale_um_per_px");
+    if (root["calibration"]) m.calibration_file = Resolve(base, y.Text(root["calibration"], "calibration"));
+    if (const auto c = root["calibrate"]) {
+      if (!c.IsMap()) y.Fail(c, "calibrate: expected pins: CSV or micrometer: IMAGE(S) with pitch_um:");
+      y.CheckKeys(c, {"pins", "micrometer", "pitch_um"});
+      if (c["pins"]) m.calibrate_pins_csv = Resolve(base, y.Text(c["pins"], "pins"));
+      if (c["micrometer"]) {
+        for (const auto& p : y.TextList(c["micrometer"], "micrometer")) m.calibrate_micrometer.push_back(Resolve(base, p));
+      }
+      if (c["pitch_um"]) m.calibrate_pitch_um = y.Number(c["pitch_um"], "pitch_um");
+    }
+    if (root["extruder"]) {
+      m.extruder = y.Text(root["extruder"], "extruder");
+      if (fs::exists(Resolve(base, m.extruder))) m.extruder = Resolve(base, m.extruder);
+    }
+    if (root["extruder_set"]) m.extruder_set = y.TextList(root["extruder_set"], "extruder_set");
+    if (root["roi"]) m.roi = y.Text(root["roi"], "roi");
+    if (root["polarity"]) m.polarity = y.Text(root["polarity"], "polarity");
+    if (root["band_start_um"]) m.band_start_um = y.Number(root["band_start_um"], "band_start_um");
+    if (root["band_height_um"]) m.band_height_um = y.Number(root["band_height_um"], "band_height_um");
+    if (root["video_start_s"]) m.video_start_s = y.Number(root["video_start_s"], "video_start_s");
+    if (root["hold_tolerance_c"]) m.hold_tolerance_c = y.Number(root["hold_tolerance_c"], "hold_tolerance_c");
+    if (root["min_step_s"]) m.min_step_s = y.Number(root["min_step_s"], "min_step_s");
+    if (root["video"]) m.video = Resolve(base, y.Text(root["video"], "video"));
+    if (root["temperature_log"]) m.temperature_log = Resolve(base, y.Text(root["temperature_log"], "temperature_log"));
+    if (root["steps"] && (root["video"] || root["temperature_log"])) {
+      y.Fail(root["steps"], "give either steps: or video: with temperature_log:, not both");
+    }
+    if (const auto steps = root["steps"]) {
+      if (!steps.IsSequence()) y.Fail(steps, "steps: expected a list");
+      for (const auto& n : steps) {
+        if (!n.IsMap()) y.Fail(n, "a step: expected step:, temperature_c: and video: or images:");
+        y.CheckKeys(n, {"step", "temperature_c", "video", "images", "start_s", "end_s", "settle_s"});
+        StepSpec s;
+        s.line = n.Mark().line + 1;
+        if (!n["step"]) y.Fail(n, "a step needs step:");
+        if (!n["temperature_c"]) y.Fail(n, "a step needs temperature_c:");
+        s.step = y.Whole(n["step"], "step");
+        s.temperature_c = y.Number(n["temperature_c"], "temperature_c");
+        if (n["video"]) s.video = Resolve(base, y.Text(n["video"], "video"));
+        if (n["images"]) s.images = Resolve(base, y.Text(n["images"], "images"));
+        if (s.video.empty() == s.images.empty()) y.Fail(n, fmt::format("step {}: give one of video: or images:", s.step));
+        if (n["start_s"]) s.start_s = y.Number(n["start_s"], "start_s");
+        if (n["end_s"]) s.end_s = y.Number(n["end_s"], "end_s");
+        s.settle_s = n["settle_s"] ? y.Number(n["settle_s"], "settle_s") : m.settle_s;
+        m.steps.push_back(s);
+      }
+    } else if (!m.video.empty() || !m.temperature_log.empty()) {
+      if (m.video.empty() || m.temperature_log.empty()) {
+        throw std::invalid_argument(path + ": video: and temperature_log: go together");
+      }
+      m.steps = StepsFromLog(m);
+    }
+  }
+  if (m.steps.empty()) throw std::invalid_argument(m.path + ": no steps");
+  std::map<int, int> seen;  // step -> line
+  for (const auto& s : m.steps) {
+    const auto [it, fresh] = seen.insert({s.step, s.line});
+    if (!fresh) {
+      throw std::invalid_argument(fmt::format("{}:{}: step {} appears twice (also at line {})", m.path, s.line,
+                                              s.step, it->second));
+    }
+    if (s.temperature_c <= -273.15) {
+      throw std::invalid_argument(fmt::format("{}:{}: temperature {} °C is below absolute zero", m.path, s.line, s.temperature_c));
+    }
+    if (s.end_s >= 0 && s.end_s <= s.start_s) {
+      throw std::invalid_argument(fmt::format("{}:{}: end_s must be after start_s", m.path, s.line));
+    }
+  }
+  return m;
+}
+
+}  // namespace clogscope::pipeline
