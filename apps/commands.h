@@ -6,9 +6,9 @@
 
 #include "calib/pixel_scale.h"
 #include "model/fit.h"
-#include "pipeline/experiment.h"
 #include "model/parameters.h"
 #include "model/predictor.h"
+#include "pipeline/experiment.h"
 #include "vision/strand_measure.h"
 #include "vision/synthetic.h"
 
@@ -127,8 +127,8 @@ std::vector<std::string> WritePredictionOutputs(const PredictResult& result,
 struct ExperimentCommandOptions {
   std::string manifest;
   std::string out_dir;
-  std::optional<int> samples;             // overrides the manifest
-  int jobs = 0;                           // 0: all cores
+  std::optional<int> samples;  // overrides the manifest
+  int jobs = 0;                // 0: all cores
   bool resume = false;
   std::optional<double> scale_um_per_px;  // overrides the manifest's scale or calibration
   std::string calib_path;
@@ -150,7 +150,8 @@ struct ExperimentReport {
 // every step, writes the tables, and (run only) predicts and writes summary.md/.json. `cancel`
 // stops it early; finished steps are kept and their tables written. Throws std::invalid_argument
 // for a bad manifest or options; a step that fails is reported in its row.
-ExperimentReport RunExperimentCommand(const ExperimentCommandOptions& options, std::atomic<bool>* cancel);
+ExperimentReport RunExperimentCommand(const ExperimentCommandOptions& options,
+                                      std::atomic<bool>* cancel);
 
 // The command-line side shared by `run` and `measure --manifest`: Ctrl-C handling, the printed
 // table, the exit status.

@@ -25,7 +25,8 @@ const Command kCommands[] = {
     {"calibrate", clogscope::apps::RunCalibrate,
      "pixel scale from pin gauges or a stage micrometer"},
     {"measure", clogscope::apps::RunMeasure, "strand width per frame from images or videos"},
-    {"run", clogscope::apps::RunRun, "the whole pipeline from one manifest: calibrate, measure, predict"},
+    {"run", clogscope::apps::RunRun,
+     "the whole pipeline from one manifest: calibrate, measure, predict"},
     {"predict", clogscope::apps::RunPredict,
      "diameter table -> predicted vibration and motor current; fits"},
 };

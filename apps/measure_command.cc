@@ -243,10 +243,12 @@ int RunMeasure(int argc, char** argv) {
   ExperimentCommandOptions exp;
   int samples = 0;
   app.add_option("inputs", o.inputs, "Images, directories of images, or video files");
-  app.add_option("--manifest", exp.manifest, "Step manifest (YAML or CSV): measure an experiment into --out");
+  app.add_option("--manifest", exp.manifest,
+                 "Step manifest (YAML or CSV): measure an experiment into --out");
   app.add_option("--out", exp.out_dir, "With --manifest: output folder for the tables");
   app.add_option("--samples", samples, "With --manifest: valid frames per step (default 50)");
-  app.add_option("--jobs", exp.jobs, "With --manifest: steps measured at once (default: all cores)");
+  app.add_option("--jobs", exp.jobs,
+                 "With --manifest: steps measured at once (default: all cores)");
   app.add_flag("--resume", exp.resume, "With --manifest: keep steps already measured in --out");
   std::string calib_path;
   app.add_option("--scale-um-per-px", o.scale_um_per_px,
@@ -283,13 +285,15 @@ int RunMeasure(int argc, char** argv) {
       "Exit status: 0 all inputs read, 2 some inputs unreadable, 1 nothing measured.");
   CLI11_PARSE(app, argc, argv);
   if (!exp.manifest.empty()) {
-    if (!o.inputs.empty()) throw std::invalid_argument("give either inputs or --manifest, not both");
+    if (!o.inputs.empty())
+      throw std::invalid_argument("give either inputs or --manifest, not both");
     exp.scale_um_per_px = o.scale_um_per_px;
     exp.calib_path = calib_path;
     if (samples) exp.samples = samples;
     return RunExperimentCli(exp);
   }
-  if (o.inputs.empty()) throw std::invalid_argument("give inputs (images, directories, videos) or --manifest");
+  if (o.inputs.empty())
+    throw std::invalid_argument("give inputs (images, directories, videos) or --manifest");
   if (!roi.empty()) o.strand.roi = ParseRoi(roi);
   if (!calib_path.empty()) o.calibration = calib::ReadCalibrationFile(calib_path);
   o.strand.polarity = vision::ParsePolarity(polarity);

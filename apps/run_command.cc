@@ -1,15 +1,14 @@
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <mutex>
-#include <stdexcept>
-
-#include <unistd.h>
-
-#include <CLI/CLI.hpp>
-#include <fmt/format.h>
 #include <nlohmann/json.hpp>
-#include <spdlog/spdlog.h>
+#include <stdexcept>
 
 #include "apps/cli_util.h"
 #include "apps/commands.h"
@@ -31,9 +30,9 @@ class Progress {
   explicit Progress(int total) : tty_(isatty(STDERR_FILENO) != 0), total_(total) {}
   void Step(const pipeline::StepResult& r, int done) {
     std::lock_guard<std::mutex> lock(mu_);
-    const std::string what = fmt::format("step {} ({:g} °C): {}, {} valid of {} examined{}", r.spec.step,
-                                         r.spec.temperature_c, r.status, r.n_valid, r.n_examined,
-                                         r.resumed ? " (kept from the earlier run)" : "");
+    const std::string what = fmt::format(
+        "step {} ({:g} °C): {}, {} valid of {} examined{}", r.spec.step, r.spec.temperature_c,
+        r.status, r.n_valid, r.n_examined, r.resumed ? " (kept from the earlier run)" : "");
     if (tty_) {
       const int width = 30, filled = total_ ? width * done / total_ : width;
       std::fprintf(stderr, "\r[%s%s] %d/%d  %-60.60s", std::string(filled, '#').c_str(),
@@ -56,54 +55,69 @@ class Progress {
 };
 
 std::string Summary(const ExperimentReport& rep, const Provenance& prov) {
-  std::string md = fmt::format("# {}\n\nclogscope {} — {} — `{}`\n\n", rep.manifest.name, prov.version,
-                               prov.created_utc, prov.command_line);
+  std::string md = fmt::format("# {}\n\nclogscope {} — {} — `{}`\n\n", rep.manifest.name,
+                               prov.version, prov.created_utc, prov.command_line);
   if (rep.conversion) {
     md += fmt::format("Pixel scale ({}): {:.6f} ± {:.6f} µm/px, edge bias {:+.4f} ± {:.4f} px.\n\n",
-                      rep.conversion->method, rep.conversion->scale_um_per_px, rep.conversion->scale_sigma_um_per_px,
-                      rep.conversion->edge_bias_px, rep.conversion->edge_bias_sigma_px);
+                      rep.conversion->method, rep.conversion->scale_um_per_px,
+                      rep.conversion->scale_sigma_um_per_px, rep.conversion->edge_bias_px,
+                      rep.conversion->edge_bias_sigma_px);
   } else {
     md += "No pixel scale: widths in px only.\n\n";
   }
-  md += "| step | T °C | n | mean µm | ± 95 % CI µm | std µm | rejected | status |\n|---|---|---|---|---|---|---|---|\n";
+  md +=
+      "| step | T °C | n | mean µm | ± 95 % CI µm | std µm | rejected | status "
+      "|\n|---|---|---|---|---|---|---|---|\n";
   for (const auto& r : rep.steps) {
-    md += fmt::format("| {} | {:g} | {} | {} | {} | {} | {} | {}{} |\n", r.spec.step, r.spec.temperature_c, r.n_used,
+    md += fmt::format("| {} | {:g} | {} | {} | {} | {} | {} | {}{} |\n", r.spec.step,
+                      r.spec.temperature_c, r.n_used,
                       r.has_um && r.n_used ? fmt::format("{:.2f}", r.mean_um) : "",
                       r.has_um && r.n_used ? fmt::format("{:.2f}", r.ci95_um) : "",
-                      r.has_um && r.n_used ? fmt::format("{:.2f}", r.std_um) : "", r.n_rejected, r.status,
-                      r.detail.empty() ? "" : ": " + r.detail);
+                      r.has_um && r.n_used ? fmt::format("{:.2f}", r.std_um) : "", r.n_rejected,
+                      r.status, r.detail.empty() ? "" : ": " + r.detail);
   }
   if (rep.prediction) {
     const auto& pr = rep.prediction->prediction;
-    md += fmt::format("\n## Predicted bar-mount vibration ({})\n\n| step | D µm | F_bp N | A/A0 | +% |{}\n|---|---|---|---|---|{}\n",
-                      rep.prediction->params.origin, pr.gain_m_s2_per_n ? " A m/s² |" : "",
-                      pr.gain_m_s2_per_n ? "---|" : "");
+    md += fmt::format(
+        "\n## Predicted bar-mount vibration ({})\n\n| step | D µm | F_bp N | A/A0 | +% "
+        "|{}\n|---|---|---|---|---|{}\n",
+        rep.prediction->params.origin, pr.gain_m_s2_per_n ? " A m/s² |" : "",
+        pr.gain_m_s2_per_n ? "---|" : "");
     for (const auto& s : pr.steps) {
-      md += fmt::format("| {} | {:.1f} | {:.3f} | {:.4f} | {:.1f} |{}\n", s.step, s.diameter_um, s.f_bp_n,
-                        s.relative_amplitude, s.amplitude_increase_pct,
+      md += fmt::format("| {} | {:.1f} | {:.3f} | {:.4f} | {:.1f} |{}\n", s.step, s.diameter_um,
+                        s.f_bp_n, s.relative_amplitude, s.amplitude_increase_pct,
                         s.amplitude_m_s2 ? fmt::format(" {:.4f} |", *s.amplitude_m_s2) : "");
     }
   }
   md += "\n## Files\n\n";
   for (const auto& f : rep.files) md += "- " + f + "\n";
-  if (rep.cancelled) md += "\n**Interrupted**: only the steps above finished; run again with --resume.\n";
+  if (rep.cancelled)
+    md += "\n**Interrupted**: only the steps above finished; run again with --resume.\n";
   return md;
 }
 
 }  // namespace
 
 bool ExperimentCommandOptions::Validate(std::string* why) const {
-  if (manifest.empty()) *why = "a manifest is required";
-  else if (out_dir.empty()) *why = "--out is required";
-  else if (samples && *samples < 2) *why = "--samples must be at least 2";
-  else if (jobs < 0) *why = "--jobs must not be negative";
-  else if (scale_um_per_px && !(*scale_um_per_px > 0)) *why = "--scale-um-per-px must be positive";
-  else if (scale_um_per_px && !calib_path.empty()) *why = "give either --scale-um-per-px or --calib, not both";
-  else return true;
+  if (manifest.empty())
+    *why = "a manifest is required";
+  else if (out_dir.empty())
+    *why = "--out is required";
+  else if (samples && *samples < 2)
+    *why = "--samples must be at least 2";
+  else if (jobs < 0)
+    *why = "--jobs must not be negative";
+  else if (scale_um_per_px && !(*scale_um_per_px > 0))
+    *why = "--scale-um-per-px must be positive";
+  else if (scale_um_per_px && !calib_path.empty())
+    *why = "give either --scale-um-per-px or --calib, not both";
+  else
+    return true;
   return false;
 }
 
-ExperimentReport RunExperimentCommand(const ExperimentCommandOptions& o, std::atomic<bool>* cancel) {
+ExperimentReport RunExperimentCommand(const ExperimentCommandOptions& o,
+                                      std::atomic<bool>* cancel) {
   std::string why;
   if (!o.Validate(&why)) throw std::invalid_argument(why);
   ExperimentReport rep;
@@ -111,7 +125,8 @@ ExperimentReport RunExperimentCommand(const ExperimentCommandOptions& o, std::at
   const pipeline::Manifest& m = rep.manifest;
   std::error_code ec;
   fs::create_directories(o.out_dir, ec);
-  if (!fs::is_directory(o.out_dir)) throw std::invalid_argument(o.out_dir + ": cannot create output directory");
+  if (!fs::is_directory(o.out_dir))
+    throw std::invalid_argument(o.out_dir + ": cannot create output directory");
 
   // The conversion: command line first, then the manifest; `run` calibrates when the manifest
   // names reference images.
@@ -119,23 +134,27 @@ ExperimentReport RunExperimentCommand(const ExperimentCommandOptions& o, std::at
     rep.conversion = pipeline::PlainScale(*o.scale_um_per_px);
   } else if (!o.calib_path.empty()) {
     rep.conversion = calib::ReadCalibrationFile(o.calib_path);
-  } else if (o.full_pipeline && (!m.calibrate_pins_csv.empty() || !m.calibrate_micrometer.empty())) {
+  } else if (o.full_pipeline &&
+             (!m.calibrate_pins_csv.empty() || !m.calibrate_micrometer.empty())) {
     CalibrateCommandOptions co;
     co.pins_csv = m.calibrate_pins_csv;
     co.micrometer_images = m.calibrate_micrometer;
     co.pitch_um = m.calibrate_pitch_um;
     co.out = (fs::path(o.out_dir) / "calibration.yaml").string();
     const CalibrateResult cr = ComputeCalibration(co);
-    if (!cr.calibration.usable) throw std::invalid_argument("calibration not usable: " + cr.calibration.message);
+    if (!cr.calibration.usable)
+      throw std::invalid_argument("calibration not usable: " + cr.calibration.message);
     calib::WriteCalibrationFile(co.out, cr.calibration, CurrentProvenance(), cr.inputs);
     rep.files.push_back(co.out);
     rep.conversion = cr.calibration;
-    spdlog::info("calibrated from {} targets: {:.6f} ± {:.6f} µm/px, edge bias {:+.4f} px", cr.calibration.targets,
-                 cr.calibration.scale_um_per_px, cr.calibration.scale_sigma_um_per_px, cr.calibration.edge_bias_px);
+    spdlog::info("calibrated from {} targets: {:.6f} ± {:.6f} µm/px, edge bias {:+.4f} px",
+                 cr.calibration.targets, cr.calibration.scale_um_per_px,
+                 cr.calibration.scale_sigma_um_per_px, cr.calibration.edge_bias_px);
   } else if (!m.calibration_file.empty()) {
     rep.conversion = calib::ReadCalibrationFile(m.calibration_file);
   } else if (m.scale_um_per_px) {
-    if (!(*m.scale_um_per_px > 0)) throw std::invalid_argument(m.path + ": scale_um_per_px must be positive");
+    if (!(*m.scale_um_per_px > 0))
+      throw std::invalid_argument(m.path + ": scale_um_per_px must be positive");
     rep.conversion = pipeline::PlainScale(*m.scale_um_per_px);
   }
 
@@ -170,7 +189,8 @@ ExperimentReport RunExperimentCommand(const ExperimentCommandOptions& o, std::at
     po.diameters = (fs::path(o.out_dir) / "diameters.csv").string();
     po.out_dir = (fs::path(o.out_dir) / "predict").string();
     if (!rep.conversion) {
-      rep.warnings.push_back("no pixel scale: the predictor needs diameters in µm; prediction skipped");
+      rep.warnings.push_back(
+          "no pixel scale: the predictor needs diameters in µm; prediction skipped");
     } else {
       PredictResult pr = ComputePrediction(po);
       const auto written = WritePredictionOutputs(pr, po.out_dir, true, &rep.warnings);
@@ -186,7 +206,9 @@ ExperimentReport RunExperimentCommand(const ExperimentCommandOptions& o, std::at
   WriteFileAtomically(md_path, Summary(rep, prov));
   nlohmann::ordered_json j;
   j["experiment"] = m.name;
-  j["provenance"] = {{"version", prov.version}, {"created_utc", prov.created_utc}, {"command_line", prov.command_line}};
+  j["provenance"] = {{"version", prov.version},
+                     {"created_utc", prov.created_utc},
+                     {"command_line", prov.command_line}};
   j["cancelled"] = rep.cancelled;
   if (rep.conversion) {
     j["scale_um_per_px"] = rep.conversion->scale_um_per_px;
@@ -195,8 +217,9 @@ ExperimentReport RunExperimentCommand(const ExperimentCommandOptions& o, std::at
   }
   auto steps = nlohmann::ordered_json::array();
   for (const auto& r : rep.steps) {
-    nlohmann::ordered_json s = {{"step", r.spec.step}, {"temperature_c", r.spec.temperature_c}, {"n", r.n_used},
-                                {"n_rejected", r.n_rejected}, {"status", r.status}, {"detail", r.detail}};
+    nlohmann::ordered_json s = {{"step", r.spec.step}, {"temperature_c", r.spec.temperature_c},
+                                {"n", r.n_used},       {"n_rejected", r.n_rejected},
+                                {"status", r.status},  {"detail", r.detail}};
     if (r.has_um && r.n_used) {
       s["mean_um"] = r.mean_um;
       s["ci95_um"] = r.ci95_um;
@@ -208,7 +231,8 @@ ExperimentReport RunExperimentCommand(const ExperimentCommandOptions& o, std::at
   if (rep.prediction) {
     auto pred = nlohmann::ordered_json::array();
     for (const auto& s : rep.prediction->prediction.steps) {
-      pred.push_back({{"step", s.step}, {"relative_amplitude", s.relative_amplitude}, {"f_bp_n", s.f_bp_n}});
+      pred.push_back(
+          {{"step", s.step}, {"relative_amplitude", s.relative_amplitude}, {"f_bp_n", s.f_bp_n}});
     }
     j["prediction"] = pred;
   }
@@ -226,36 +250,42 @@ int RunExperimentCli(const ExperimentCommandOptions& o) {
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
   for (const auto& w : rep.warnings) spdlog::warn("{}", w);
-  fmt::print("{:>4} {:>7} {:>4} {:>10} {:>8} {:>8} {:>4}  {}\n", "step", "T °C", "n", "mean µm", "±95%", "std µm",
-             "rej", "status");
+  fmt::print("{:>4} {:>7} {:>4} {:>10} {:>8} {:>8} {:>4}  {}\n", "step", "T °C", "n", "mean µm",
+             "±95%", "std µm", "rej", "status");
   int failed = 0;
   for (const auto& r : rep.steps) {
     failed += r.status != "ok";
     if (r.has_um && r.n_used) {
-      fmt::print("{:>4} {:>7.1f} {:>4} {:>10.2f} {:>8.2f} {:>8.2f} {:>4}  {}\n", r.spec.step, r.spec.temperature_c,
-                 r.n_used, r.mean_um, r.ci95_um, r.std_um, r.n_rejected, r.status);
+      fmt::print("{:>4} {:>7.1f} {:>4} {:>10.2f} {:>8.2f} {:>8.2f} {:>4}  {}\n", r.spec.step,
+                 r.spec.temperature_c, r.n_used, r.mean_um, r.ci95_um, r.std_um, r.n_rejected,
+                 r.status);
     } else {
-      fmt::print("{:>4} {:>7.1f} {:>4} {:>10} {:>8} {:>8} {:>4}  {}{}\n", r.spec.step, r.spec.temperature_c, r.n_used,
-                 r.n_used ? fmt::format("{:.3f}px", r.mean_px) : "-", "", "", r.n_rejected, r.status,
-                 r.detail.empty() ? "" : ": " + r.detail);
+      fmt::print("{:>4} {:>7.1f} {:>4} {:>10} {:>8} {:>8} {:>4}  {}{}\n", r.spec.step,
+                 r.spec.temperature_c, r.n_used,
+                 r.n_used ? fmt::format("{:.3f}px", r.mean_px) : "-", "", "", r.n_rejected,
+                 r.status, r.detail.empty() ? "" : ": " + r.detail);
     }
   }
   spdlog::info("wrote {} file(s) in {}", rep.files.size(), o.out_dir);
   if (rep.cancelled) {
-    spdlog::warn("interrupted: {} finished step(s) kept in {}; run again with --resume", rep.steps.size(), o.out_dir);
+    spdlog::warn("interrupted: {} finished step(s) kept in {}; run again with --resume",
+                 rep.steps.size(), o.out_dir);
     return 130;
   }
   return failed == static_cast<int>(rep.steps.size()) ? 1 : (failed ? 2 : 0);
 }
 
 int RunRun(int argc, char** argv) {
-  CLI::App app{"Run the whole pipeline from one manifest: calibrate (when the manifest names reference images), "
-               "measure every step, predict (when it names an extruder), and summarise.",
-               "clogscope run"};
+  CLI::App app{
+      "Run the whole pipeline from one manifest: calibrate (when the manifest names reference "
+      "images), "
+      "measure every step, predict (when it names an extruder), and summarise.",
+      "clogscope run"};
   ExperimentCommandOptions o;
   o.full_pipeline = true;
   int samples = 0;
-  app.add_option("manifest", o.manifest, "Experiment manifest (YAML, or CSV step list)")->required();
+  app.add_option("manifest", o.manifest, "Experiment manifest (YAML, or CSV step list)")
+      ->required();
   app.add_option("--out", o.out_dir, "Output folder")->required();
   app.add_option("--samples", samples, "Valid frames per step (default: the manifest's, else 50)");
   app.add_option("--jobs", o.jobs, "Steps measured at once (default: all cores)");

@@ -1,15 +1,15 @@
 #include "pipeline/experiment.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <mutex>
-#include <stdexcept>
-#include <thread>
-
-#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <stdexcept>
+#include <thread>
 
 #include "common/atomic_file.h"
 #include "common/csv.h"
@@ -35,8 +35,10 @@ std::string StepFileName(int step) { return fmt::format("step_{:04d}.json", step
 
 // What must match for a step file from an earlier run to stand for this one.
 json SpecKey(const StepSpec& s, int samples) {
-  return {{"step", s.step}, {"temperature_c", s.temperature_c}, {"video", s.video}, {"images", s.images},
-          {"start_s", s.start_s}, {"end_s", s.end_s}, {"settle_s", s.settle_s}, {"samples", samples}};
+  return {{"step", s.step},         {"temperature_c", s.temperature_c},
+          {"video", s.video},       {"images", s.images},
+          {"start_s", s.start_s},   {"end_s", s.end_s},
+          {"settle_s", s.settle_s}, {"samples", samples}};
 }
 
 // A frame source for a step: video frames by time, or a directory's images by index.
@@ -173,7 +175,8 @@ void Summarise(StepResult* r, const ExperimentOptions& o) {
   }
   r->status = r->n_valid >= o.samples ? "ok" : "too_few_frames";
   if (r->status == "too_few_frames") {
-    r->detail = fmt::format("{} valid of {} asked ({} frames examined)", r->n_valid, o.samples, r->n_examined);
+    r->detail = fmt::format("{} valid of {} asked ({} frames examined)", r->n_valid, o.samples,
+                            r->n_examined);
   }
   for (auto& f : r->frames) f.fields = FrameFields(f.source, f.frame, f.time_s, f.m, o.conversion);
 }
@@ -181,11 +184,16 @@ void Summarise(StepResult* r, const ExperimentOptions& o) {
 }  // namespace
 
 bool ExperimentOptions::Validate(std::string* why) const {
-  if (samples < 2) *why = "samples: need at least 2";
-  else if (jobs < 0) *why = "jobs: must not be negative";
-  else if (out_dir.empty()) *why = "an output directory is required";
-  else if (!strand.Validate(why)) return false;
-  else return true;
+  if (samples < 2)
+    *why = "samples: need at least 2";
+  else if (jobs < 0)
+    *why = "jobs: must not be negative";
+  else if (out_dir.empty())
+    *why = "an output directory is required";
+  else if (!strand.Validate(why))
+    return false;
+  else
+    return true;
   return false;
 }
 
@@ -199,9 +207,9 @@ calib::ScaleCalibration PlainScale(double scale) {
 
 const std::vector<std::string>& FrameColumns() {
   static const std::vector<std::string> kColumns = {
-      "source",   "frame",    "time_s",   "valid",         "width_px",       "width_sigma_px",
-      "width_um", "width_sigma_um", "angle_deg", "contrast", "blur_px",        "tip_x_px",
-      "tip_y_px", "calipers_used", "calipers_total", "polarity", "reason", "detail"};
+      "source",   "frame",          "time_s",         "valid",    "width_px", "width_sigma_px",
+      "width_um", "width_sigma_um", "angle_deg",      "contrast", "blur_px",  "tip_x_px",
+      "tip_y_px", "calipers_used",  "calipers_total", "polarity", "reason",   "detail"};
   return kColumns;
 }
 
@@ -247,9 +255,11 @@ StepResult MeasureStep(const StepSpec& spec, const ExperimentOptions& o, int dec
     } else {
       std::vector<std::string> files;
       std::error_code ec;
-      if (!fs::is_directory(spec.images, ec)) throw std::invalid_argument(spec.images + ": no such directory");
+      if (!fs::is_directory(spec.images, ec))
+        throw std::invalid_argument(spec.images + ": no such directory");
       for (const auto& e : fs::directory_iterator(spec.images, ec)) {
-        if (e.is_regular_file() && vision::IsImagePath(e.path().string())) files.push_back(e.path().string());
+        if (e.is_regular_file() && vision::IsImagePath(e.path().string()))
+          files.push_back(e.path().string());
       }
       if (files.empty()) throw std::invalid_argument(spec.images + ": directory holds no images");
       std::sort(files.begin(), files.end());
@@ -264,8 +274,9 @@ StepResult MeasureStep(const StepSpec& spec, const ExperimentOptions& o, int dec
   }
   if (!(b > a)) {
     r.status = "failed";
-    r.detail = fmt::format("nothing left after start {:g} s and settle {:g} s (source ends at {:g})",
-                           spec.start_s, spec.settle_s, b);
+    r.detail =
+        fmt::format("nothing left after start {:g} s and settle {:g} s (source ends at {:g})",
+                    spec.start_s, spec.settle_s, b);
     return r;
   }
 
@@ -299,7 +310,8 @@ StepResult MeasureStep(const StepSpec& spec, const ExperimentOptions& o, int dec
     ++r.n_examined;
     if (f.m.valid()) {
       filled[k] = true;
-      if (overlay_frames && std::find(overlay_slots.begin(), overlay_slots.end(), k) != overlay_slots.end() &&
+      if (overlay_frames &&
+          std::find(overlay_slots.begin(), overlay_slots.end(), k) != overlay_slots.end() &&
           static_cast<int>(overlay_frames->size()) < o.overlays_per_step) {
         overlay_frames->push_back({static_cast<int>(r.frames.size()), img.clone()});
       }
@@ -323,7 +335,8 @@ std::vector<StepResult> RunExperiment(const Manifest& m, const ExperimentOptions
   std::error_code ec;
   fs::create_directories(steps_dir, ec);
   fs::create_directories(overlay_dir, ec);
-  if (!fs::is_directory(steps_dir)) throw std::invalid_argument(o.out_dir + ": cannot create output directory");
+  if (!fs::is_directory(steps_dir))
+    throw std::invalid_argument(o.out_dir + ": cannot create output directory");
 
   const int total = static_cast<int>(m.steps.size());
   std::vector<std::optional<StepResult>> results(total);
@@ -334,7 +347,8 @@ std::vector<StepResult> RunExperiment(const Manifest& m, const ExperimentOptions
       try {
         StepResult r;
         // A step that failed (say, its video was missing) is tried again.
-        if (ResultFromJson(json::parse(ReadFile(file)), m.steps[i], o.samples, &r) && r.status != "failed") {
+        if (ResultFromJson(json::parse(ReadFile(file)), m.steps[i], o.samples, &r) &&
+            r.status != "failed") {
           results[i] = std::move(r);
           continue;
         }
@@ -352,8 +366,9 @@ std::vector<StepResult> RunExperiment(const Manifest& m, const ExperimentOptions
     if (o.on_step) o.on_step(*results[i], done, total);
   }
   std::atomic<size_t> next{0};
-  const int jobs = std::max(1, std::min<int>(o.jobs > 0 ? o.jobs : std::thread::hardware_concurrency(),
-                                             static_cast<int>(todo.size())));
+  const int jobs =
+      std::max(1, std::min<int>(o.jobs > 0 ? o.jobs : std::thread::hardware_concurrency(),
+                                static_cast<int>(todo.size())));
   // With several steps at once each decoder gets one thread; a lone step lets FFmpeg choose.
   const int decoder_threads = jobs > 1 ? 1 : 0;
   auto worker = [&]() {
@@ -368,12 +383,14 @@ std::vector<StepResult> RunExperiment(const Manifest& m, const ExperimentOptions
       for (const auto& [frame_idx, image] : overlays) {
         const FrameRecord& f = r.frames[frame_idx];
         const std::string name =
-            (overlay_dir / fmt::format("step{:02d}_{:.0f}C_f{:06d}.png", r.spec.step, r.spec.temperature_c, f.frame))
+            (overlay_dir / fmt::format("step{:02d}_{:.0f}C_f{:06d}.png", r.spec.step,
+                                       r.spec.temperature_c, f.frame))
                 .string();
         const double scale = o.conversion ? o.conversion->scale_um_per_px : 0.0;
         vision::WriteImageAtomically(name, vision::DrawOverlay(image, f.m, scale));
       }
-      WriteFileAtomically((steps_dir / StepFileName(r.spec.step)).string(), ResultToJson(r, o.samples).dump() + "\n");
+      WriteFileAtomically((steps_dir / StepFileName(r.spec.step)).string(),
+                          ResultToJson(r, o.samples).dump() + "\n");
       std::lock_guard<std::mutex> lock(mu);
       ++done;
       if (o.on_step) o.on_step(r, done, total);
@@ -390,15 +407,18 @@ std::vector<StepResult> RunExperiment(const Manifest& m, const ExperimentOptions
   return out_results;
 }
 
-std::vector<std::string> WriteExperimentTables(const Manifest& m, const std::vector<StepResult>& results,
-                                               const ExperimentOptions& o, std::vector<std::string>* warnings) {
+std::vector<std::string> WriteExperimentTables(const Manifest& m,
+                                               const std::vector<StepResult>& results,
+                                               const ExperimentOptions& o,
+                                               std::vector<std::string>* warnings) {
   const fs::path out(o.out_dir);
   const Provenance prov = CurrentProvenance();
   std::string conv_line;
   if (o.conversion) {
-    conv_line = fmt::format("# conversion ({}): scale {:.6f} ± {:.6f} µm/px, edge bias {:+.4f} ± {:.4f} px\n",
-                            o.conversion->method, o.conversion->scale_um_per_px, o.conversion->scale_sigma_um_per_px,
-                            o.conversion->edge_bias_px, o.conversion->edge_bias_sigma_px);
+    conv_line = fmt::format(
+        "# conversion ({}): scale {:.6f} ± {:.6f} µm/px, edge bias {:+.4f} ± {:.4f} px\n",
+        o.conversion->method, o.conversion->scale_um_per_px, o.conversion->scale_sigma_um_per_px,
+        o.conversion->edge_bias_px, o.conversion->edge_bias_sigma_px);
   }
   std::vector<std::string> written;
   // Per-frame rows of every step.
@@ -420,22 +440,31 @@ std::vector<std::string> WriteExperimentTables(const Manifest& m, const std::vec
 
   // The diameter table.
   std::string table = ProvenanceCsvComment(prov) + conv_line;
-  table += "step,temperature_c,n,mean_um,std_um,sem_um,ci95_um,cal_sigma_um,mean_px,std_px,n_rejected,"
-           "n_valid,n_examined,status,detail\n";
+  table +=
+      "step,temperature_c,n,mean_um,std_um,sem_um,ci95_um,cal_sigma_um,mean_px,std_px,n_rejected,"
+      "n_valid,n_examined,status,detail\n";
   json rows = json::array();
   for (const auto& r : results) {
     const bool have = r.n_used > 0;
     auto um = [&](double v, int d) { return have && r.has_um ? CsvNumber(v, d) : std::string(); };
-    table += CsvLine({std::to_string(r.spec.step), CsvNumber(r.spec.temperature_c, 2), std::to_string(r.n_used),
-                      um(r.mean_um, 3), um(r.std_um, 3), um(r.sem_um, 3), um(r.ci95_um, 3), um(r.cal_sigma_um, 3),
-                      have ? CsvNumber(r.mean_px, 4) : "", have ? CsvNumber(r.std_px, 4) : "",
-                      std::to_string(r.n_rejected), std::to_string(r.n_valid), std::to_string(r.n_examined),
-                      r.status, r.detail}) +
-             "\n";
-    json row = {{"step", r.spec.step}, {"temperature_c", r.spec.temperature_c}, {"n", r.n_used},
-                {"mean_px", have ? json(r.mean_px) : json()}, {"std_px", have ? json(r.std_px) : json()},
-                {"n_rejected", r.n_rejected}, {"n_valid", r.n_valid}, {"n_examined", r.n_examined},
-                {"status", r.status}, {"detail", r.detail}, {"source", r.spec.video.empty() ? r.spec.images : r.spec.video}};
+    table +=
+        CsvLine({std::to_string(r.spec.step), CsvNumber(r.spec.temperature_c, 2),
+                 std::to_string(r.n_used), um(r.mean_um, 3), um(r.std_um, 3), um(r.sem_um, 3),
+                 um(r.ci95_um, 3), um(r.cal_sigma_um, 3), have ? CsvNumber(r.mean_px, 4) : "",
+                 have ? CsvNumber(r.std_px, 4) : "", std::to_string(r.n_rejected),
+                 std::to_string(r.n_valid), std::to_string(r.n_examined), r.status, r.detail}) +
+        "\n";
+    json row = {{"step", r.spec.step},
+                {"temperature_c", r.spec.temperature_c},
+                {"n", r.n_used},
+                {"mean_px", have ? json(r.mean_px) : json()},
+                {"std_px", have ? json(r.std_px) : json()},
+                {"n_rejected", r.n_rejected},
+                {"n_valid", r.n_valid},
+                {"n_examined", r.n_examined},
+                {"status", r.status},
+                {"detail", r.detail},
+                {"source", r.spec.video.empty() ? r.spec.images : r.spec.video}};
     if (have && r.has_um) {
       row["mean_um"] = r.mean_um;
       row["std_um"] = r.std_um;
@@ -447,15 +476,20 @@ std::vector<std::string> WriteExperimentTables(const Manifest& m, const std::vec
   }
   WriteFileAtomically((out / "diameters.csv").string(), table);
   written.push_back((out / "diameters.csv").string());
-  json j = {{"provenance", {{"version", prov.version}, {"created_utc", prov.created_utc}, {"command_line", prov.command_line}}},
+  json j = {{"provenance",
+             {{"version", prov.version},
+              {"created_utc", prov.created_utc},
+              {"command_line", prov.command_line}}},
             {"experiment", m.name},
             {"manifest", m.path},
             {"samples", o.samples},
             {"steps", rows}};
   if (o.conversion) {
-    j["conversion"] = {{"method", o.conversion->method}, {"scale_um_per_px", o.conversion->scale_um_per_px},
+    j["conversion"] = {{"method", o.conversion->method},
+                       {"scale_um_per_px", o.conversion->scale_um_per_px},
                        {"scale_sigma_um_per_px", o.conversion->scale_sigma_um_per_px},
-                       {"edge_bias_px", o.conversion->edge_bias_px}, {"edge_bias_sigma_px", o.conversion->edge_bias_sigma_px}};
+                       {"edge_bias_px", o.conversion->edge_bias_px},
+                       {"edge_bias_sigma_px", o.conversion->edge_bias_sigma_px}};
   }
   WriteFileAtomically((out / "diameters.json").string(), j.dump(2) + "\n");
   written.push_back((out / "diameters.json").string());
@@ -470,7 +504,8 @@ std::vector<std::string> WriteExperimentTables(const Manifest& m, const std::vec
   }
   if (!s.x.empty()) {
     PlotSpec spec;
-    spec.title = fmt::format("{}: effective nozzle diameter, {} samples per step", m.name, o.samples);
+    spec.title =
+        fmt::format("{}: effective nozzle diameter, {} samples per step", m.name, o.samples);
     spec.x_label = "temperature (°C)";
     spec.y_label = results.front().has_um ? "diameter (µm)" : "width (px)";
     spec.series.push_back(s);

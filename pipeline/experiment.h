@@ -2,14 +2,13 @@
 
 #include <atomic>
 #include <functional>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "calib/pixel_scale.h"
 #include "pipeline/manifest.h"
-#include <opencv2/core.hpp>
-
 #include "vision/strand_measure.h"
 
 namespace clogscope::pipeline {
@@ -20,8 +19,9 @@ struct FrameRecord {
   int frame = 0;
   double time_s = -1;
   vision::StrandMeasurement m;
-  bool used = false;                // valid and kept by the outlier rejection
-  std::vector<std::string> fields;  // its per-frame CSV fields (kept for steps read back by --resume)
+  bool used = false;  // valid and kept by the outlier rejection
+  std::vector<std::string>
+      fields;  // its per-frame CSV fields (kept for steps read back by --resume)
 };
 
 // A step's outcome: the diameter table's row and the frames behind it.
@@ -58,7 +58,8 @@ struct ExperimentOptions {
 // Measures one step: N valid frames spread evenly over its settled part (the first valid frame from
 // the middle of each of N equal slots on), outliers rejected by MAD. Video parts are reached by
 // seeking. An unreadable source gives status "failed", never an exception.
-StepResult MeasureStep(const StepSpec& spec, const ExperimentOptions& options, int decoder_threads = 0,
+StepResult MeasureStep(const StepSpec& spec, const ExperimentOptions& options,
+                       int decoder_threads = 0,
                        std::vector<std::pair<int, cv::Mat>>* overlay_frames = nullptr);
 
 // Runs every step (in parallel, `jobs` at a time), writing each finished step to
@@ -68,7 +69,8 @@ std::vector<StepResult> RunExperiment(const Manifest& manifest, const Experiment
 
 // The tables: out_dir/frames.csv, diameters.csv, diameters.json and diameter_vs_temperature.png,
 // each written atomically. Returns the files written; a plot problem goes to `warnings`.
-std::vector<std::string> WriteExperimentTables(const Manifest& manifest, const std::vector<StepResult>& results,
+std::vector<std::string> WriteExperimentTables(const Manifest& manifest,
+                                               const std::vector<StepResult>& results,
                                                const ExperimentOptions& options,
                                                std::vector<std::string>* warnings);
 

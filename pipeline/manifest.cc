@@ -1,14 +1,14 @@
 #include "pipeline/manifest.h"
 
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <map>
 #include <set>
 #include <stdexcept>
-
-#include <fmt/format.h>
-#include <yaml-cpp/yaml.h>
 
 #include "common/atomic_file.h"
 #include "common/csv.h"
@@ -46,12 +46,14 @@ class YamlReader {
     } catch (const std::exception&) {
       used = 0;
     }
-    if (used == 0 || used != t.size() || !std::isfinite(v)) Fail(n, fmt::format("{}: '{}' is not a number", key, t));
+    if (used == 0 || used != t.size() || !std::isfinite(v))
+      Fail(n, fmt::format("{}: '{}' is not a number", key, t));
     return v;
   }
   int Whole(const YAML::Node& n, const std::string& key) const {
     const double v = Number(n, key);
-    if (v != std::floor(v) || std::abs(v) > 1e9) Fail(n, fmt::format("{}: expected a whole number", key));
+    if (v != std::floor(v) || std::abs(v) > 1e9)
+      Fail(n, fmt::format("{}: expected a whole number", key));
     return static_cast<int>(v);
   }
   std::string Text(const YAML::Node& n, const std::string& key) const {
@@ -79,16 +81,19 @@ std::string Resolve(const fs::path& base, const std::string& p) {
 std::vector<StepSpec> StepsFromLog(const Manifest& m) {
   const CsvTable t = ParseCsv(ReadFile(m.temperature_log), m.temperature_log);
   const int ct = t.Column("time_s"), cc = t.Column("temperature_c");
-  if (ct < 0 || cc < 0) throw std::invalid_argument(m.temperature_log + ": needs columns time_s,temperature_c");
+  if (ct < 0 || cc < 0)
+    throw std::invalid_argument(m.temperature_log + ": needs columns time_s,temperature_c");
   std::vector<TemperatureSample> log;
   for (size_t i = 0; i < t.rows.size(); ++i) {
     try {
       log.push_back({std::stod(t.rows[i][ct]), std::stod(t.rows[i][cc])});
     } catch (const std::exception&) {
-      throw std::invalid_argument(fmt::format("{}:{}: not a number", m.temperature_log, t.row_line_numbers[i]));
+      throw std::invalid_argument(
+          fmt::format("{}:{}: not a number", m.temperature_log, t.row_line_numbers[i]));
     }
     if (i > 0 && log[i].time_s < log[i - 1].time_s) {
-      throw std::invalid_argument(fmt::format("{}:{}: time goes backwards", m.temperature_log, t.row_line_numbers[i]));
+      throw std::invalid_argument(
+          fmt::format("{}:{}: time goes backwards", m.temperature_log, t.row_line_numbers[i]));
     }
   }
   const auto holds = FindHolds(log, m.hold_tolerance_c, m.settle_s, m.min_step_s);
@@ -108,7 +113,8 @@ std::vector<StepSpec> StepsFromLog(const Manifest& m) {
     if (s.end_s <= s.start_s) continue;  // hold entirely before the video starts
     steps.push_back(s);
   }
-  if (steps.empty()) throw std::invalid_argument(m.temperature_log + ": no hold falls inside the video");
+  if (steps.empty())
+    throw std::invalid_argument(m.temperature_log + ": no hold falls inside the video");
   return steps;
 }
 
@@ -134,7 +140,8 @@ Manifest LoadCsvManifest(const std::string& path) {
       if (c_a >= 0 && !r[c_a].empty()) s.start_s = std::stod(r[c_a]);
       if (c_b >= 0 && !r[c_b].empty()) s.end_s = std::stod(r[c_b]);
     } catch (const std::exception&) {
-      throw std::invalid_argument(where + ": step, temperature_c, start_s and end_s must be numbers");
+      throw std::invalid_argument(where +
+                                  ": step, temperature_c, start_s and end_s must be numbers");
     }
     if (r[c_src].empty()) throw std::invalid_argument(where + ": source is empty");
     const std::string src = Resolve(base, r[c_src]);
@@ -161,10 +168,12 @@ Manifest LoadManifest(const std::string& path) {
       throw std::invalid_argument(fmt::format("{}:{}: {}", path, e.mark.line + 1, e.msg));
     }
     const YamlReader y(path);
-    if (!root.IsMap()) throw std::invalid_argument(path + ": expected a mapping (name:, steps:, …)");
-    y.CheckKeys(root, {"name", "samples", "settle_s", "scale_um_per_px", "calibration", "calibrate", "extruder",
-                       "extruder_set", "roi", "polarity", "band_start_um", "band_height_um", "steps", "video",
-                       "temperature_log", "video_start_s", "hold_tolerance_c", "min_step_s"});
+    if (!root.IsMap())
+      throw std::invalid_argument(path + ": expected a mapping (name:, steps:, …)");
+    y.CheckKeys(root, {"name", "samples", "settle_s", "scale_um_per_px", "calibration", "calibrate",
+                       "extruder", "extruder_set", "roi", "polarity", "band_start_um",
+                       "band_height_um", "steps", "video", "temperature_log", "video_start_s",
+                       "hold_tolerance_c", "min_step_s"});
     m.path = path;
     const fs::path base = fs::path(path).parent_path();
     m.name = root["name"] ? y.Text(root["name"], "name") : fs::path(path).stem().string();
@@ -173,14 +182,18 @@ Manifest LoadManifest(const std::string& path) {
       if (m.samples < 2) y.Fail(root["samples"], "samples: need at least 2");
     }
     if (root["settle_s"]) m.settle_s = y.Number(root["settle_s"], "settle_s");
-    if (root["scale_um_per_px"]) m.scale_um_per_px = y.Number(root["scale_um_per_px"], "scale_um_per_px");
-    if (root["calibration"]) m.calibration_file = Resolve(base, y.Text(root["calibration"], "calibration"));
+    if (root["scale_um_per_px"])
+      m.scale_um_per_px = y.Number(root["scale_um_per_px"], "scale_um_per_px");
+    if (root["calibration"])
+      m.calibration_file = Resolve(base, y.Text(root["calibration"], "calibration"));
     if (const auto c = root["calibrate"]) {
-      if (!c.IsMap()) y.Fail(c, "calibrate: expected pins: CSV or micrometer: IMAGE(S) with pitch_um:");
+      if (!c.IsMap())
+        y.Fail(c, "calibrate: expected pins: CSV or micrometer: IMAGE(S) with pitch_um:");
       y.CheckKeys(c, {"pins", "micrometer", "pitch_um"});
       if (c["pins"]) m.calibrate_pins_csv = Resolve(base, y.Text(c["pins"], "pins"));
       if (c["micrometer"]) {
-        for (const auto& p : y.TextList(c["micrometer"], "micrometer")) m.calibrate_micrometer.push_back(Resolve(base, p));
+        for (const auto& p : y.TextList(c["micrometer"], "micrometer"))
+          m.calibrate_micrometer.push_back(Resolve(base, p));
       }
       if (c["pitch_um"]) m.calibrate_pitch_um = y.Number(c["pitch_um"], "pitch_um");
     }
@@ -192,12 +205,15 @@ Manifest LoadManifest(const std::string& path) {
     if (root["roi"]) m.roi = y.Text(root["roi"], "roi");
     if (root["polarity"]) m.polarity = y.Text(root["polarity"], "polarity");
     if (root["band_start_um"]) m.band_start_um = y.Number(root["band_start_um"], "band_start_um");
-    if (root["band_height_um"]) m.band_height_um = y.Number(root["band_height_um"], "band_height_um");
+    if (root["band_height_um"])
+      m.band_height_um = y.Number(root["band_height_um"], "band_height_um");
     if (root["video_start_s"]) m.video_start_s = y.Number(root["video_start_s"], "video_start_s");
-    if (root["hold_tolerance_c"]) m.hold_tolerance_c = y.Number(root["hold_tolerance_c"], "hold_tolerance_c");
+    if (root["hold_tolerance_c"])
+      m.hold_tolerance_c = y.Number(root["hold_tolerance_c"], "hold_tolerance_c");
     if (root["min_step_s"]) m.min_step_s = y.Number(root["min_step_s"], "min_step_s");
     if (root["video"]) m.video = Resolve(base, y.Text(root["video"], "video"));
-    if (root["temperature_log"]) m.temperature_log = Resolve(base, y.Text(root["temperature_log"], "temperature_log"));
+    if (root["temperature_log"])
+      m.temperature_log = Resolve(base, y.Text(root["temperature_log"], "temperature_log"));
     if (root["steps"] && (root["video"] || root["temperature_log"])) {
       y.Fail(root["steps"], "give either steps: or video: with temperature_log:, not both");
     }
@@ -205,7 +221,8 @@ Manifest LoadManifest(const std::string& path) {
       if (!steps.IsSequence()) y.Fail(steps, "steps: expected a list");
       for (const auto& n : steps) {
         if (!n.IsMap()) y.Fail(n, "a step: expected step:, temperature_c: and video: or images:");
-        y.CheckKeys(n, {"step", "temperature_c", "video", "images", "start_s", "end_s", "settle_s"});
+        y.CheckKeys(n,
+                    {"step", "temperature_c", "video", "images", "start_s", "end_s", "settle_s"});
         StepSpec s;
         s.line = n.Mark().line + 1;
         if (!n["step"]) y.Fail(n, "a step needs step:");
@@ -214,7 +231,8 @@ Manifest LoadManifest(const std::string& path) {
         s.temperature_c = y.Number(n["temperature_c"], "temperature_c");
         if (n["video"]) s.video = Resolve(base, y.Text(n["video"], "video"));
         if (n["images"]) s.images = Resolve(base, y.Text(n["images"], "images"));
-        if (s.video.empty() == s.images.empty()) y.Fail(n, fmt::format("step {}: give one of video: or images:", s.step));
+        if (s.video.empty() == s.images.empty())
+          y.Fail(n, fmt::format("step {}: give one of video: or images:", s.step));
         if (n["start_s"]) s.start_s = y.Number(n["start_s"], "start_s");
         if (n["end_s"]) s.end_s = y.Number(n["end_s"], "end_s");
         s.settle_s = n["settle_s"] ? y.Number(n["settle_s"], "settle_s") : m.settle_s;
@@ -232,14 +250,16 @@ Manifest LoadManifest(const std::string& path) {
   for (const auto& s : m.steps) {
     const auto [it, fresh] = seen.insert({s.step, s.line});
     if (!fresh) {
-      throw std::invalid_argument(fmt::format("{}:{}: step {} appears twice (also at line {})", m.path, s.line,
-                                              s.step, it->second));
+      throw std::invalid_argument(fmt::format("{}:{}: step {} appears twice (also at line {})",
+                                              m.path, s.line, s.step, it->second));
     }
     if (s.temperature_c <= -273.15) {
-      throw std::invalid_argument(fmt::format("{}:{}: temperature {} °C is below absolute zero", m.path, s.line, s.temperature_c));
+      throw std::invalid_argument(fmt::format("{}:{}: temperature {} °C is below absolute zero",
+                                              m.path, s.line, s.temperature_c));
     }
     if (s.end_s >= 0 && s.end_s <= s.start_s) {
-      throw std::invalid_argument(fmt::format("{}:{}: end_s must be after start_s", m.path, s.line));
+      throw std::invalid_argument(
+          fmt::format("{}:{}: end_s must be after start_s", m.path, s.line));
     }
   }
   return m;

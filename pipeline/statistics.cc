@@ -59,8 +59,8 @@ SampleStats RobustStats(const std::vector<double>& values, double k, double min_
   return s;
 }
 
-std::vector<HoldSegment> FindHolds(const std::vector<TemperatureSample>& log, double tol, double settle_s,
-                                   double min_hold_s) {
+std::vector<HoldSegment> FindHolds(const std::vector<TemperatureSample>& log, double tol,
+                                   double settle_s, double min_hold_s) {
   std::vector<HoldSegment> out;
   size_t i = 0;
   while (i < log.size()) {

@@ -1,10 +1,10 @@
 // End-to-end tests of `clogscope calibrate` and `measure --calib` on rendered targets, and the
 // bad inputs of the calibration issue: each a one-line error and no calibration file.
+#include <gtest/gtest.h>
+
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-
-#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include "calib/calibration_file.h"
@@ -23,19 +23,22 @@ struct RunResult {
 
 RunResult RunCli(const std::string& args, const fs::path& dir) {
   const std::string o = (dir / "stdout.txt").string(), e = (dir / "stderr.txt").string();
-  const int status = std::system((std::string(CLOGSCOPE_BINARY) + " " + args + " >" + o + " 2>" + e).c_str());
+  const int status =
+      std::system((std::string(CLOGSCOPE_BINARY) + " " + args + " >" + o + " 2>" + e).c_str());
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, ReadFile(o), ReadFile(e)};
 }
 
 const std::string kSmall = " --size 640x360 --tip-x-px 320 --tip-y-px 180 ";
 
 // Renders pins of the given diameters (bias 0.3 px, 3 µm/px) and their CSV in `dir`.
-void RenderPins(const fs::path& dir, const std::vector<int>& diameters, const std::string& extra_csv_rows = "") {
+void RenderPins(const fs::path& dir, const std::vector<int>& diameters,
+                const std::string& extra_csv_rows = "") {
   std::string csv = "image,diameter_um,tolerance_um\n";
   for (int d : diameters) {
     const std::string name = "pin" + std::to_string(d);
-    ASSERT_EQ(RunCli("render --target pin --strand-width-um " + std::to_string(d) + " --edge-bias-px 0.3 --silhouette" +
-                         kSmall + "--seed " + std::to_string(d) + " --out " + (dir / name).string(),
+    ASSERT_EQ(RunCli("render --target pin --strand-width-um " + std::to_string(d) +
+                         " --edge-bias-px 0.3 --silhouette" + kSmall + "--seed " +
+                         std::to_string(d) + " --out " + (dir / name).string(),
                      dir)
                   .exit_code,
               0);
@@ -49,7 +52,8 @@ TEST(CalibrateCommandTest, PinsThenMeasureWithCalib) {
   fs::remove_all(d);
   fs::create_directories(d);
   RenderPins(d, {300, 400, 500});
-  RunResult r = RunCli("calibrate --pins " + (d / "pins.csv").string() + " --out " + (d / "cal.yaml").string(), d);
+  RunResult r = RunCli(
+      "calibrate --pins " + (d / "pins.csv").string() + " --out " + (d / "cal.yaml").string(), d);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("outliers 0 of 3"), std::string::npos) << r.out;
   const calib::ScaleCalibration cal = calib::ReadCalibrationFile((d / "cal.yaml").string());
@@ -58,13 +62,14 @@ TEST(CalibrateCommandTest, PinsThenMeasureWithCalib) {
   EXPECT_GT(cal.scale_sigma_um_per_px, 0);
   EXPECT_TRUE(fs::exists(d / "cal_residuals.png"));
   // A strand seen through the same optics: µm from the calibration, bias removed.
-  ASSERT_EQ(RunCli("render --strand-width-um 381.3 --edge-bias-px 0.3 --size 640x360 --tip-x-px 320 --tip-y-px 100 --out " +
+  ASSERT_EQ(RunCli("render --strand-width-um 381.3 --edge-bias-px 0.3 --size 640x360 --tip-x-px "
+                   "320 --tip-y-px 100 --out " +
                        (d / "strand").string(),
                    d)
                 .exit_code,
             0);
-  r = RunCli("measure " + (d / "strand").string() + " --calib " + (d / "cal.yaml").string() + " --out-frames " +
-                 (d / "f.csv").string(),
+  r = RunCli("measure " + (d / "strand").string() + " --calib " + (d / "cal.yaml").string() +
+                 " --out-frames " + (d / "f.csv").string(),
              d);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const CsvTable t = ParseCsv(ReadFile((d / "f.csv").string()), "f.csv");
@@ -76,14 +81,17 @@ TEST(CalibrateCommandTest, MicrometerEndToEnd) {
   const fs::path d = fs::temp_directory_path() / "clogscope_calib_micro";
   fs::remove_all(d);
   fs::create_directories(d);
-  ASSERT_EQ(RunCli("render --target micrometer --pitch-um 100 --tilt-deg 4 --silhouette --out " + (d / "m").string(), d)
+  ASSERT_EQ(RunCli("render --target micrometer --pitch-um 100 --tilt-deg 4 --silhouette --out " +
+                       (d / "m").string(),
+                   d)
                 .exit_code,
             0);
   const RunResult r = RunCli("calibrate --micrometer " + (d / "m" / "frame_000000.png").string() +
                                  " --pitch-um 100 --out " + (d / "cal.yaml").string(),
                              d);
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NEAR(calib::ReadCalibrationFile((d / "cal.yaml").string()).scale_um_per_px, 3.0, 3.0 * 2e-4);
+  EXPECT_NEAR(calib::ReadCalibrationFile((d / "cal.yaml").string()).scale_um_per_px, 3.0,
+              3.0 * 2e-4);
 }
 
 TEST(CalibrateCommandTest, BadInputsWriteNoCalibration) {
@@ -91,21 +99,31 @@ TEST(CalibrateCommandTest, BadInputsWriteNoCalibration) {
   fs::remove_all(d);
   fs::create_directories(d);
   RenderPins(d, {300, 400});
-  const std::string good_rows = "pin300/frame_000000.png,300,0.5\npin400/frame_000000.png,400,0.5\n";
-  WriteFileAtomically((d / "same.csv").string(), "image,diameter_um\npin300/frame_000000.png,400\npin400/frame_000000.png,400\n");
+  const std::string good_rows =
+      "pin300/frame_000000.png,300,0.5\npin400/frame_000000.png,400,0.5\n";
+  WriteFileAtomically(
+      (d / "same.csv").string(),
+      "image,diameter_um\npin300/frame_000000.png,400\npin400/frame_000000.png,400\n");
   WriteFileAtomically((d / "nodiam.csv").string(), "image,diameter_um\npin300/frame_000000.png,\n");
-  WriteFileAtomically((d / "missing.csv").string(), "image,diameter_um\n" + good_rows.substr(0, 0) + "nothere.png,300\n");
+  WriteFileAtomically((d / "missing.csv").string(),
+                      "image,diameter_um\n" + good_rows.substr(0, 0) + "nothere.png,300\n");
   WriteFileAtomically((d / "empty.csv").string(), "image,diameter_um\n");
-  ASSERT_EQ(RunCli("render --target pin --strand-width-um 300 --silhouette --size 640x360 --tip-x-px 10 --tip-y-px 180 --out " +
+  ASSERT_EQ(RunCli("render --target pin --strand-width-um 300 --silhouette --size 640x360 "
+                   "--tip-x-px 10 --tip-y-px 180 --out " +
                        (d / "cut").string(),
                    d)
                 .exit_code,
             0);
-  WriteFileAtomically((d / "notfound.csv").string(), "image,diameter_um\ncut/frame_000000.png,300\npin400/frame_000000.png,400\n");
-  ASSERT_EQ(RunCli("render --target micrometer --pitch-um 600 --silhouette --size 640x360 --out " + (d / "sparse").string(), d)
+  WriteFileAtomically((d / "notfound.csv").string(),
+                      "image,diameter_um\ncut/frame_000000.png,300\npin400/frame_000000.png,400\n");
+  ASSERT_EQ(RunCli("render --target micrometer --pitch-um 600 --silhouette --size 640x360 --out " +
+                       (d / "sparse").string(),
+                   d)
                 .exit_code,
             0);
-  ASSERT_EQ(RunCli("render --target micrometer --pitch-um 100 --silhouette --size 640x360 --out " + (d / "m").string(), d)
+  ASSERT_EQ(RunCli("render --target micrometer --pitch-um 100 --silhouette --size 640x360 --out " +
+                       (d / "m").string(),
+                   d)
                 .exit_code,
             0);
   struct Case {
@@ -116,11 +134,14 @@ TEST(CalibrateCommandTest, BadInputsWriteNoCalibration) {
       {"--pins " + (d / "missing.csv").string(), "nothere.png: no such file"},
       {"--pins " + (d / "empty.csv").string(), "no pins listed"},
       {"--pins " + (d / "notfound.csv").string(), "pin not found"},
-      {"--micrometer " + (d / "sparse" / "frame_000000.png").string() + " --pitch-um 600", "need at least 3"},
-      {"--micrometer " + (d / "m" / "frame_000000.png").string() + " --pitch-um 10 --expect-scale-um-per-px 3",
+      {"--micrometer " + (d / "sparse" / "frame_000000.png").string() + " --pitch-um 600",
+       "need at least 3"},
+      {"--micrometer " + (d / "m" / "frame_000000.png").string() +
+           " --pitch-um 10 --expect-scale-um-per-px 3",
        "does not fit the line spacing"},
       {"--micrometer " + (d / "m" / "frame_000000.png").string(), "--pitch-um must be positive"},
-      {"--pins " + (d / "pins.csv").string() + " --micrometer x.png --pitch-um 100", "either --pins"},
+      {"--pins " + (d / "pins.csv").string() + " --micrometer x.png --pitch-um 100",
+       "either --pins"},
   };
   for (const auto& c : cases) {
     const fs::path out = d / "cal.yaml";
@@ -138,15 +159,20 @@ TEST(CalibrateCommandTest, MeasureRefusesBadCalibrationFiles) {
   fs::remove_all(d);
   fs::create_directories(d);
   WriteFileAtomically((d / "garbage.yaml").string(), "this: [is: not");
-  WriteFileAtomically((d / "v9.yaml").string(), "%YAML:1.0\n---\nclogscope_calibration_version: 9\nscale_um_per_px: 3\n");
-  WriteFileAtomically((d / "neg.yaml").string(),
-                      "%YAML:1.0\n---\nclogscope_calibration_version: 1\nusable: 1\nscale_um_per_px: -3\n"
-                      "scale_sigma_um_per_px: 0\nedge_bias_px: 0\n");
-  for (const auto& [file, expect] : std::vector<std::pair<std::string, std::string>>{
-           {"garbage.yaml", "garbage.yaml"}, {"v9.yaml", "version 9"}, {"neg.yaml", "must be positive"},
-           {"absent.yaml", "absent.yaml"}}) {
-    const RunResult r =
-        RunCli("measure x.png --calib " + (d / file).string() + " --out-frames " + (d / "f.csv").string(), d);
+  WriteFileAtomically((d / "v9.yaml").string(),
+                      "%YAML:1.0\n---\nclogscope_calibration_version: 9\nscale_um_per_px: 3\n");
+  WriteFileAtomically(
+      (d / "neg.yaml").string(),
+      "%YAML:1.0\n---\nclogscope_calibration_version: 1\nusable: 1\nscale_um_per_px: -3\n"
+      "scale_sigma_um_per_px: 0\nedge_bias_px: 0\n");
+  for (const auto& [file, expect] :
+       std::vector<std::pair<std::string, std::string>>{{"garbage.yaml", "garbage.yaml"},
+                                                        {"v9.yaml", "version 9"},
+                                                        {"neg.yaml", "must be positive"},
+                                                        {"absent.yaml", "absent.yaml"}}) {
+    const RunResult r = RunCli(
+        "measure x.png --calib " + (d / file).string() + " --out-frames " + (d / "f.csv").string(),
+        d);
     EXPECT_NE(r.exit_code, 0) << file;
     EXPECT_NE(r.err.find(expect), std::string::npos) << file << "\n" << r.err;
   }

@@ -1,0 +1,146 @@
+#include "pipeline/experiment.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "common/atomic_file.h"
+#include "common/csv.h"
+#include "vision/synthetic.h"
+
+namespace clogscope::pipeline {
+namespace {
+
+namespace fs = std::filesystem;
+
+vision::SceneParams SmallScene(double width_um, uint64_t seed) {
+  vision::SceneParams p;
+  p.width_px = 640;
+  p.height_px = 360;
+  p.tip_x_px = 320;
+  p.tip_y_px = 100;
+  p.strand_width_um = width_um;
+  p.width_jitter_um = 2;
+  p.seed = seed;
+  return p;
+}
+
+class ExperimentTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("clogscope_experiment_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  std::string Render(const std::string& name, double width_um, int frames, uint64_t seed) {
+    const std::string path = (dir_ / name).string();
+    truths_[path] = vision::RenderSequence(SmallScene(width_um, seed), frames, 25.0, path, "");
+    return path;
+  }
+  ExperimentOptions Options(int samples) {
+    ExperimentOptions o;
+    o.samples = samples;
+    o.out_dir = (dir_ / "out").string();
+    o.conversion = PlainScale(3.0);
+    o.jobs = 2;
+    return o;
+  }
+  fs::path dir_;
+  std::map<std::string, std::vector<vision::FrameTruth>> truths_;
+};
+
+TEST_F(ExperimentTest, StepSamplesEvenlyAndMatchesTruth) {
+  StepSpec s;
+  s.step = 1;
+  s.temperature_c = 220;
+  s.video = Render("v.mp4", 390.1, 100, 7);  // 4 s
+  s.settle_s = 1.0;
+  const StepResult r = MeasureStep(s, Options(15));
+  ASSERT_EQ(r.status, "ok") << r.detail;
+  EXPECT_EQ(r.n_valid, 15);
+  EXPECT_EQ(r.n_examined, 15);
+  // Frames spread over the settled 3 s: one per 0.2 s slot, from 1.1 s on.
+  double truth_sum = 0, prev = 0;
+  for (size_t i = 0; i < r.frames.size(); ++i) {
+    const auto& f = r.frames[i];
+    EXPECT_NEAR(f.time_s, 1.0 + (i + 0.5) * 0.2, 0.021) << i;
+    EXPECT_GT(f.time_s, prev);
+    prev = f.time_s;
+    if (f.used) truth_sum += truths_[s.video][f.frame].width_um;
+  }
+  EXPECT_EQ(r.n_used + r.n_rejected, 15);
+  // The mean against the truth of exactly the frames used: measurement error only.
+  EXPECT_NEAR(r.mean_um, truth_sum / r.n_used, 0.15 * 3.0);
+  EXPECT_NEAR(r.sem_um, r.std_um / std::sqrt(r.n_used), 1e-9);
+  EXPECT_GT(r.ci95_um, 2 * r.sem_um);
+}
+
+TEST_F(ExperimentTest, ShortStepsAndBadSourcesAreMarkedNotFatal) {
+  StepSpec short_step;
+  short_step.step = 1;
+  short_step.temperature_c = 220;
+  short_step.video = Render("short.mp4", 400, 10, 1);
+  const StepResult r = MeasureStep(short_step, Options(20));
+  EXPECT_EQ(r.status, "too_few_frames");
+  EXPECT_EQ(r.n_valid, 10);
+  EXPECT_NE(r.detail.find("10 valid of 20"), std::string::npos);
+  StepSpec missing = short_step;
+  missing.video = (dir_ / "nope.mp4").string();
+  const StepResult m = MeasureStep(missing, Options(20));
+  EXPECT_EQ(m.status, "failed");
+  EXPECT_NE(m.detail.find("nope.mp4"), std::string::npos);
+  StepSpec late = short_step;
+  late.start_s = 100;
+  EXPECT_EQ(MeasureStep(late, Options(5)).status, "failed");
+}
+
+TEST_F(ExperimentTest, RunWritesTablesAndResumes) {
+  Manifest m;
+  m.path = (dir_ / "m.yaml").string();
+  m.name = "t";
+  for (int i = 0; i < 3; ++i) {
+    StepSpec s;
+    s.step = i + 1;
+    s.temperature_c = 220 - 10 * i;
+    s.video = Render("s" + std::to_string(i) + ".mp4", 400 - 5 * i, 50, i + 1);
+    m.steps.push_back(s);
+  }
+  m.steps.push_back({4, 190, (dir_ / "missing.mp4").string(), "", 0, -1, 0, 0});
+  ExperimentOptions o = Options(10);
+  const auto results = RunExperiment(m, o);
+  ASSERT_EQ(results.size(), 4u);
+  std::vector<std::string> warnings;
+  WriteExperimentTables(m, results, o, &warnings);
+  const CsvTable t = ParseCsv(ReadFile((dir_ / "out" / "diameters.csv").string()), "diameters.csv");
+  for (const char* col : {"step", "temperature_c", "n", "mean_um", "std_um", "sem_um", "ci95_um"}) {
+    EXPECT_GE(t.Column(col), 0) << col;
+  }
+  ASSERT_EQ(t.rows.size(), 4u);
+  EXPECT_NEAR(std::stod(t.rows[2][t.Column("mean_um")]), 390, 2.0);
+  EXPECT_EQ(t.rows[3][t.Column("status")], "failed");
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "frames.csv"));
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "diameters.json"));
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "steps" / "step_0002.json"));
+  EXPECT_FALSE(fs::is_empty(dir_ / "out" / "overlays"));
+  // --resume keeps finished steps (and retries the failed one).
+  o.resume = true;
+  const auto again = RunExperiment(m, o);
+  ASSERT_EQ(again.size(), 4u);
+  EXPECT_TRUE(again[0].resumed);
+  EXPECT_FALSE(again[3].resumed);
+  EXPECT_DOUBLE_EQ(again[1].mean_um, results[1].mean_um);
+  // A cancelled run keeps nothing it had not finished.
+  std::atomic<bool> cancel{true};
+  o.resume = false;
+  o.out_dir = (dir_ / "cancelled").string();
+  o.cancel = &cancel;
+  EXPECT_TRUE(RunExperiment(m, o).empty());
+}
+
+}  // namespace
+}  // namespace clogscope::pipeline

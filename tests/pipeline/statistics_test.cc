@@ -1,0 +1,73 @@
+#include "pipeline/statistics.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace clogscope::pipeline {
+namespace {
+
+TEST(StatisticsTest, StudentQuantilesMatchTables) {
+  // Two-sided 95 % critical values of Student's t (standard tables).
+  const std::pair<int, double> table[] = {{1, 12.706},  {2, 4.303},  {5, 2.571},  {6, 2.447},
+                                          {9, 2.262},   {10, 2.228}, {20, 2.086}, {29, 2.045},
+                                          {49, 2.0096}, {100, 1.984}};
+  for (const auto& [dof, t] : table) EXPECT_NEAR(StudentT975(dof), t, 1.5e-3) << dof;
+  EXPECT_TRUE(std::isnan(StudentT975(0)));
+}
+
+TEST(StatisticsTest, RobustStatsRejectsOnlyTheOutliers) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> n(133.3, 0.5);
+  std::vector<double> v;
+  for (int i = 0; i < 48; ++i) v.push_back(n(rng));
+  v.push_back(140);  // a drop of melt on the strand
+  v.push_back(120);
+  const SampleStats s = RobustStats(v);
+  EXPECT_EQ(s.n_rejected, 2);
+  EXPECT_FALSE(s.used[48]);
+  EXPECT_FALSE(s.used[49]);
+  EXPECT_NEAR(s.mean, 133.3, 0.3);
+  EXPECT_NEAR(s.std, 0.5, 0.15);
+  EXPECT_NEAR(s.sem, s.std / std::sqrt(48.0), 1e-12);
+  EXPECT_NEAR(s.ci95_half_width, StudentT975(47) * s.sem, 1e-12);
+  // Identical values: the MAD floor keeps a 0.01 px difference from being an outlier.
+  const SampleStats flat = RobustStats({5, 5, 5, 5, 5.01}, 3.5, 0.02);
+  EXPECT_EQ(flat.n_rejected, 0);
+}
+
+TEST(StatisticsTest, HoldsFromATemperatureLog) {
+  // 220 for 60 s, ramp down to 210 over 20 s, 210 for 60 s, ramp, 200 for 10 s (too short).
+  std::vector<TemperatureSample> log;
+  std::mt19937 rng(1);
+  std::normal_distribution<double> noise(0, 0.2);
+  for (int t = 0; t <= 170; ++t) {
+    double temp;
+    if (t < 60)
+      temp = 220;
+    else if (t < 80)
+      temp = 220 - 0.5 * (t - 60);
+    else if (t < 140)
+      temp = 210;
+    else if (t < 160)
+      temp = 210 - 0.5 * (t - 140);
+    else
+      temp = 200;
+    log.push_back({double(t), temp + noise(rng)});
+  }
+  const auto holds = FindHolds(log, 1.0, 15.0, 20.0);
+  ASSERT_EQ(holds.size(), 2u);
+  EXPECT_NEAR(holds[0].temperature_c, 220, 0.2);
+  EXPECT_NEAR(holds[0].start_s, 15, 1e-9);
+  EXPECT_NEAR(holds[0].end_s, 60, 2.5);
+  EXPECT_NEAR(holds[1].temperature_c, 210, 0.2);
+  EXPECT_GT(holds[1].start_s, 78);
+  // Never settles: a steady ramp.
+  std::vector<TemperatureSample> ramp;
+  for (int t = 0; t < 100; ++t) ramp.push_back({double(t), 220 - 0.5 * t});
+  EXPECT_TRUE(FindHolds(ramp, 1.0, 5.0, 10.0).empty());
+}
+
+}  // namespace
+}  // namespace clogscope::pipeline
