@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 #include <random>
@@ -179,45 +180,49 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
   const Vec2 centre{0.5 * (p.width_px - 1), 0.5 * (p.height_px - 1)};
 
   cv::Mat radiance(p.height_px, p.width_px, CV_64F);
-  for (int y = 0; y < p.height_px; ++y) {
-    double* row = radiance.ptr<double>(y);
-    for (int x = 0; x < p.width_px; ++x) {
-      const Vec2 d{x - p.tip_x_px, y - p.tip_y_px};
-      double v;
-      if (p.target == Target::kMicrometer) {
-        // The nearest lines only: they are at least 4 px apart and the reach of one is 9 sigma.
-        const double u = Dot(n_strand, d);
-        const long k0 = std::lround(u / pitch_px);
-        double cov = 0;
-        for (long k = k0 - 2; k <= k0 + 2; ++k) {
-          const double c = k * pitch_px;
-          cov += PixelMeanOfBlurredStep(u - c + 0.5 * w, sigma, n_strand.x, n_strand.y) -
-                 PixelMeanOfBlurredStep(u - c - 0.5 * w, sigma, n_strand.x, n_strand.y);
+  // Rows are independent: render them on all cores.
+  cv::parallel_for_(cv::Range(0, p.height_px), [&](const cv::Range& rows) {
+    for (int y = rows.start; y < rows.end; ++y) {
+      double* row = radiance.ptr<double>(y);
+      for (int x = 0; x < p.width_px; ++x) {
+        const Vec2 d{x - p.tip_x_px, y - p.tip_y_px};
+        double v;
+        if (p.target == Target::kMicrometer) {
+          // The nearest lines only: they are at least 4 px apart and the reach of one is 9 sigma.
+          const double u = Dot(n_strand, d);
+          const long k0 = std::lround(u / pitch_px);
+          double cov = 0;
+          for (long k = k0 - 2; k <= k0 + 2; ++k) {
+            const double c = k * pitch_px;
+            cov += PixelMeanOfBlurredStep(u - c + 0.5 * w, sigma, n_strand.x, n_strand.y) -
+                   PixelMeanOfBlurredStep(u - c - 0.5 * w, sigma, n_strand.x, n_strand.y);
+          }
+          v = p.background_level + (p.strand_level - p.background_level) * cov;
+        } else {
+          const double cov = strand_left.Eval(d, sigma) - strand_right.Eval(d, sigma);
+          v = p.background_level + (p.strand_level - p.background_level) * cov;
+          if (p.highlight)
+            v += p.highlight_gain * (hl_left.Eval(d, sigma) - hl_right.Eval(d, sigma));
         }
-        v = p.background_level + (p.strand_level - p.background_level) * cov;
-      } else {
-        const double cov = strand_left.Eval(d, sigma) - strand_right.Eval(d, sigma);
-        v = p.background_level + (p.strand_level - p.background_level) * cov;
-        if (p.highlight) v += p.highlight_gain * (hl_left.Eval(d, sigma) - hl_right.Eval(d, sigma));
-      }
-      if (p.target == Target::kStrand) {
-        if (p.bed) {
-          const double a = bed.Eval(d, sigma);
-          v = v * (1 - a) + p.bed_level * a;
+        if (p.target == Target::kStrand) {
+          if (p.bed) {
+            const double a = bed.Eval(d, sigma);
+            v = v * (1 - a) + p.bed_level * a;
+          }
+          // The product of three soft half-planes is exact away from the two flank corners, which
+          // lie far from the measurement band.
+          double a = nozzle_face.Eval(d, sigma);
+          if (a > 0) a *= nozzle_right.Eval(d, sigma) * nozzle_left.Eval(d, sigma);
+          v = v * (1 - a) + p.nozzle_level * a;
         }
-        // The product of three soft half-planes is exact away from the two flank corners, which
-        // lie far from the measurement band.
-        double a = nozzle_face.Eval(d, sigma);
-        if (a > 0) a *= nozzle_right.Eval(d, sigma) * nozzle_left.Eval(d, sigma);
-        v = v * (1 - a) + p.nozzle_level * a;
+        if (p.gradient_fraction != 0) {
+          const Vec2 c{x - centre.x, y - centre.y};
+          v *= 1.0 - p.gradient_fraction * Dot(c, g_dir) / diag;
+        }
+        row[x] = v;
       }
-      if (p.gradient_fraction != 0) {
-        const Vec2 c{x - centre.x, y - centre.y};
-        v *= 1.0 - p.gradient_fraction * Dot(c, g_dir) / diag;
-      }
-      row[x] = v;
     }
-  }
+  });
 
   const double full_scale = p.bit_depth == 16 ? 65535.0 : 255.0;
   const double level_scale = full_scale / 255.0;
