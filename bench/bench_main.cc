@@ -21,6 +21,7 @@
 #include "vision/strand_measure.h"
 #include "vision/synthetic.h"
 #include "vision/video_decoder.h"
+#include "pipeline/experiment.h"
 
 namespace {
 
@@ -227,17 +228,112 @@ void BenchVideo() {
   }
 }
 
+// The batch job of the pipeline issue: six 10 s 720p H.264 step videos, 50 samples per step, two
+// steps at a time, against decoding every frame once.
+void BenchExperiment() {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "clogscope_bench" / "experiment";
+  fs::create_directories(dir);
+  const double diams[] = {400.0, 396.9, 390.1, 381.3, 365.9, 345.4};
+  clogscope::pipeline::Manifest m;
+  m.name = "bench";
+  m.path = (dir / "bench.yaml").string();
+  std::vector<std::string> videos;
+  for (int i = 0; i < 6; ++i) {
+    const std::string path = (dir / fmt::format("step{}.mp4", i + 1)).string();
+    if (!fs::exists(path)) {
+      SceneParams p;
+      p.strand_width_um = diams[i];
+      p.width_jitter_um = 2;
+      p.sway_deg = 0.3;
+      p.seed = i + 1;
+      clogscope::vision::RenderSequence(p, 250, 25.0, path, "");
+    }
+    videos.push_back(path);
+    clogscope::pipeline::StepSpec s;
+    s.step = i + 1;
+    s.temperature_c = 220 - 10 * i;
+    s.video = path;
+    m.steps.push_back(s);
+  }
+  const int frames_total = 6 * 250;
+  // Decoding every frame once: our reader (one file after another, FFmpeg's threads), and ffmpeg.
+  auto decode_all = [&](int threads) {
+    const auto t0 = Clock::now();
+    int n = 0;
+    for (const auto& v : videos) {
+      clogscope::vision::VideoDecoder dec(v, threads);
+      clogscope::vision::DecodedFrame f;
+      while (dec.Read(&f)) ++n;
+    }
+    return std::make_pair(n, Seconds(t0, Clock::now()));
+  };
+  std::string ff_cmd = "ffmpeg -v error";
+  for (const auto& v : videos) ff_cmd += " -i " + v;
+  for (size_t i = 0; i < videos.size(); ++i) ff_cmd += fmt::format(" -map {}:v -f null -", i);
+  ff_cmd += " 2>/dev/null";
+  auto run_pipeline = [&](int jobs) {
+    clogscope::pipeline::ExperimentOptions o;
+    o.samples = 50;
+    o.jobs = jobs;
+    o.out_dir = (dir / "out").string();
+    o.conversion = clogscope::pipeline::PlainScale(3.0);
+    o.overlays_per_step = 0;
+    const auto t0 = Clock::now();
+    const auto r = clogscope::pipeline::RunExperiment(m, o);
+    const double secs = Seconds(t0, Clock::now());
+    int examined = 0;
+    double worst = 0;
+    for (size_t i = 0; i < r.size(); ++i) {
+      examined += r[i].n_examined;
+      worst = std::max(worst, std::abs(r[i].mean_um - diams[i]));
+    }
+    return std::make_tuple(secs, examined, worst);
+  };
+  constexpr int kRounds = 3;
+  std::vector<double> ours_all, ours_one, ff, pipe2, pipe1;
+  int examined = 0;
+  double worst = 0;
+  for (int r = 0; r < kRounds; ++r) {
+    ours_all.push_back(decode_all(0).second);
+    ours_one.push_back(decode_all(1).second);
+    const auto t0 = Clock::now();
+    if (std::system(ff_cmd.c_str()) == 0) ff.push_back(Seconds(t0, Clock::now()));
+    double s2 = 0, s1 = 0;
+    std::tie(s2, examined, worst) = run_pipeline(2);
+    pipe2.push_back(s2);
+    std::tie(s1, std::ignore, std::ignore) = run_pipeline(1);
+    pipe1.push_back(s1);
+  }
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? NAN : v[v.size() / 2];
+  };
+  fmt::print("\n## Experiment: six 10 s 1280x720 H.264 steps ({} frames), 50 samples per step, median of {}\n\n",
+             frames_total, kRounds);
+  fmt::print("| job | wall s | frames/s (of all {} frames) |\n|---|---|---|\n", frames_total);
+  auto row = [&](const std::string& name, double s) { fmt::print("| {} | {:.3f} | {:.0f} |\n", name, s, frames_total / s); };
+  row("decode every frame once: ffmpeg -f null (all six files, its default threads, incl. start-up)", median(ff));
+  row("decode every frame once: clogscope reader, FFmpeg's threads", median(ours_all));
+  row("decode every frame once: clogscope reader, one thread", median(ours_one));
+  row("measure the experiment: clogscope, 2 steps at a time (--jobs 2)", median(pipe2));
+  row("measure the experiment: clogscope, 1 step at a time (--jobs 1)", median(pipe1));
+  fmt::print("\nframes measured: {} of {}; worst |step mean − rendered diameter|: {:.2f} µm\n", examined,
+             frames_total, worst);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   const std::string what = argc > 1 ? argv[1] : "all";
-  if (what != "all" && what != "measure" && what != "accuracy" && what != "video") {
-    std::fprintf(stderr, "usage: clogscope_bench [measure|accuracy|video|all]\n");
+  if (what != "all" && what != "measure" && what != "accuracy" && what != "video" && what != "experiment") {
+    std::fprintf(stderr, "usage: clogscope_bench [measure|accuracy|video|experiment|all]\n");
     return 2;
   }
   fmt::print("# clogscope benchmarks ({} hardware threads)\n", std::thread::hardware_concurrency());
   if (what == "all" || what == "measure") BenchMeasure();
   if (what == "all" || what == "accuracy") BenchAccuracy();
   if (what == "all" || what == "video") BenchVideo();
+  if (what == "all" || what == "experiment") BenchExperiment();
   return 0;
 }
