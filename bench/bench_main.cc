@@ -16,12 +16,12 @@
 #include <tuple>
 #include <vector>
 
+#include "pipeline/experiment.h"
 #include "vision/batch.h"
 #include "vision/frame_source.h"
 #include "vision/strand_measure.h"
 #include "vision/synthetic.h"
 #include "vision/video_decoder.h"
-#include "pipeline/experiment.h"
 
 namespace {
 
@@ -309,24 +309,31 @@ void BenchExperiment() {
     std::sort(v.begin(), v.end());
     return v.empty() ? NAN : v[v.size() / 2];
   };
-  fmt::print("\n## Experiment: six 10 s 1280x720 H.264 steps ({} frames), 50 samples per step, median of {}\n\n",
-             frames_total, kRounds);
+  fmt::print(
+      "\n## Experiment: six 10 s 1280x720 H.264 steps ({} frames), 50 samples per step, median of "
+      "{}\n\n",
+      frames_total, kRounds);
   fmt::print("| job | wall s | frames/s (of all {} frames) |\n|---|---|---|\n", frames_total);
-  auto row = [&](const std::string& name, double s) { fmt::print("| {} | {:.3f} | {:.0f} |\n", name, s, frames_total / s); };
-  row("decode every frame once: ffmpeg -f null (all six files, its default threads, incl. start-up)", median(ff));
+  auto row = [&](const std::string& name, double s) {
+    fmt::print("| {} | {:.3f} | {:.0f} |\n", name, s, frames_total / s);
+  };
+  row("decode every frame once: ffmpeg -f null (all six files, its default threads, incl. "
+      "start-up)",
+      median(ff));
   row("decode every frame once: clogscope reader, FFmpeg's threads", median(ours_all));
   row("decode every frame once: clogscope reader, one thread", median(ours_one));
   row("measure the experiment: clogscope, 2 steps at a time (--jobs 2)", median(pipe2));
   row("measure the experiment: clogscope, 1 step at a time (--jobs 1)", median(pipe1));
-  fmt::print("\nframes measured: {} of {}; worst |step mean − rendered diameter|: {:.2f} µm\n", examined,
-             frames_total, worst);
+  fmt::print("\nframes measured: {} of {}; worst |step mean − rendered diameter|: {:.2f} µm\n",
+             examined, frames_total, worst);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   const std::string what = argc > 1 ? argv[1] : "all";
-  if (what != "all" && what != "measure" && what != "accuracy" && what != "video" && what != "experiment") {
+  if (what != "all" && what != "measure" && what != "accuracy" && what != "video" &&
+      what != "experiment") {
     std::fprintf(stderr, "usage: clogscope_bench [measure|accuracy|video|experiment|all]\n");
     return 2;
   }

@@ -1,0 +1,125 @@
+// End-to-end test of `clogscope run` on a small rendered experiment: calibration from pins in the
+// manifest, sampled steps against the truth, the predictor, the summary; bad manifests; --resume.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "common/atomic_file.h"
+#include "common/csv.h"
+
+namespace clogscope::apps {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct RunResult {
+  int exit_code;
+  std::string out, err;
+};
+
+RunResult RunCli(const std::string& args, const fs::path& dir) {
+  const std::string o = (dir / "stdout.txt").string(), e = (dir / "stderr.txt").string();
+  const int status =
+      std::system((std::string(CLOGSCOPE_BINARY) + " " + args + " >" + o + " 2>" + e).c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, ReadFile(o), ReadFile(e)};
+}
+
+class RunCommandTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = fs::temp_directory_path() / "clogscope_run_e2e";
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    const std::string small = " --size 640x360 --tip-x-px 320 ";
+    std::string pins = "image,diameter_um\n";
+    for (int d : {300, 400, 500}) {
+      ASSERT_EQ(RunCli("render --target pin --edge-bias-px 0.3 --strand-width-um " +
+                           std::to_string(d) + small + "--tip-y-px 180 --out " +
+                           (dir_ / ("pin" + std::to_string(d))).string(),
+                       dir_)
+                    .exit_code,
+                0);
+      pins += "pin" + std::to_string(d) + "/frame_000000.png," + std::to_string(d) + "\n";
+    }
+    WriteFileAtomically((dir_ / "pins.csv").string(), pins);
+    const double diams[] = {400.0, 390.1, 365.9};
+    std::string manifest =
+        "name: small\nsamples: 12\nsettle_s: 0.4\ncalibrate:\n  pins: pins.csv\nextruder: "
+        "direct-pla\nsteps:\n";
+    for (int i = 0; i < 3; ++i) {
+      const std::string v = "s" + std::to_string(i + 1) + ".mp4";
+      ASSERT_EQ(
+          RunCli("render --frames 50 --edge-bias-px 0.3 --width-jitter-um 1 --strand-width-um " +
+                     std::to_string(diams[i]) + small + "--tip-y-px 100 --seed " +
+                     std::to_string(i + 1) + " --out " + (dir_ / v).string(),
+                 dir_)
+              .exit_code,
+          0);
+      manifest += "  - {step: " + std::to_string(i + 1) +
+                  ", temperature_c: " + std::to_string(220 - 10 * i) + ", video: " + v + "}\n";
+    }
+    WriteFileAtomically((dir_ / "exp.yaml").string(), manifest);
+  }
+  static fs::path dir_;
+};
+fs::path RunCommandTest::dir_;
+
+TEST_F(RunCommandTest, WholePipeline) {
+  const fs::path out = dir_ / "out";
+  const RunResult r =
+      RunCli("run " + (dir_ / "exp.yaml").string() + " --out " + out.string() + " --jobs 2", dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* f :
+       {"calibration.yaml", "frames.csv", "diameters.csv", "diameters.json", "summary.md",
+        "summary.json", "predict/predictions.csv", "steps/step_0003.json"}) {
+    EXPECT_TRUE(fs::exists(out / f)) << f;
+  }
+  const CsvTable t = ParseCsv(ReadFile((out / "diameters.csv").string()), "diameters.csv");
+  const double diams[] = {400.0, 390.1, 365.9};
+  ASSERT_EQ(t.rows.size(), 3u);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(t.rows[i][t.Column("status")], "ok");
+    EXPECT_EQ(t.rows[i][t.Column("n")], "12");
+    // Jitter 1 µm over 12 frames: the mean is within ~0.3 µm (1σ) of the rendered diameter.
+    EXPECT_NEAR(std::stod(t.rows[i][t.Column("mean_um")]), diams[i], 1.2) << i;
+    EXPECT_GT(std::stod(t.rows[i][t.Column("ci95_um")]), 0);
+  }
+  const std::string summary = ReadFile((out / "summary.md").string());
+  EXPECT_NE(summary.find("Pixel scale (pins)"), std::string::npos);
+  EXPECT_NE(summary.find("Predicted bar-mount vibration"), std::string::npos);
+  // --resume: nothing re-measured, same table.
+  const RunResult again =
+      RunCli("run " + (dir_ / "exp.yaml").string() + " --out " + out.string() + " --resume", dir_);
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_NE(again.err.find("kept from the earlier run"), std::string::npos);
+  const CsvTable t2 = ParseCsv(ReadFile((out / "diameters.csv").string()), "diameters.csv");
+  EXPECT_EQ(t2.rows[1][t2.Column("mean_um")], t.rows[1][t.Column("mean_um")]);
+}
+
+TEST_F(RunCommandTest, BadManifestsAreOneLineErrors) {
+  WriteFileAtomically((dir_ / "typo.yaml").string(), "name: x\nsampels: 5\nsteps: []\n");
+  RunResult r =
+      RunCli("run " + (dir_ / "typo.yaml").string() + " --out " + (dir_ / "o1").string(), dir_);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("typo.yaml:2: unknown key 'sampels'"), std::string::npos) << r.err;
+  r = RunCli("run " + (dir_ / "nope.yaml").string() + " --out " + (dir_ / "o2").string(), dir_);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("nope.yaml"), std::string::npos) << r.err;
+  // One step's video is missing: the others complete, exit 2.
+  WriteFileAtomically(
+      (dir_ / "partial.yaml").string(),
+      "samples: 5\nscale_um_per_px: 3\nsteps:\n  - {step: 1, temperature_c: 220, video: s1.mp4}\n"
+      "  - {step: 2, temperature_c: 210, video: gone.mp4}\n");
+  r = RunCli("run " + (dir_ / "partial.yaml").string() + " --out " + (dir_ / "o3").string(), dir_);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("gone.mp4"), std::string::npos) << r.err;
+  const CsvTable t = ParseCsv(ReadFile((dir_ / "o3" / "diameters.csv").string()), "d");
+  EXPECT_EQ(t.rows[0][t.Column("status")], "ok");
+  EXPECT_EQ(t.rows[1][t.Column("status")], "failed");
+}
+
+}  // namespace
+}  // namespace clogscope::apps
