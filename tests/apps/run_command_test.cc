@@ -5,6 +5,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+
+#include <unistd.h>
 #include <nlohmann/json.hpp>
 
 #include "common/atomic_file.h"
@@ -30,7 +32,8 @@ RunResult RunCli(const std::string& args, const fs::path& dir) {
 class RunCommandTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = fs::temp_directory_path() / "clogscope_run_e2e";
+    // One folder per process: ctest runs this suite's tests as parallel processes.
+    dir_ = fs::temp_directory_path() / ("clogscope_run_e2e_" + std::to_string(getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     const std::string small = " --size 640x360 --tip-x-px 320 ";
