@@ -32,20 +32,6 @@ cv::Mat ReadImageOrThrow(const std::string& path, const std::string& where) {
   return img;
 }
 
-double ParseNumber(const std::string& text, const std::string& where, const char* column) {
-  size_t used = 0;
-  double v = NAN;
-  try {
-    v = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (text.empty()) throw std::invalid_argument(fmt::format("{}: {} is missing", where, column));
-  if (used != text.size() || !std::isfinite(v))
-    throw std::invalid_argument(fmt::format("{}: {} '{}' is not a number", where, column, text));
-  return v;
-}
-
 calib::ScaleCalibration CalibrateFromPins(const CalibrateCommandOptions& o,
                                           std::vector<std::string>* inputs) {
   const CsvTable t = ParseCsv(ReadFile(o.pins_csv), o.pins_csv);
@@ -69,9 +55,9 @@ calib::ScaleCalibration CalibrateFromPins(const CalibrateCommandOptions& o,
         fs::path(row[c_img]).is_absolute() ? row[c_img] : (base / row[c_img]).string();
     calib::PinObservation pin;
     pin.name = row[c_img];
-    pin.diameter_um = ParseNumber(row[c_d], where, "diameter_um");
+    pin.diameter_um = ParseNumberField(row[c_d], where, "diameter_um");
     if (c_tol >= 0 && !row[c_tol].empty())
-      pin.tolerance_um = ParseNumber(row[c_tol], where, "tolerance_um");
+      pin.tolerance_um = ParseNumberField(row[c_tol], where, "tolerance_um");
     const vision::StrandMeasurement m = vision::MeasureStrand(ReadImageOrThrow(path, where), mo);
     if (!m.valid()) {
       throw std::invalid_argument(fmt::format("{}: {}: pin not found ({}: {})", where, row[c_img],

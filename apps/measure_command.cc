@@ -37,45 +37,6 @@ struct Row {
   vision::StrandMeasurement m;
 };
 
-// Pixel widths to µm: a calibration's (w − b)·s with its σ carried, a plain scale, or none.
-struct Conversion {
-  std::optional<calib::ScaleCalibration> cal;
-  std::optional<double> scale;
-  bool known() const { return cal || scale; }
-  double Um(double px) const { return cal ? cal->ToMicrons(px) : px * *scale; }
-  double SigmaUm(double px, double sigma_px) const {
-    return cal ? cal->MicronsSigma(px, sigma_px) : sigma_px * *scale;
-  }
-  double ScaleUmPerPx() const { return cal ? cal->scale_um_per_px : scale.value_or(0.0); }
-};
-
-std::string FormatRow(const Row& r, const Conversion& conv) {
-  const auto& m = r.m;
-  const bool ok = m.valid();
-  auto num = [&](double v, int d) { return ok ? CsvNumber(v, d) : std::string(); };
-  auto geo = [&](double v, int d) { return m.has_geometry ? CsvNumber(v, d) : std::string(); };
-  return CsvLine({
-      r.source,
-      std::to_string(r.frame),
-      r.time_s >= 0 ? CsvNumber(r.time_s, 4) : "",
-      ok ? "1" : "0",
-      num(m.width_px, 4),
-      num(m.width_sigma_px, 4),
-      conv.known() ? num(conv.Um(m.width_px), 3) : "",
-      conv.known() ? num(conv.SigmaUm(m.width_px, m.width_sigma_px), 3) : "",
-      geo(m.angle_deg, 3),
-      geo(m.contrast, 1),
-      geo(m.blur_px, 3),
-      geo(m.tip_x_px, 2),
-      geo(m.tip_y_px, 2),
-      std::to_string(m.calipers_used),
-      std::to_string(m.calipers_total),
-      m.status == vision::FrameStatus::kNoStrand ? "" : vision::PolarityName(m.polarity),
-      vision::FrameStatusName(m.status),
-      m.detail,
-  });
-}
-
 // "<video file name>_<frame>.png" or "<image stem>.png"; a suffix keeps names of this run unique.
 std::string OverlayName(const Row& r, bool from_video, std::set<std::string>* used) {
   const fs::path p(r.source);
@@ -88,13 +49,7 @@ std::string OverlayName(const Row& r, bool from_video, std::set<std::string>* us
 
 }  // namespace
 
-const std::vector<std::string>& FrameCsvColumns() {
-  static const std::vector<std::string> kColumns = {
-      "source",   "frame",          "time_s",         "valid",    "width_px", "width_sigma_px",
-      "width_um", "width_sigma_um", "angle_deg",      "contrast", "blur_px",  "tip_x_px",
-      "tip_y_px", "calipers_used",  "calipers_total", "polarity", "reason",   "detail"};
-  return kColumns;
-}
+const std::vector<std::string>& FrameCsvColumns() { return pipeline::FrameColumns(); }
 
 bool MeasureCommandOptions::Validate(std::string* why) const {
   if (inputs.empty())
@@ -156,7 +111,11 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
   const auto t0 = std::chrono::steady_clock::now();
   // Rows go to "<out>.partial" as each input completes, so an interrupted run keeps what it did.
   AtomicTextFile csv(o.out_frames, /*keep_partial=*/true);
-  const Conversion conv{o.calibration, o.scale_um_per_px};
+  // Widths to µm: the calibration's (w − b)·s with its σ, or a plain scale, or none.
+  const std::optional<calib::ScaleCalibration> conv =
+      o.calibration ? o.calibration
+                    : (o.scale_um_per_px ? std::optional(pipeline::PlainScale(*o.scale_um_per_px))
+                                         : std::nullopt);
   csv.stream() << ProvenanceCsvComment(CurrentProvenance());
   if (o.calibration) {
     csv.stream() << fmt::format(
@@ -199,15 +158,16 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
     }
     int valid = 0;
     for (const Row& r : rows) {
-      csv.stream() << FormatRow(r, conv) << "\n";
+      csv.stream() << CsvLine(pipeline::FrameFields(r.source, r.frame, r.time_s, r.m, conv))
+                   << "\n";
       valid += r.m.valid();
     }
     csv.stream().flush();
     for (const auto& [row, image] : keep) {
       const std::string name =
           (fs::path(o.overlay_dir) / OverlayName(rows[row], from_video, &overlay_names)).string();
-      vision::WriteImageAtomically(name,
-                                   vision::DrawOverlay(image, rows[row].m, conv.ScaleUmPerPx()));
+      vision::WriteImageAtomically(
+          name, vision::DrawOverlay(image, rows[row].m, conv ? conv->scale_um_per_px : 0.0));
       ++summary.overlays_written;
     }
     ++summary.inputs_ok;

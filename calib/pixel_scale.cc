@@ -44,6 +44,27 @@ struct LineResidual {
   }
 };
 
+// A problem whose residual blocks can be re-added with another loss: it keeps the cost functions.
+struct RobustProblem {
+  RobustProblem() : problem(Options()) {}
+  static ceres::Problem::Options Options() {
+    ceres::Problem::Options po;
+    po.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    return po;
+  }
+  void Add(ceres::CostFunction* cost, std::vector<double*> blocks) {
+    owned.emplace_back(cost);
+    costs.push_back(cost);
+    params.push_back(blocks);
+    ids.push_back(problem.AddResidualBlock(cost, nullptr, blocks));
+  }
+  ceres::Problem problem;
+  std::vector<std::unique_ptr<ceres::CostFunction>> owned;
+  std::vector<ceres::CostFunction*> costs;
+  std::vector<ceres::ResidualBlockId> ids;
+  std::vector<std::vector<double*>> params;
+};
+
 // Least squares, then rounds with a Huber loss at 3× the normalised residuals' robust spread,
 // re-estimated each round from the previous solution: a bad target must not pull the scale, and a
 // spread measured around a solution it already pulled would be too generous.
@@ -164,27 +185,20 @@ ScaleCalibration FitPinScale(const std::vector<PinObservation>& pins, const Scal
   if (!(scale > 0)) scale = pins[0].diameter_um / pins[0].width_px;
   double bias = 0;
 
-  ceres::Problem::Options po;
-  po.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(po);
-  std::vector<std::unique_ptr<ceres::CostFunction>> owned;
-  std::vector<ceres::CostFunction*> costs;
-  std::vector<ceres::ResidualBlockId> ids;
-  std::vector<std::vector<double*>> params;
+  RobustProblem rp;
+  ceres::Problem& problem = rp.problem;
   for (const auto& p : pins) {
     const double sigma =
         std::sqrt(p.width_sigma_px * p.width_sigma_px + std::pow(p.tolerance_um / scale, 2) +
                   kSigmaFloorPx * kSigmaFloorPx);
-    owned.emplace_back(new ceres::AutoDiffCostFunction<PinResidual, 1, 1, 1>(
-        new PinResidual{p.diameter_um, p.width_px, sigma, with_bias}));
-    costs.push_back(owned.back().get());
-    params.push_back({&scale, &bias});
-    ids.push_back(problem.AddResidualBlock(costs.back(), nullptr, &scale, &bias));
+    rp.Add(new ceres::AutoDiffCostFunction<PinResidual, 1, 1, 1>(
+               new PinResidual{p.diameter_um, p.width_px, sigma, with_bias}),
+           {&scale, &bias});
   }
   problem.SetParameterLowerBound(&scale, 0, 1e-9);
   if (!with_bias) problem.SetParameterBlockConstant(&bias);
   ceres::Solver::Summary summary;
-  SolveRobust(problem, ids, costs, params, opt.max_iterations, &summary);
+  SolveRobust(problem, rp.ids, rp.costs, rp.params, opt.max_iterations, &summary);
 
   ScaleCalibration cal;
   cal.method = "pins";
@@ -310,25 +324,18 @@ ScaleCalibration FitMicrometerScale(const std::vector<LineObservation>& lines, d
   }
   double d2 = 0;
 
-  ceres::Problem::Options po;
-  po.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(po);
-  std::vector<std::unique_ptr<ceres::CostFunction>> owned;
-  std::vector<ceres::CostFunction*> costs;
-  std::vector<ceres::ResidualBlockId> ids;
-  std::vector<std::vector<double*>> params;
+  RobustProblem rp;
+  ceres::Problem& problem = rp.problem;
   for (const auto& l : lines) {
     const double sigma = std::sqrt(l.sigma_px * l.sigma_px + kSigmaFloorPx * kSigmaFloorPx);
-    owned.emplace_back(new ceres::AutoDiffCostFunction<LineResidual, 1, 1, 1, 1>(
-        new LineResidual{l.index - kmid, pitch_um, l.position_px, sigma}));
-    costs.push_back(owned.back().get());
-    params.push_back({&scale, &x0[l.image], &d2});
-    ids.push_back(problem.AddResidualBlock(costs.back(), nullptr, params.back()));
+    rp.Add(new ceres::AutoDiffCostFunction<LineResidual, 1, 1, 1, 1>(
+               new LineResidual{l.index - kmid, pitch_um, l.position_px, sigma}),
+           {&scale, &x0[l.image], &d2});
   }
   problem.SetParameterLowerBound(&scale, 0, 1e-9);
   if (!opt.fit_distortion) problem.SetParameterBlockConstant(&d2);
   ceres::Solver::Summary summary;
-  SolveRobust(problem, ids, costs, params, opt.max_iterations, &summary);
+  SolveRobust(problem, rp.ids, rp.costs, rp.params, opt.max_iterations, &summary);
 
   ScaleCalibration cal;
   cal.method = "micrometer";

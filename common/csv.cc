@@ -32,6 +32,22 @@ std::string CsvNumber(std::optional<double> value, int decimals) {
   return fmt::format("{:.{}f}", *value, decimals);
 }
 
+double ParseNumberField(const std::string& text, const std::string& where,
+                        const std::string& what) {
+  if (text.empty()) throw std::invalid_argument(fmt::format("{}: {} is missing", where, what));
+  size_t used = 0;
+  double v = NAN;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || !std::isfinite(v)) {
+    throw std::invalid_argument(fmt::format("{}: {} '{}' is not a number", where, what, text));
+  }
+  return v;
+}
+
 int CsvTable::Column(const std::string& name) const {
   for (size_t i = 0; i < header.size(); ++i) {
     if (header[i] == name) return static_cast<int>(i);

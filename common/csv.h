@@ -26,6 +26,10 @@ struct CsvTable {
   int Column(const std::string& name) const;
 };
 
+// A number from a table cell or option value. Throws std::invalid_argument "WHERE: WHAT is missing"
+// for an empty cell, "WHERE: WHAT 'TEXT' is not a number" for anything but a finite number.
+double ParseNumberField(const std::string& text, const std::string& where, const std::string& what);
+
 // Parses CSV text; throws std::invalid_argument naming `source_name` and the line on a malformed
 // row.
 CsvTable ParseCsv(const std::string& text, const std::string& source_name);

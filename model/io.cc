@@ -16,23 +16,8 @@
 namespace clogscope::model {
 namespace {
 
-double ParseNumber(const std::string& text, const std::string& where, const std::string& column) {
-  size_t used = 0;
-  double v = NAN;
-  try {
-    v = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (text.empty()) throw std::invalid_argument(fmt::format("{}: {} is empty", where, column));
-  if (used != text.size() || !std::isfinite(v)) {
-    throw std::invalid_argument(fmt::format("{}: {} '{}' is not a number", where, column, text));
-  }
-  return v;
-}
-
 int ParseStep(const std::string& text, const std::string& where) {
-  const double v = ParseNumber(text, where, "step");
+  const double v = ParseNumberField(text, where, "step");
   if (v != std::floor(v))
     throw std::invalid_argument(fmt::format("{}: step '{}' is not a whole number", where, text));
   return static_cast<int>(v);
@@ -59,9 +44,9 @@ std::vector<StepInput> ReadDiameterTable(const std::string& path, double default
     StepInput s;
     s.step = c_step >= 0 ? ParseStep(row[c_step], where) : static_cast<int>(i) + 1;
     s.source_line = t.row_line_numbers[i];
-    s.diameter_m = ParseNumber(row[c_mean], where, "mean_um") * 1e-6;
+    s.diameter_m = ParseNumberField(row[c_mean], where, "mean_um") * 1e-6;
     s.temperature_c =
-        c_temp >= 0 ? ParseNumber(row[c_temp], where, "temperature_c") : default_temperature_c;
+        c_temp >= 0 ? ParseNumberField(row[c_temp], where, "temperature_c") : default_temperature_c;
     if (!seen.insert(s.step).second)
       throw std::invalid_argument(fmt::format("{}: step {} appears twice", where, s.step));
     steps.push_back(s);
@@ -89,7 +74,7 @@ std::vector<Measurement> ReadMeasurements(const std::string& path,
     if (c_step >= 0) {
       m.step = ParseStep(row[c_step], where);
     } else {
-      const double temp = ParseNumber(row[c_temp], where, "temperature_c");
+      const double temp = ParseNumberField(row[c_temp], where, "temperature_c");
       int matches = 0;
       for (const auto& s : steps) {
         if (std::abs(s.temperature_c - temp) < 1e-6) {
@@ -105,9 +90,9 @@ std::vector<Measurement> ReadMeasurements(const std::string& path,
       }
     }
     if (c_amp >= 0 && !row[c_amp].empty())
-      m.amplitude_m_s2 = ParseNumber(row[c_amp], where, "amplitude_m_s2");
+      m.amplitude_m_s2 = ParseNumberField(row[c_amp], where, "amplitude_m_s2");
     if (c_cur >= 0 && !row[c_cur].empty())
-      m.current_ma = ParseNumber(row[c_cur], where, "current_ma");
+      m.current_ma = ParseNumberField(row[c_cur], where, "current_ma");
     out.push_back(m);
   }
   return out;

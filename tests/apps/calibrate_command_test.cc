@@ -10,23 +10,15 @@
 #include "calib/calibration_file.h"
 #include "common/atomic_file.h"
 #include "common/csv.h"
+#include "tests/apps/cli_test_util.h"
 
 namespace clogscope::apps {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct RunResult {
-  int exit_code;
-  std::string out, err;
-};
-
-RunResult RunCli(const std::string& args, const fs::path& dir) {
-  const std::string o = (dir / "stdout.txt").string(), e = (dir / "stderr.txt").string();
-  const int status =
-      std::system((std::string(CLOGSCOPE_BINARY) + " " + args + " >" + o + " 2>" + e).c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, ReadFile(o), ReadFile(e)};
-}
+using testing::RunCli;
+using testing::RunResult;
 
 const std::string kSmall = " --size 640x360 --tip-x-px 320 --tip-y-px 180 ";
 

@@ -10,30 +10,17 @@
 #include "apps/commands.h"
 #include "common/atomic_file.h"
 #include "common/csv.h"
+#include "tests/apps/cli_test_util.h"
 
 namespace clogscope::apps {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct RunResult {
-  int exit_code;
-  std::string err;
-};
+using testing::RunCli;
+using testing::RunResult;
 
-RunResult RunCli(const std::string& args, const fs::path& dir) {
-  const std::string err_path = (dir / "stderr.txt").string();
-  const std::string cmd = std::string(CLOGSCOPE_BINARY) + " " + args + " 2>" + err_path;
-  const int status = std::system(cmd.c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, ReadFile(err_path)};
-}
-
-fs::path FreshDir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("clogscope_cli_" + name);
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+fs::path FreshDir(const std::string& name) { return testing::FreshDir("clogscope_cli_" + name); }
 
 const std::string kSmall = "--size 640x360 --tip-x-px 320 --tip-y-px 100 ";
 

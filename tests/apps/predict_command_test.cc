@@ -10,30 +10,18 @@
 #include "apps/commands.h"
 #include "common/atomic_file.h"
 #include "common/csv.h"
+#include "tests/apps/cli_test_util.h"
 
 namespace clogscope::apps {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct RunResult {
-  int exit_code;
-  std::string out, err;
-};
-
-RunResult RunCli(const std::string& args, const fs::path& dir) {
-  const std::string out_path = (dir / "stdout.txt").string(),
-                    err_path = (dir / "stderr.txt").string();
-  const int status = std::system(
-      (std::string(CLOGSCOPE_BINARY) + " " + args + " >" + out_path + " 2>" + err_path).c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, ReadFile(out_path), ReadFile(err_path)};
-}
+using testing::RunCli;
+using testing::RunResult;
 
 fs::path FreshDir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("clogscope_predict_" + name);
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
+  return testing::FreshDir("clogscope_predict_" + name);
 }
 
 const char* kTable =

@@ -1,33 +1,24 @@
 // End-to-end test of `clogscope run` on a small rendered experiment: calibration from pins in the
 // manifest, sampled steps against the truth, the predictor, the summary; bad manifests; --resume.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-
-#include <unistd.h>
 #include <nlohmann/json.hpp>
 
 #include "common/atomic_file.h"
 #include "common/csv.h"
+#include "tests/apps/cli_test_util.h"
 
 namespace clogscope::apps {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct RunResult {
-  int exit_code;
-  std::string out, err;
-};
-
-RunResult RunCli(const std::string& args, const fs::path& dir) {
-  const std::string o = (dir / "stdout.txt").string(), e = (dir / "stderr.txt").string();
-  const int status =
-      std::system((std::string(CLOGSCOPE_BINARY) + " " + args + " >" + o + " 2>" + e).c_str());
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, ReadFile(o), ReadFile(e)};
-}
+using testing::RunCli;
+using testing::RunResult;
 
 class RunCommandTest : public ::testing::Test {
  protected:

@@ -58,7 +58,7 @@ TEST(ModelIoTest, BadTablesNameFileAndLine) {
             }).find("twice"),
             std::string::npos);
   EXPECT_NE(
-      ErrorOf([] { ReadDiameterTable(Write("e.csv", "step,mean_um\n1,\n"), 220); }).find("empty"),
+      ErrorOf([] { ReadDiameterTable(Write("e.csv", "step,mean_um\n1,\n"), 220); }).find("mean_um is missing"),
       std::string::npos);
 }
 
