@@ -581,7 +581,7 @@ StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions
   // Two passes at most: the second re-centres the windows on the fitted edge lines and widens them
   // to the fitted blur when the first pass's guesses were off.
   for (int pass = 0; pass < 2; ++pass) {
-    const double outer = std::max(8.0, 3.5 * sigma_guess + 4.0);
+    const double outer = std::max(6.5, 3.0 * sigma_guess + 2.5);
     const double inner = std::min(outer, std::max(4.0, 0.3 * width0));
     total_samples = total_saturated = 0;
     border = false;
@@ -626,7 +626,7 @@ StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions
     const bool recentre =
         std::abs(new_left + new_slope * s_mid - (left_guess + slope_guess * s_mid)) > 1.0 ||
         std::abs(new_right + new_slope * s_mid - (right_guess + slope_guess * s_mid)) > 1.0;
-    const bool widen = 3.5 * new_sigma + 4.0 > 1.25 * outer;
+    const bool widen = 3.0 * new_sigma + 2.5 > 1.25 * outer;
     left_guess = new_left;
     right_guess = new_right;
     slope_guess = new_slope;
