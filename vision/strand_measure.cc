@@ -578,9 +578,11 @@ StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions
   }
   int total_samples = 0, total_saturated = 0;
   bool border = false;
-  // Two passes at most: the second re-centres the windows on the fitted edge lines and widens them
-  // to the fitted blur when the first pass's guesses were off.
-  for (int pass = 0; pass < 2; ++pass) {
+  // Usually one pass. Another re-centres the windows on the fitted edge lines, or widens them to
+  // the fitted blur; a badly blurred frame needs a few widenings before its fit sees the whole
+  // edge.
+  constexpr int kMaxPasses = 4;
+  for (int pass = 0; pass < kMaxPasses; ++pass) {
     const double outer = std::max(6.5, 3.0 * sigma_guess + 2.5);
     const double inner = std::min(outer, std::max(4.0, 0.3 * width0));
     total_samples = total_saturated = 0;
@@ -613,7 +615,11 @@ StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions
       total_saturated += cf.saturated;
     }
     const EdgeLines lines = FitEdgeLines(fits, band_s0, opt.caliper_spacing_px);
-    if (lines.calipers < 2) break;
+    if (lines.calipers < 2) {
+      // No edge fitted: perhaps blur far wider than the window. Widen and look again.
+      sigma_guess = std::max(2.5 * sigma_guess, 0.6 * outer);
+      continue;
+    }
     const double new_slope = lines.slope, new_left = lines.left_u0, new_right = lines.right_u0;
     std::vector<double> sigmas;
     for (const auto& cf : fits) {
@@ -630,7 +636,8 @@ StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions
     left_guess = new_left;
     right_guess = new_right;
     slope_guess = new_slope;
-    sigma_guess = new_sigma;
+    // A fit in a window too narrow for the edge underestimates its width: widen geometrically.
+    sigma_guess = widen ? std::max(new_sigma, 0.6 * outer) : new_sigma;
     if (!(recentre || widen)) break;
   }
   if (border)
@@ -696,6 +703,14 @@ StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions
     m.width_sigma_px = std::hypot(k.left.edge_sigma_px, k.right.edge_sigma_px);
   }
 
+  // The coarse width comes from every strand row, most of them outside the band: a blob covering
+  // one edge over the band makes the band's edges agree with each other but not with the strand.
+  if (std::abs(m.width_px - width0) > std::max(3.0, 0.04 * width0)) {
+    return fail(
+        FrameStatus::kOccluded,
+        fmt::format("width in the band {:.1f} px disagrees with the strand's {:.1f} px elsewhere",
+                    m.width_px, width0));
+  }
   if (m.contrast < min_contrast)
     return fail(FrameStatus::kLowContrast,
                 fmt::format("edge contrast {:.1f} below {:.1f}", m.contrast, min_contrast));
