@@ -167,7 +167,8 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
       const std::string name =
           (fs::path(o.overlay_dir) / OverlayName(rows[row], from_video, &overlay_names)).string();
       vision::WriteImageAtomically(
-          name, vision::DrawOverlay(image, rows[row].m, conv ? conv->scale_um_per_px : 0.0));
+          name, vision::DrawOverlay(image, rows[row].m, conv ? conv->scale_um_per_px : 0.0,
+                                    conv ? conv->edge_bias_px : 0.0));
       ++summary.overlays_written;
     }
     ++summary.inputs_ok;

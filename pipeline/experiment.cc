@@ -387,7 +387,8 @@ std::vector<StepResult> RunExperiment(const Manifest& m, const ExperimentOptions
                                        r.spec.temperature_c, f.frame))
                 .string();
         const double scale = o.conversion ? o.conversion->scale_um_per_px : 0.0;
-        vision::WriteImageAtomically(name, vision::DrawOverlay(image, f.m, scale));
+        const double bias = o.conversion ? o.conversion->edge_bias_px : 0.0;
+        vision::WriteImageAtomically(name, vision::DrawOverlay(image, f.m, scale, bias));
       }
       WriteFileAtomically((steps_dir / StepFileName(r.spec.step)).string(),
                           ResultToJson(r, o.samples).dump() + "\n");

@@ -70,14 +70,17 @@ void Text(cv::Mat& img, const std::string& s, cv::Point org, double size) {
 
 }  // namespace
 
-cv::Mat DrawOverlay(const cv::Mat& frame, const StrandMeasurement& m, double scale_um_per_px) {
+cv::Mat DrawOverlay(const cv::Mat& frame, const StrandMeasurement& m, double scale_um_per_px,
+                    double edge_bias_px) {
   cv::Mat out = ToBgr8(frame);
   const double font = std::max(0.4, out.cols / 2400.0);
   const int line_h = static_cast<int>(30 * font / 0.5);
   std::vector<std::string> lines;
   if (m.valid()) {
     std::string w = fmt::format("width {:.3f} +/- {:.3f} px", m.width_px, m.width_sigma_px);
-    if (scale_um_per_px > 0) w += fmt::format(" = {:.2f} um", m.width_px * scale_um_per_px);
+    if (scale_um_per_px > 0) {
+      w += fmt::format(" = {:.2f} um", (m.width_px - edge_bias_px) * scale_um_per_px);
+    }
     lines.push_back(w);
   } else {
     lines.push_back(fmt::format("INVALID: {} {}", FrameStatusName(m.status), m.detail));

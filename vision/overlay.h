@@ -9,7 +9,9 @@ namespace clogscope::vision {
 // An 8-bit BGR picture of the frame with the measurement drawn on it, for a person to check at a
 // glance: the band (yellow), the fitted edges (green), each caliper's edge points (green used, red
 // rejected), the tip (cyan), the width and status as text, and a magnified inset of the band.
-// scale_um_per_px <= 0 leaves out the width in µm.
-cv::Mat DrawOverlay(const cv::Mat& frame, const StrandMeasurement& m, double scale_um_per_px);
+// The width in µm is (width_px − edge_bias_px)·scale_um_per_px, as in the tables; scale_um_per_px
+// <= 0 leaves it out.
+cv::Mat DrawOverlay(const cv::Mat& frame, const StrandMeasurement& m, double scale_um_per_px,
+                    double edge_bias_px = 0.0);
 
 }  // namespace clogscope::vision
