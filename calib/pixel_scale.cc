@@ -22,6 +22,11 @@ double Median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+// A line centre's σ in px, floored.
+double LineSigma(const LineObservation& l) {
+  return std::sqrt(l.sigma_px * l.sigma_px + kSigmaFloorPx * kSigmaFloorPx);
+}
+
 struct PinResidual {
   double diameter_um, width_px, sigma_px;
   bool with_bias;
@@ -68,10 +73,11 @@ struct RobustProblem {
 // Least squares, then rounds with a Huber loss at 3× the normalised residuals' robust spread,
 // re-estimated each round from the previous solution: a bad target must not pull the scale, and a
 // spread measured around a solution it already pulled would be too generous.
-void SolveRobust(ceres::Problem& problem, std::vector<ceres::ResidualBlockId> blocks,
-                 const std::vector<ceres::CostFunction*>& costs,
-                 const std::vector<std::vector<double*>>& params, int max_iterations,
-                 ceres::Solver::Summary* summary) {
+void SolveRobust(RobustProblem& rp, int max_iterations, ceres::Solver::Summary* summary) {
+  ceres::Problem& problem = rp.problem;
+  std::vector<ceres::ResidualBlockId>& blocks = rp.ids;
+  const std::vector<ceres::CostFunction*>& costs = rp.costs;
+  const std::vector<std::vector<double*>>& params = rp.params;
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::DENSE_QR;
   so.max_num_iterations = max_iterations;
@@ -185,20 +191,26 @@ ScaleCalibration FitPinScale(const std::vector<PinObservation>& pins, const Scal
   if (!(scale > 0)) scale = pins[0].diameter_um / pins[0].width_px;
   double bias = 0;
 
+  // Each pin's σ in px: its measured width's, its diameter tolerance at the starting scale, a
+  // floor.
+  std::vector<double> sigmas;
+  for (const auto& p : pins) {
+    sigmas.push_back(std::sqrt(p.width_sigma_px * p.width_sigma_px +
+                               std::pow(p.tolerance_um / scale, 2) +
+                               kSigmaFloorPx * kSigmaFloorPx));
+  }
   RobustProblem rp;
   ceres::Problem& problem = rp.problem;
-  for (const auto& p : pins) {
-    const double sigma =
-        std::sqrt(p.width_sigma_px * p.width_sigma_px + std::pow(p.tolerance_um / scale, 2) +
-                  kSigmaFloorPx * kSigmaFloorPx);
+  for (size_t i = 0; i < pins.size(); ++i) {
+    const auto& p = pins[i];
     rp.Add(new ceres::AutoDiffCostFunction<PinResidual, 1, 1, 1>(
-               new PinResidual{p.diameter_um, p.width_px, sigma, with_bias}),
+               new PinResidual{p.diameter_um, p.width_px, sigmas[i], with_bias}),
            {&scale, &bias});
   }
   problem.SetParameterLowerBound(&scale, 0, 1e-9);
   if (!with_bias) problem.SetParameterBlockConstant(&bias);
   ceres::Solver::Summary summary;
-  SolveRobust(problem, rp.ids, rp.costs, rp.params, opt.max_iterations, &summary);
+  SolveRobust(rp, opt.max_iterations, &summary);
 
   ScaleCalibration cal;
   cal.method = "pins";
@@ -207,17 +219,15 @@ ScaleCalibration FitPinScale(const std::vector<PinObservation>& pins, const Scal
   cal.edge_bias_fitted = with_bias;
   std::vector<double> abs_res;
   double chi2 = 0;
-  for (const auto& p : pins) {
+  for (size_t i = 0; i < pins.size(); ++i) {
+    const auto& p = pins[i];
     TargetResidual r;
     r.name = p.name;
     r.nominal_um = p.diameter_um;
     r.measured_px = p.width_px;
     r.model_px = p.diameter_um / scale + bias;
     r.residual_px = p.width_px - r.model_px;
-    const double sigma =
-        std::sqrt(p.width_sigma_px * p.width_sigma_px + std::pow(p.tolerance_um / scale, 2) +
-                  kSigmaFloorPx * kSigmaFloorPx);
-    chi2 += std::pow(r.residual_px / sigma, 2);
+    chi2 += std::pow(r.residual_px / sigmas[i], 2);
     abs_res.push_back(std::abs(r.residual_px));
     cal.residuals.push_back(r);
   }
@@ -327,7 +337,7 @@ ScaleCalibration FitMicrometerScale(const std::vector<LineObservation>& lines, d
   RobustProblem rp;
   ceres::Problem& problem = rp.problem;
   for (const auto& l : lines) {
-    const double sigma = std::sqrt(l.sigma_px * l.sigma_px + kSigmaFloorPx * kSigmaFloorPx);
+    const double sigma = LineSigma(l);
     rp.Add(new ceres::AutoDiffCostFunction<LineResidual, 1, 1, 1, 1>(
                new LineResidual{l.index - kmid, pitch_um, l.position_px, sigma}),
            {&scale, &x0[l.image], &d2});
@@ -335,7 +345,7 @@ ScaleCalibration FitMicrometerScale(const std::vector<LineObservation>& lines, d
   problem.SetParameterLowerBound(&scale, 0, 1e-9);
   if (!opt.fit_distortion) problem.SetParameterBlockConstant(&d2);
   ceres::Solver::Summary summary;
-  SolveRobust(problem, rp.ids, rp.costs, rp.params, opt.max_iterations, &summary);
+  SolveRobust(rp, opt.max_iterations, &summary);
 
   ScaleCalibration cal;
   cal.method = "micrometer";
@@ -353,7 +363,7 @@ ScaleCalibration FitMicrometerScale(const std::vector<LineObservation>& lines, d
     r.measured_px = l.position_px;
     r.model_px = x0[l.image] + k * pitch_um / scale + d2 * k * k;
     r.residual_px = l.position_px - r.model_px;
-    chi2 += std::pow(r.residual_px, 2) / (l.sigma_px * l.sigma_px + kSigmaFloorPx * kSigmaFloorPx);
+    chi2 += std::pow(r.residual_px / LineSigma(l), 2);
     abs_res.push_back(std::abs(r.residual_px));
     cal.residuals.push_back(r);
   }

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "common/csv.h"
+
 namespace clogscope::model {
 namespace {
 
@@ -132,17 +134,7 @@ void ExtruderParams::SetByName(const std::string& name, const std::string& value
     return;
   }
   const Param p = ParamByName(name);
-  size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(value, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != value.size() || !std::isfinite(v)) {
-    throw std::invalid_argument(fmt::format("{} '{}': not a number", InfoOf(p).name, value));
-  }
-  Set(p, v);
+  Set(p, ParseNumberField(value, InfoOf(p).name, "value"));
 }
 
 bool ExtruderParams::Validate(std::string* why) const {

@@ -85,12 +85,9 @@ std::vector<StepSpec> StepsFromLog(const Manifest& m) {
     throw std::invalid_argument(m.temperature_log + ": needs columns time_s,temperature_c");
   std::vector<TemperatureSample> log;
   for (size_t i = 0; i < t.rows.size(); ++i) {
-    try {
-      log.push_back({std::stod(t.rows[i][ct]), std::stod(t.rows[i][cc])});
-    } catch (const std::exception&) {
-      throw std::invalid_argument(
-          fmt::format("{}:{}: not a number", m.temperature_log, t.row_line_numbers[i]));
-    }
+    const std::string where = fmt::format("{}:{}", m.temperature_log, t.row_line_numbers[i]);
+    log.push_back({ParseNumberField(t.rows[i][ct], where, "time_s"),
+                   ParseNumberField(t.rows[i][cc], where, "temperature_c")});
     if (i > 0 && log[i].time_s < log[i - 1].time_s) {
       throw std::invalid_argument(
           fmt::format("{}:{}: time goes backwards", m.temperature_log, t.row_line_numbers[i]));
@@ -134,15 +131,14 @@ Manifest LoadCsvManifest(const std::string& path) {
     const std::string where = fmt::format("{}:{}", path, t.row_line_numbers[i]);
     StepSpec s;
     s.line = t.row_line_numbers[i];
-    try {
-      s.step = std::stoi(r[c_step]);
-      s.temperature_c = std::stod(r[c_t]);
-      if (c_a >= 0 && !r[c_a].empty()) s.start_s = std::stod(r[c_a]);
-      if (c_b >= 0 && !r[c_b].empty()) s.end_s = std::stod(r[c_b]);
-    } catch (const std::exception&) {
-      throw std::invalid_argument(where +
-                                  ": step, temperature_c, start_s and end_s must be numbers");
+    const double step = ParseNumberField(r[c_step], where, "step");
+    if (step != std::floor(step) || std::abs(step) > 1e9) {
+      throw std::invalid_argument(where + ": step '" + r[c_step] + "' is not a whole number");
     }
+    s.step = static_cast<int>(step);
+    s.temperature_c = ParseNumberField(r[c_t], where, "temperature_c");
+    if (c_a >= 0 && !r[c_a].empty()) s.start_s = ParseNumberField(r[c_a], where, "start_s");
+    if (c_b >= 0 && !r[c_b].empty()) s.end_s = ParseNumberField(r[c_b], where, "end_s");
     if (r[c_src].empty()) throw std::invalid_argument(where + ": source is empty");
     const std::string src = Resolve(base, r[c_src]);
     (fs::is_directory(src) ? s.images : s.video) = src;

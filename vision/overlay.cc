@@ -102,7 +102,7 @@ cv::Mat DrawOverlay(const cv::Mat& frame, const StrandMeasurement& m, double sca
                                  0.6 * out.rows / std::max(crop.height, 1));
     if (crop.area() > 0 && zoom >= 1.5) {
       cv::Mat inset;
-      cv::resize(ToBgr8(frame)(crop), inset, cv::Size(), zoom, zoom, cv::INTER_NEAREST);
+      cv::resize(ToBgr8(frame(crop)), inset, cv::Size(), zoom, zoom, cv::INTER_NEAREST);
       DrawGeometry(inset, m, zoom, {crop.x - 0.5 + 0.5 / zoom, crop.y - 0.5 + 0.5 / zoom});
       const int x0 = cx < out.cols / 2 ? out.cols - inset.cols - 8 : 8;
       const int y0 = out.rows - inset.rows - 8;
