@@ -43,7 +43,7 @@ calib::ScaleCalibration CalibrateFromPins(const CalibrateCommandOptions& o,
   inputs->push_back(o.pins_csv);
   const fs::path base = fs::path(o.pins_csv).parent_path();
   vision::StrandMeasureOptions mo = o.pin_measure;
-  mo.require_tip = false;
+  mo.target = vision::MeasureTarget::kFilament;
   mo.band_start_px = 8;
   mo.band_height_px = 1e6;  // the whole pin
   std::vector<calib::PinObservation> pins;

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "vision/frame_status.h"
 #include "vision/synthetic.h"
 
 namespace clogscope::vision {
@@ -20,30 +21,16 @@ struct StrandMeasureOptions {
   double min_contrast_fraction = 0.06;  // edge step below this fraction of full scale: low contrast
   double max_blur_px = 6.0;             // fitted PSF sigma above this: out of focus
   double max_tilt_deg = 45.0;           // strand axes leaning more than this are not strands
-  // False for objects across the whole frame (calibration pins): without a nozzle tip the band
-  // starts band_start_px below where the object leaves the frame, and runs as far as it can.
-  bool require_tip = true;
+  // kStrand: the band starts band_start_px below the nozzle tip. kFilament (also pins, needles):
+  // no tip; the band starts band_start_px below the top of the visible straight stretch and runs
+  // band_height_px along it (at most to its end).
+  MeasureTarget target = MeasureTarget::kStrand;
+  double min_length_px = 30.0;  // shortest straight stretch of both edges that counts as a strand
   double min_caliper_fraction = 0.5;     // fewer consistent calipers than this: occluded
   double max_saturated_fraction = 0.05;  // more clipped pixels at the edges than this: saturated
 
   bool Validate(std::string* why) const;
 };
-
-// Why a frame gives no width. kValid when it does.
-enum class FrameStatus {
-  kValid,
-  kUnreadable,        // the frame could not be decoded
-  kNoStrand,          // nothing strand-like in the frame or ROI
-  kNoTip,             // a strand but no nozzle tip above it
-  kTouchesBorder,     // the strand's edges in the band reach the frame or ROI border
-  kBandOutsideFrame,  // the band leaves the frame/ROI or runs into the bed or an obstacle
-  kLowContrast,
-  kOutOfFocus,
-  kSaturated,
-  kOccluded,      // too few calipers agree
-  kWidthOutlier,  // far from the neighbouring frames' widths (set by FlagWidthOutliers)
-};
-const char* FrameStatusName(FrameStatus status);
 
 // One caliper: a thin slab across the strand. Positions are across (u) and along (s) the axis.
 struct Caliper {
@@ -66,7 +53,7 @@ struct StrandMeasurement {
   double angle_deg = 0;       // strand axis from image vertical, + leaning to +x going down
   double contrast = 0;        // median edge step, grey levels of the frame's bit depth
   double blur_px = 0;         // median PSF sigma, pixel footprint removed
-  double tip_x_px = 0;
+  double tip_x_px = 0;  // nozzle tip on the axis (strand); top of the measured stretch (filament)
   double tip_y_px = 0;
   Polarity polarity = Polarity::kAuto;
   int calipers_used = 0;
@@ -81,10 +68,22 @@ struct StrandMeasurement {
   std::vector<Caliper> calipers;
 };
 
-// Measures the strand width in one frame (8- or 16-bit; grey, BGR or BGRA). Expected failures come
-// back as a status with a reason; throws std::invalid_argument for frames of another pixel type or
-// options that do not validate.
+// Measures the strand width in one frame (8- or 16-bit; grey, BGR or BGRA; 16-bit frames holding
+// 10- or 12-bit data are judged against their data range). The strand is found by its edges (see
+// scene.h); for colour frames the channel with the best edge pair is measured. Expected failures
+// come back as a status with a reason; throws std::invalid_argument for frames of another pixel
+// type or options that do not validate.
 StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions& options);
+
+struct SceneResult;
+// The second half of MeasureStrand: the band and calipers in a scene already found in `channel`
+// (the ROI view the scene chose). Tracking calls it with a scene followed from the last frame.
+StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, const SceneResult& scene,
+                                 const cv::Rect& roi, const StrandMeasureOptions& options);
+
+// The largest value the frame's data can hold: 255 for 8 bit; for 16 bit, 2^b − 1 for the smallest
+// b (8…16) that holds its largest pixel (12-bit cameras write 16-bit files).
+double DataMax(const cv::Mat& image);
 
 // Marks valid frames whose width is far from the median of the valid frames within ±half_window
 // frames (robust: more than k·1.4826·MAD and more than min_deviation_px away) as kWidthOutlier.

@@ -71,6 +71,8 @@ const char* PolarityName(Polarity p) {
       return "bright";
     case Polarity::kDarkOnBright:
       return "dark";
+    case Polarity::kMixed:
+      return "mixed";
   }
   return "?";
 }

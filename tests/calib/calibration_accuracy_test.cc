@@ -34,7 +34,7 @@ SceneParams PinScene(double diameter_um, uint64_t seed, int width = 1280, int he
 
 ScaleCalibration CalibrateFromRenderedPins(uint64_t seed, int width = 1280, int height = 720) {
   vision::StrandMeasureOptions mo;
-  mo.require_tip = false;
+  mo.target = vision::MeasureTarget::kFilament;
   mo.band_start_px = 8;
   mo.band_height_px = 1e6;
   std::vector<PinObservation> pins;

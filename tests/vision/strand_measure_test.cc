@@ -170,8 +170,10 @@ TEST(StrandMeasureTest, FailuresComeWithAReason) {
   EXPECT_EQ(MeasureStrand(RenderFrame(p, 0, nullptr), opt).status, FrameStatus::kTouchesBorder);
 
   p = SceneParams();
-  p.tip_y_px = 690;  // band below the bottom of the frame
+  p.tip_y_px = 682;  // 38 px of strand: found, but the 17-67 px band leaves the frame
   EXPECT_EQ(MeasureStrand(RenderFrame(p, 0, nullptr), opt).status, FrameStatus::kBandOutsideFrame);
+  p.tip_y_px = 700;  // 20 px of strand: shorter than min_length_px, nothing strand-like
+  EXPECT_EQ(MeasureStrand(RenderFrame(p, 0, nullptr), opt).status, FrameStatus::kNoStrand);
 
   p = SceneParams();
   p.blur_sigma_px = 9;

@@ -1,0 +1,27 @@
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace clogscope {
+
+// Median (the mean of the two middle values for an even count); 0 for no values.
+inline double Median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  const size_t mid = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + mid, v.end());
+  double m = v[mid];
+  if (v.size() % 2 == 0) m = 0.5 * (m + *std::max_element(v.begin(), v.begin() + mid));
+  return m;
+}
+
+// Median absolute deviation from `median` (unscaled: σ ≈ 1.4826·MAD for normal data).
+inline double Mad(const std::vector<double>& v, double median) {
+  std::vector<double> dev;
+  dev.reserve(v.size());
+  for (double x : v) dev.push_back(std::abs(x - median));
+  return Median(std::move(dev));
+}
+
+}  // namespace clogscope

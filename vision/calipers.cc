@@ -1,0 +1,311 @@
+#include "vision/calipers.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "common/robust.h"
+#include "vision/edge_fit.h"
+
+namespace clogscope::vision {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / M_PI;
+
+// Sub-pixel start for an edge fit: along the normal at s, from u_guess - half to u_guess + half in
+// half-pixel steps, the crossing of the local mid-level (between the profile's extremes) nearest to
+// u_guess. Returns u_guess when the profile has no clear step.
+double RefineEdgeGuess(const GreyImage& img, const AxisFrame& f, double s, double u_guess,
+                       double half, double min_step) {
+  constexpr double kStep = 0.5;
+  const int n = static_cast<int>(2 * half / kStep) + 1;
+  std::array<float, 128> v;
+  if (n > static_cast<int>(v.size())) return u_guess;
+  float lo = 1e30f, hi = -1e30f;
+  for (int i = 0; i < n; ++i) {
+    const double u = u_guess - half + i * kStep;
+    const double x = f.ImageX(s, u), y = f.ImageY(s, u);
+    if (!img.InsideForBilinear(x, y)) return u_guess;
+    v[i] = img.Bilinear(x, y);
+    lo = std::min(lo, v[i]);
+    hi = std::max(hi, v[i]);
+  }
+  if (hi - lo < min_step) return u_guess;
+  const float mid = 0.5f * (lo + hi);
+  double best = u_guess, best_dist = 1e30;
+  for (int i = 0; i + 1 < n; ++i) {
+    if ((v[i] < mid) == (v[i + 1] < mid)) continue;
+    const double u = u_guess - half + (i + (mid - v[i]) / (v[i + 1] - v[i])) * kStep;
+    if (std::abs(u - u_guess) < best_dist) {
+      best_dist = std::abs(u - u_guess);
+      best = u;
+    }
+  }
+  return best;
+}
+
+struct CaliperFit {
+  EdgeFit left, right;
+  bool inside_roi = true;
+  int saturated = 0;
+  int samples = 0;
+};
+
+// Gathers the pixels of one caliper slab near one edge, in (u, value) form. Returns false when
+// the window leaves the image.
+bool GatherEdgeSamples(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
+                       double u1, double data_max, std::vector<EdgeSample>* out, int* saturated) {
+  out->clear();
+  double xmin = 1e30, xmax = -1e30, ymin = 1e30, ymax = -1e30;
+  for (double s : {s0, s1}) {
+    for (double u : {u0, u1}) {
+      xmin = std::min(xmin, f.ImageX(s, u));
+      xmax = std::max(xmax, f.ImageX(s, u));
+      ymin = std::min(ymin, f.ImageY(s, u));
+      ymax = std::max(ymax, f.ImageY(s, u));
+    }
+  }
+  const int x_lo = static_cast<int>(std::ceil(xmin)), x_hi = static_cast<int>(std::floor(xmax));
+  const int y_lo = static_cast<int>(std::ceil(ymin)), y_hi = static_cast<int>(std::floor(ymax));
+  if (x_lo < 0 || y_lo < 0 || x_hi >= img.m.cols || y_hi >= img.m.rows) return false;
+  const float top = static_cast<float>(data_max);
+  for (int y = y_lo; y <= y_hi; ++y) {
+    const double ry = y - f.oy;
+    for (int x = x_lo; x <= x_hi; ++x) {
+      const double rx = x - f.ox;
+      const double s = rx * f.dx + ry * f.dy;
+      if (s < s0 || s >= s1) continue;
+      const double u = rx * f.dy - ry * f.dx;
+      if (u < u0 || u > u1) continue;
+      const float v = img.At(x, y);
+      if (v <= 0.0f || v >= top) ++*saturated;
+      out->push_back({static_cast<float>(u), v});
+    }
+  }
+  return true;
+}
+
+// The two edges as lines u = u0 + slope·s with a shared slope (parallel edges), least squares over
+// the calipers whose width agrees with the median (an occluded or damaged caliper must not tilt the
+// lines: the width's tilt correction depends on the slope).
+struct EdgeLines {
+  double left_u0 = 0, right_u0 = 0, slope = 0;
+  int calipers = 0;
+};
+
+EdgeLines FitEdgeLines(const std::vector<CaliperFit>& fits, double band_s0, double spacing) {
+  std::vector<double> widths;
+  for (const auto& cf : fits) {
+    if (cf.left.converged && cf.right.converged)
+      widths.push_back(cf.right.edge_px - cf.left.edge_px);
+  }
+  EdgeLines out;
+  if (widths.size() < 2) return out;
+  const double med = Median(widths);
+  const double tol = std::max(4.0 * 1.4826 * Mad(widths, med), 0.1);
+  double n = 0, ss = 0, sss = 0, sl = 0, sr = 0, sls = 0, srs = 0;
+  for (size_t k = 0; k < fits.size(); ++k) {
+    const CaliperFit& cf = fits[k];
+    if (!cf.left.converged || !cf.right.converged) continue;
+    if (std::abs(cf.right.edge_px - cf.left.edge_px - med) > tol) continue;
+    const double s = band_s0 + (k + 0.5) * spacing;
+    n += 1;
+    ss += s;
+    sss += s * s;
+    sl += cf.left.edge_px;
+    sr += cf.right.edge_px;
+    sls += cf.left.edge_px * s;
+    srs += cf.right.edge_px * s;
+  }
+  if (n < 2) return out;
+  const double var_s = sss - ss * ss / n;
+  out.slope = var_s > 1e-9 ? ((sls - sl * ss / n) + (srs - sr * ss / n)) / (2 * var_s) : 0.0;
+  out.left_u0 = (sl - out.slope * ss) / n;
+  out.right_u0 = (sr - out.slope * ss) / n;
+  out.calipers = static_cast<int>(n);
+  return out;
+}
+
+}  // namespace
+
+void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry& g,
+                     double band_s0, double band_s1, const StrandMeasureOptions& opt,
+                     StrandMeasurement* m) {
+  auto fail = [&](FrameStatus st, std::string detail) {
+    m->status = st;
+    m->detail = std::move(detail);
+  };
+  const AxisFrame& f = g.axis;
+  const double min_contrast = opt.min_contrast_fraction * data_max;
+  const double width0 = g.width_px;
+  const int n_cal = static_cast<int>((band_s1 - band_s0) / opt.caliper_spacing_px);
+  m->band_start_px = band_s0;
+  m->band_end_px = band_s0 + n_cal * opt.caliper_spacing_px;
+  m->calipers_total = n_cal;
+
+  std::vector<CaliperFit> fits(n_cal);
+  std::vector<EdgeSample> samples;
+  samples.reserve(512);
+  double sigma_guess = 1.5;
+  double left_guess = g.left_u0, right_guess = g.right_u0, slope_guess = g.edge_slope;
+  {
+    // Sub-pixel starting edges at the top and bottom of the band: most frames then need one pass.
+    const double sa = band_s0 + 0.5 * opt.caliper_spacing_px;
+    const double sb = band_s0 + (n_cal - 0.5) * opt.caliper_spacing_px;
+    const double half = std::min(10.0, 0.25 * width0);
+    const double la = RefineEdgeGuess(img, f, sa, left_guess + slope_guess * sa, half, min_contrast);
+    const double lb = RefineEdgeGuess(img, f, sb, left_guess + slope_guess * sb, half, min_contrast);
+    const double ra = RefineEdgeGuess(img, f, sa, right_guess + slope_guess * sa, half, min_contrast);
+    const double rb = RefineEdgeGuess(img, f, sb, right_guess + slope_guess * sb, half, min_contrast);
+    if (sb > sa) slope_guess = 0.5 * ((lb - la) + (rb - ra)) / (sb - sa);
+    left_guess = 0.5 * (la + lb) - slope_guess * 0.5 * (sa + sb);
+    right_guess = 0.5 * (ra + rb) - slope_guess * 0.5 * (sa + sb);
+  }
+  int total_samples = 0, total_saturated = 0;
+  bool border = false;
+  // Usually one pass. Another re-centres the windows on the fitted edge lines, or widens them to
+  // the fitted blur; a badly blurred frame needs a few widenings before its fit sees the whole
+  // edge.
+  constexpr int kMaxPasses = 4;
+  for (int pass = 0; pass < kMaxPasses; ++pass) {
+    const double outer = std::max(6.5, 3.0 * sigma_guess + 2.5);
+    const double inner = std::min(outer, std::max(4.0, 0.3 * width0));
+    total_samples = total_saturated = 0;
+    border = false;
+    for (int k = 0; k < n_cal; ++k) {
+      const double s0 = band_s0 + k * opt.caliper_spacing_px;
+      const double s1 = s0 + opt.caliper_spacing_px;
+      const double sc = 0.5 * (s0 + s1);
+      CaliperFit& cf = fits[k];
+      cf = CaliperFit{};
+      for (int side = 0; side < 2; ++side) {
+        const double e0 = (side == 0 ? left_guess : right_guess) + slope_guess * sc;
+        const double u0 = side == 0 ? e0 - outer : e0 - inner;
+        const double u1 = side == 0 ? e0 + inner : e0 + outer;
+        if (!GatherEdgeSamples(img, f, s0, s1, u0, u1, data_max, &samples, &cf.saturated)) {
+          cf.inside_roi = false;
+          break;
+        }
+        cf.samples += static_cast<int>(samples.size());
+        EdgeFit fit = FitBlurredStep(samples, e0, sigma_guess, e0);
+        // Reject fits that wandered out of their window or have the wrong sign of step.
+        const bool in_window = fit.edge_px > u0 + 1.0 && fit.edge_px < u1 - 1.0;
+        const int expected = side == 0 ? g.left_sign : g.right_sign;
+        if (!(in_window && fit.step * expected > 0)) fit.converged = false;
+        (side == 0 ? cf.left : cf.right) = fit;
+      }
+      if (!cf.inside_roi) border = true;
+      total_samples += cf.samples;
+      total_saturated += cf.saturated;
+    }
+    const EdgeLines lines = FitEdgeLines(fits, band_s0, opt.caliper_spacing_px);
+    if (lines.calipers < 2) {
+      // No edge fitted: perhaps blur far wider than the window. Widen and look again.
+      sigma_guess = std::max(2.5 * sigma_guess, 0.6 * outer);
+      continue;
+    }
+    std::vector<double> sigmas;
+    for (const auto& cf : fits) {
+      if (!cf.left.converged || !cf.right.converged) continue;
+      sigmas.push_back(cf.left.sigma_px);
+      sigmas.push_back(cf.right.sigma_px);
+    }
+    const double new_sigma = Median(sigmas);
+    const double s_mid = 0.5 * (band_s0 + band_s1);
+    const bool recentre =
+        std::abs(lines.left_u0 + lines.slope * s_mid - (left_guess + slope_guess * s_mid)) > 1.0 ||
+        std::abs(lines.right_u0 + lines.slope * s_mid - (right_guess + slope_guess * s_mid)) > 1.0;
+    const bool widen = 3.0 * new_sigma + 2.5 > 1.25 * outer;
+    left_guess = lines.left_u0;
+    right_guess = lines.right_u0;
+    slope_guess = lines.slope;
+    // A fit in a window too narrow for the edge underestimates its width: widen geometrically.
+    sigma_guess = widen ? std::max(new_sigma, 0.6 * outer) : new_sigma;
+    if (!(recentre || widen)) break;
+  }
+  if (border)
+    return fail(FrameStatus::kTouchesBorder, "edge windows reach the frame or ROI border");
+  if (total_samples > 0 && total_saturated > opt.max_saturated_fraction * total_samples) {
+    return fail(FrameStatus::kSaturated,
+                fmt::format("{} of {} edge pixels clipped", total_saturated, total_samples));
+  }
+
+  // Per-caliper widths, robust combination.
+  const double cos_d = 1.0 / std::sqrt(1.0 + slope_guess * slope_guess);
+  std::vector<double> cal_widths, steps, blurs;
+  m->calipers.assign(n_cal, Caliper{});
+  for (int k = 0; k < n_cal; ++k) {
+    Caliper& c = m->calipers[k];
+    c.s_px = band_s0 + (k + 0.5) * opt.caliper_spacing_px;
+    c.fitted = fits[k].left.converged && fits[k].right.converged;
+    if (!c.fitted) continue;
+    c.left_u_px = fits[k].left.edge_px;
+    c.right_u_px = fits[k].right.edge_px;
+    c.width_px = (c.right_u_px - c.left_u_px) * cos_d;
+    cal_widths.push_back(c.width_px);
+    steps.push_back(std::abs(fits[k].left.step));
+    steps.push_back(std::abs(fits[k].right.step));
+    for (const EdgeFit* e : {&fits[k].left, &fits[k].right}) {
+      // The fitted width holds the PSF and the pixel footprint, whose variance across any straight
+      // edge is 1/12 px² whatever its tilt.
+      blurs.push_back(std::sqrt(std::max(0.0, e->sigma_px * e->sigma_px - 1.0 / 12.0)));
+    }
+  }
+  m->has_geometry = true;
+  m->axis_dx = f.dx;
+  m->axis_dy = f.dy;
+  m->left_u0_px = left_guess;
+  m->right_u0_px = right_guess;
+  m->edge_slope = slope_guess;
+  // Report the refined axis: the edges' slope in the measurement frame tilts the first estimate.
+  m->angle_deg = (std::atan2(f.dx, f.dy) + std::atan(slope_guess)) * kRadToDeg;
+  if (cal_widths.empty()) return fail(FrameStatus::kOccluded, "no caliper found both edges");
+  m->contrast = Median(steps);
+  m->blur_px = Median(blurs);
+
+  const double med = Median(cal_widths);
+  const double mad = Mad(cal_widths, med);
+  const double tol = std::max(4.0 * 1.4826 * mad, 0.1);
+  double sum = 0, sum2 = 0;
+  int used = 0;
+  for (auto& c : m->calipers) {
+    if (!c.fitted) continue;
+    c.inlier = std::abs(c.width_px - med) <= tol;
+    if (!c.inlier) continue;
+    sum += c.width_px;
+    sum2 += c.width_px * c.width_px;
+    ++used;
+  }
+  m->calipers_used = used;
+  m->width_px = sum / used;
+  if (used >= 2) {
+    const double var = std::max(0.0, (sum2 - sum * sum / used) / (used - 1));
+    m->width_sigma_px = std::sqrt(var / used);
+  } else {
+    const auto& k = fits[0];
+    m->width_sigma_px = std::hypot(k.left.edge_sigma_px, k.right.edge_sigma_px);
+  }
+
+  // The coarse width comes from the whole pair, most of it outside the band: a blob covering one
+  // edge over the band makes the band's edges agree with each other but not with the strand.
+  if (std::abs(m->width_px - width0) > std::max(3.0, 0.04 * width0)) {
+    return fail(
+        FrameStatus::kOccluded,
+        fmt::format("width in the band {:.1f} px disagrees with the strand's {:.1f} px elsewhere",
+                    m->width_px, width0));
+  }
+  if (m->contrast < min_contrast)
+    return fail(FrameStatus::kLowContrast,
+                fmt::format("edge contrast {:.1f} below {:.1f}", m->contrast, min_contrast));
+  if (m->blur_px > opt.max_blur_px)
+    return fail(FrameStatus::kOutOfFocus,
+                fmt::format("edge blur {:.2f} px above {:.2f} px", m->blur_px, opt.max_blur_px));
+  if (used < opt.min_caliper_fraction * n_cal)
+    return fail(FrameStatus::kOccluded, fmt::format("{} of {} calipers consistent", used, n_cal));
+  m->status = FrameStatus::kValid;
+  m->detail.clear();
+}
+
+}  // namespace clogscope::vision

@@ -1,0 +1,43 @@
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <opencv2/core.hpp>
+
+namespace clogscope::vision {
+
+// Read access to one 8- or 16-bit channel, with bilinear sampling. Internal to the vision module.
+struct GreyImage {
+  const cv::Mat& m;
+  bool is16;
+  float At(int x, int y) const {
+    return is16 ? static_cast<float>(m.ptr<uint16_t>(y)[x])
+                : static_cast<float>(m.ptr<uint8_t>(y)[x]);
+  }
+  // Bilinear, inside the image only (the caller checks with InsideForBilinear).
+  float Bilinear(double x, double y) const {
+    const int x0 = static_cast<int>(std::floor(x));
+    const int y0 = static_cast<int>(std::floor(y));
+    const double fx = x - x0, fy = y - y0;
+    const double v00 = At(x0, y0), v10 = At(x0 + 1, y0);
+    const double v01 = At(x0, y0 + 1), v11 = At(x0 + 1, y0 + 1);
+    return static_cast<float>((v00 * (1 - fx) + v10 * fx) * (1 - fy) +
+                              (v01 * (1 - fx) + v11 * fx) * fy);
+  }
+  bool InsideForBilinear(double x, double y) const {
+    return x >= 0 && y >= 0 && x <= m.cols - 1.001 && y <= m.rows - 1.001;
+  }
+};
+
+// The measurement frame of a strand: origin on its axis, unit axis direction pointing down the
+// strand. Across-axis coordinate u grows along n = (dy, −dx), to the right of a downward axis.
+struct AxisFrame {
+  double ox = 0, oy = 0;
+  double dx = 0, dy = 1;
+  double ImageX(double s, double u) const { return ox + s * dx + u * dy; }
+  double ImageY(double s, double u) const { return oy + s * dy - u * dx; }
+  double S(double x, double y) const { return (x - ox) * dx + (y - oy) * dy; }
+  double U(double x, double y) const { return (x - ox) * dy - (y - oy) * dx; }
+};
+
+}  // namespace clogscope::vision

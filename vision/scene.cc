@@ -1,0 +1,649 @@
+#include "vision/scene.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "common/robust.h"
+
+namespace clogscope::vision {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / M_PI;
+constexpr double kDegToRad = M_PI / 180.0;
+constexpr int kMinPiecePoints = 4;       // edge points (sampled rows) in a straight piece
+constexpr double kStraightTolPx = 1.0;   // a piece deviates less than this from its line (small px)
+constexpr int kMaxCandidates = 40;       // pairs kept after scoring
+constexpr int kMaxFollowed = 6;          // pairs followed along the full-resolution image
+constexpr double kFollowOffsetPx = 3.0;  // edge contrast is read this far either side
+constexpr double kMixedPenalty = 0.5;    // a pair brighter on one side only is less likely
+
+struct EdgePoint {
+  float x, y;  // small-image px
+  float g;     // |gradient|, grey per small px
+  int sign;
+};
+
+// A straight run of edge points: x = a + b·y in small-image px.
+struct Piece {
+  std::vector<EdgePoint> pts;
+  int sign = 0;
+  double a = 0, b = 0;
+  double max_residual = 0;
+  double y0() const { return pts.front().y; }
+  double y1() const { return pts.back().y; }
+  double X(double y) const { return a + b * y; }
+  void Fit() {
+    double n = 0, sy = 0, sx = 0, syy = 0, sxy = 0;
+    for (const auto& p : pts) {
+      n += 1;
+      sy += p.y;
+      sx += p.x;
+      syy += double(p.y) * p.y;
+      sxy += double(p.y) * p.x;
+    }
+    const double var = n * syy - sy * sy;
+    b = var > 1e-9 ? (n * sxy - sx * sy) / var : 0.0;
+    a = (sx - b * sy) / n;
+    const double c = 1.0 / std::sqrt(1 + b * b);
+    max_residual = 0;
+    for (const auto& p : pts) max_residual = std::max(max_residual, std::abs(p.x - X(p.y)) * c);
+  }
+};
+
+// Gradient of one channel at the detection scale, and its edge points on sampled rows.
+struct Detection {
+  int factor = 1;    // full px per small px
+  int row_step = 2;  // small px between sampled rows
+  double noise = 0;  // σ of the horizontal gradient from noise, grey per small px
+  std::vector<std::vector<EdgePoint>> rows;
+};
+
+Detection DetectEdgePoints(const cv::Mat& channel, const SceneOptions& o) {
+  Detection d;
+  d.factor = std::min(channel.cols, channel.rows) >= 240 ? 2 : 1;
+  d.row_step = std::max(1, 4 / d.factor);
+  cv::Mat small;
+  if (d.factor == 2) {
+    cv::resize(channel, small, cv::Size(channel.cols / 2, channel.rows / 2), 0, 0, cv::INTER_AREA);
+  } else {
+    small = channel;
+  }
+  cv::Mat f32, gx, gy;
+  small.convertTo(f32, CV_32F);
+  cv::Sobel(f32, gx, CV_32F, 1, 0, 3, 1.0 / 8, 0, cv::BORDER_REPLICATE);
+  cv::Sobel(f32, gy, CV_32F, 0, 1, 3, 1.0 / 8, 0, cv::BORDER_REPLICATE);
+
+  // Noise of the gradient from the median |gx| of the sampled rows: edges are a small minority of
+  // pixels, so the median sees noise and texture.
+  std::vector<double> mags;
+  for (int y = d.row_step / 2; y < gx.rows; y += d.row_step) {
+    const float* g = gx.ptr<float>(y);
+    for (int x = 1; x < gx.cols - 1; x += 2) mags.push_back(std::abs(g[x]));
+  }
+  d.noise = std::max(1.4826 * Median(mags), o.min_contrast / 60.0);
+  // An edge of the weakest accepted step at the largest blur still rises above this.
+  const float threshold = static_cast<float>(std::max(5.0 * d.noise, o.min_contrast / 8.0));
+  const float tan_max = static_cast<float>(std::tan(std::min(85.0, o.max_tilt_deg + 10) * kDegToRad));
+
+  for (int y = d.row_step / 2; y < gx.rows; y += d.row_step) {
+    const float* g = gx.ptr<float>(y);
+    const float* h = gy.ptr<float>(y);
+    std::vector<EdgePoint> pts;
+    for (int x = 1; x < gx.cols - 1; ++x) {
+      const float a = std::abs(g[x]);
+      if (a < threshold) continue;
+      const float l = std::abs(g[x - 1]), r = std::abs(g[x + 1]);
+      if (a < l || a <= r) continue;
+      if (std::abs(h[x]) > a * tan_max) continue;  // too far from an upright edge
+      // Sub-pixel position: centroid of the peak above half its height. A parabola through three
+      // samples is as good on sharp edges and far less noisy on blurred, broad ones.
+      const float half = 0.5f * a;
+      double sw = 0, sx = 0;
+      for (int k = x; k >= std::max(0, x - 12); --k) {
+        const float w = std::abs(g[k]) - half;
+        if (w <= 0 || (k < x && (g[k] > 0) != (g[x] > 0))) break;
+        sw += w;
+        sx += w * k;
+      }
+      for (int k = x + 1; k <= std::min(gx.cols - 1, x + 12); ++k) {
+        const float w = std::abs(g[k]) - half;
+        if (w <= 0 || (g[k] > 0) != (g[x] > 0)) break;
+        sw += w;
+        sx += w * k;
+      }
+      pts.push_back({static_cast<float>(sx / sw), static_cast<float>(y), a, g[x] > 0 ? 1 : -1});
+    }
+    d.rows.push_back(std::move(pts));
+  }
+  return d;
+}
+
+// Links edge points of consecutive sampled rows into chains (same sign, continuing the chain's
+// direction), allowing one missed row.
+std::vector<std::vector<EdgePoint>> LinkChains(const Detection& d, double max_tilt_deg) {
+  struct Chain {
+    std::vector<EdgePoint> pts;
+    int last_row = 0;
+  };
+  std::vector<Chain> active;
+  std::vector<std::vector<EdgePoint>> done;
+  const double tan_max = std::tan(max_tilt_deg * kDegToRad);
+  struct Link {
+    float dist;
+    int chain, point;
+  };
+  std::vector<Link> links;
+  for (int r = 0; r < static_cast<int>(d.rows.size()); ++r) {
+    const auto& pts = d.rows[r];
+    // Close chains that missed two rows.
+    for (size_t c = 0; c < active.size();) {
+      if (active[c].last_row < r - 2) {
+        done.push_back(std::move(active[c].pts));
+        active[c] = std::move(active.back());
+        active.pop_back();
+      } else {
+        ++c;
+      }
+    }
+    links.clear();
+    for (int c = 0; c < static_cast<int>(active.size()); ++c) {
+      const auto& cp = active[c].pts;
+      const EdgePoint& last = cp.back();
+      const double y = pts.empty() ? 0 : pts.front().y;
+      double pred = last.x, tol;
+      if (cp.size() >= 2) {
+        const EdgePoint& first = cp[cp.size() >= 6 ? cp.size() - 6 : 0];
+        const double slope = (last.x - first.x) / std::max(1e-6f, last.y - first.y);
+        pred = last.x + slope * (y - last.y);
+        tol = 1.5;
+      } else {
+        tol = (y - last.y) * tan_max + 1.5;
+      }
+      // Points are sorted by x: look only in [pred − tol, pred + tol].
+      auto it = std::lower_bound(pts.begin(), pts.end(), pred - tol,
+                                 [](const EdgePoint& p, double v) { return p.x < v; });
+      for (; it != pts.end() && it->x <= pred + tol; ++it) {
+        if (it->sign != last.sign) continue;
+        links.push_back({static_cast<float>(std::abs(it->x - pred)), c,
+                         static_cast<int>(it - pts.begin())});
+      }
+    }
+    std::sort(links.begin(), links.end(), [](const Link& a, const Link& b) { return a.dist < b.dist; });
+    std::vector<char> point_used(pts.size(), 0), chain_used(active.size(), 0);
+    for (const Link& l : links) {
+      if (point_used[l.point] || chain_used[l.chain]) continue;
+      point_used[l.point] = chain_used[l.chain] = 1;
+      active[l.chain].pts.push_back(pts[l.point]);
+      active[l.chain].last_row = r;
+    }
+    for (size_t i = 0; i < pts.size(); ++i) {
+      if (!point_used[i]) active.push_back({{pts[i]}, r});
+    }
+  }
+  for (auto& c : active) done.push_back(std::move(c.pts));
+  return done;
+}
+
+// Splits a chain into straight pieces (recursively at the point farthest from the fitted line).
+void SplitStraight(const std::vector<EdgePoint>& pts, size_t lo, size_t hi,
+                   std::vector<Piece>* out) {
+  if (hi - lo + 1 < kMinPiecePoints) return;
+  Piece p;
+  p.pts.assign(pts.begin() + lo, pts.begin() + hi + 1);
+  p.sign = pts[lo].sign;
+  p.Fit();
+  if (p.max_residual <= kStraightTolPx) {
+    out->push_back(std::move(p));
+    return;
+  }
+  size_t worst = lo;
+  double worst_r = -1;
+  const double c = 1.0 / std::sqrt(1 + p.b * p.b);
+  for (size_t i = lo; i <= hi; ++i) {
+    const double r = std::abs(pts[i].x - p.X(pts[i].y)) * c;
+    if (r > worst_r) {
+      worst_r = r;
+      worst = i;
+    }
+  }
+  // Keep the split point on the side where it is not the end, so that the recursion shrinks.
+  if (worst == lo) {
+    SplitStraight(pts, lo + 1, hi, out);
+  } else if (worst == hi) {
+    SplitStraight(pts, lo, hi - 1, out);
+  } else {
+    SplitStraight(pts, lo, worst - 1, out);
+    SplitStraight(pts, worst + 1, hi, out);
+  }
+}
+
+// Joins collinear pieces of the same sign along one line (an edge broken by a blob, a reflection
+// or a weak stretch).
+void MergeCollinear(std::vector<Piece>* pieces, int row_step) {
+  std::sort(pieces->begin(), pieces->end(),
+            [](const Piece& a, const Piece& b) { return a.y0() < b.y0(); });
+  bool merged = true;
+  while (merged) {
+    merged = false;
+    for (size_t i = 0; i < pieces->size() && !merged; ++i) {
+      for (size_t j = i + 1; j < pieces->size(); ++j) {
+        Piece& p = (*pieces)[i];
+        Piece& q = (*pieces)[j];
+        if (p.sign != q.sign) continue;
+        if (q.y0() < p.y1() - row_step + 0.5) continue;  // overlapping rows: parallel, not one
+        const double gap = q.y0() - p.y1();
+        if (gap > std::max(30.0, 0.5 * ((p.y1() - p.y0()) + (q.y1() - q.y0())))) continue;
+        if (std::abs(std::atan(p.b) - std::atan(q.b)) > 3.0 * kDegToRad) continue;
+        if (std::abs(p.X(q.y0()) - q.pts.front().x) > 1.5 ||
+            std::abs(q.X(p.y1()) - p.pts.back().x) > 1.5)
+          continue;
+        Piece m;
+        m.pts = p.pts;
+        m.pts.insert(m.pts.end(), q.pts.begin(), q.pts.end());
+        m.sign = p.sign;
+        m.Fit();
+        if (m.max_residual > 1.5 * kStraightTolPx) continue;
+        p = std::move(m);
+        pieces->erase(pieces->begin() + j);
+        merged = true;
+        break;
+      }
+    }
+  }
+}
+
+EdgeSegment ToSegment(const Piece& p, const Detection& d) {
+  const double f = d.factor, off = 0.5 * (d.factor - 1);
+  EdgeSegment s;
+  s.top = {p.X(p.y0()) * f + off, p.y0() * f + off};
+  s.bottom = {p.X(p.y1()) * f + off, p.y1() * f + off};
+  s.sign = p.sign;
+  std::vector<double> g;
+  for (const auto& e : p.pts) g.push_back(e.g);
+  s.strength = Median(g) / f;
+  s.coverage = std::min(1.0, p.pts.size() / ((p.y1() - p.y0()) / d.row_step + 1.0));
+  return s;
+}
+
+// The segment's line in an axis frame: u at s.
+struct LineInAxis {
+  double s0, s1, u0, u1;
+  double U(double s) const { return s1 > s0 ? u0 + (u1 - u0) * (s - s0) / (s1 - s0) : u0; }
+};
+LineInAxis InAxis(const EdgeSegment& e, const AxisFrame& a) {
+  return {a.S(e.top.x, e.top.y), a.S(e.bottom.x, e.bottom.y), a.U(e.top.x, e.top.y),
+          a.U(e.bottom.x, e.bottom.y)};
+}
+
+Polarity PairPolarity(int left_sign, int right_sign) {
+  if (left_sign > 0 && right_sign < 0) return Polarity::kBrightOnDark;
+  if (left_sign < 0 && right_sign > 0) return Polarity::kDarkOnBright;
+  return Polarity::kMixed;
+}
+
+// Scores every pair of long segments as a strand silhouette.
+std::vector<PairCandidate> PairSegments(const std::vector<EdgeSegment>& edges, double noise_full,
+                                        int roi_width, const SceneOptions& o) {
+  std::vector<PairCandidate> out;
+  for (size_t i = 0; i < edges.size(); ++i) {
+    for (size_t j = i + 1; j < edges.size(); ++j) {
+      const EdgeSegment& a = edges[i];
+      const EdgeSegment& b = edges[j];
+      const cv::Point2d da = (a.bottom - a.top) / a.length_px();
+      const cv::Point2d db = (b.bottom - b.top) / b.length_px();
+      const double min_len = std::min(a.length_px(), b.length_px());
+      const double dangle = std::abs(std::atan2(da.x, da.y) - std::atan2(db.x, db.y));
+      if (dangle > std::max(3.0 * kDegToRad, std::atan(3.0 / min_len))) continue;
+      cv::Point2d dir = a.length_px() * da + b.length_px() * db;
+      dir /= cv::norm(dir);
+      AxisFrame ax{0.25 * (a.top.x + a.bottom.x + b.top.x + b.bottom.x),
+                   0.25 * (a.top.y + a.bottom.y + b.top.y + b.bottom.y), dir.x, dir.y};
+      LineInAxis la = InAxis(a, ax), lb = InAxis(b, ax);
+      int li = static_cast<int>(i), ri = static_cast<int>(j);
+      if (la.U(0.5 * (la.s0 + la.s1)) > lb.U(0.5 * (lb.s0 + lb.s1))) {
+        std::swap(la, lb);
+        std::swap(li, ri);
+      }
+      const double s0 = std::max(la.s0, lb.s0), s1 = std::min(la.s1, lb.s1);
+      const double len = s1 - s0;
+      if (len < o.min_length_px) continue;
+      const double w0 = lb.U(s0) - la.U(s0), w1 = lb.U(s1) - la.U(s1);
+      const double width = 0.5 * (w0 + w1);
+      if (width < o.min_width_px || width > 0.9 * roi_width) continue;
+      if (std::abs(w1 - w0) > std::max(2.0, 0.03 * width)) continue;  // not parallel enough
+      const EdgeSegment& L = edges[li];
+      const EdgeSegment& R = edges[ri];
+      const Polarity pol = PairPolarity(L.sign, R.sign);
+      if (o.polarity != Polarity::kAuto && pol != o.polarity) continue;
+      PairCandidate c;
+      c.left = li;
+      c.right = ri;
+      c.polarity = pol;
+      c.length_px = len;
+      c.width_px = width;
+      c.snr = std::min(L.strength, R.strength) / noise_full;
+      c.score = len * 0.5 * (L.coverage + R.coverage) * std::min(1.0, c.snr / 20.0) *
+                (pol == Polarity::kMixed ? kMixedPenalty : 1.0);
+      // Origin on the axis at the top of the common stretch.
+      const double uc = 0.5 * (la.U(s0) + lb.U(s0));
+      c.axis = {ax.ImageX(s0, uc), ax.ImageY(s0, uc), dir.x, dir.y};
+      c.left_u0 = la.U(s0) - uc;
+      c.right_u0 = lb.U(s0) - uc;
+      c.edge_slope = 0.5 * ((la.U(s1) - la.U(s0)) + (lb.U(s1) - lb.U(s0))) / len;
+      out.push_back(c);
+    }
+  }
+  std::sort(out.begin(), out.end(),
+            [](const PairCandidate& a, const PairCandidate& b) { return a.score > b.score; });
+  if (out.size() > kMaxCandidates) out.resize(kMaxCandidates);
+  return out;
+}
+
+// u-interval of a candidate in another candidate's frame, at the middle of its stretch.
+std::pair<double, double> Interval(const PairCandidate& c, const AxisFrame& frame) {
+  const double sm = 0.5 * c.length_px;
+  const double xl = c.axis.ImageX(sm, c.left_u0 + c.edge_slope * sm);
+  const double yl = c.axis.ImageY(sm, c.left_u0 + c.edge_slope * sm);
+  const double xr = c.axis.ImageX(sm, c.right_u0 + c.edge_slope * sm);
+  const double yr = c.axis.ImageY(sm, c.right_u0 + c.edge_slope * sm);
+  return {frame.U(xl, yl), frame.U(xr, yr)};
+}
+
+// Marks pairs lying inside a comparable outer pair (a highlight stripe, a clear strand's internal
+// lines): the outer silhouette is the object.
+void SuppressNested(std::vector<PairCandidate>* cands) {
+  auto& c = *cands;
+  for (size_t i = 0; i < c.size(); ++i) {
+    for (size_t j = 0; j < c.size(); ++j) {
+      if (i == j || !c[j].verdict.empty()) continue;
+      if (c[i].width_px <= c[j].width_px + 1.0) continue;
+      const auto [l, r] = Interval(c[j], c[i].axis);
+      const auto [ol, orr] = Interval(c[i], c[i].axis);
+      if (l < ol - 0.5 || r > orr + 0.5) continue;
+      const double sj = c[i].axis.S(c[j].axis.ox, c[j].axis.oy);
+      if (sj > c[i].length_px || sj + c[j].length_px < 0) continue;  // not beside each other
+      if (c[i].score >= 0.3 * c[j].score)
+        c[j].verdict = fmt::format("inside a wider pair ({:.1f} px)", c[i].width_px);
+    }
+  }
+}
+
+// Edge contrast across the line u(s) at s: positive when the edge is there with its sign.
+bool ContrastAt(const GreyImage& img, const AxisFrame& a, double s, double u, int sign, double* c) {
+  const double xa = a.ImageX(s, u - kFollowOffsetPx), ya = a.ImageY(s, u - kFollowOffsetPx);
+  const double xb = a.ImageX(s, u + kFollowOffsetPx), yb = a.ImageY(s, u + kFollowOffsetPx);
+  if (!img.InsideForBilinear(xa, ya) || !img.InsideForBilinear(xb, yb)) return false;
+  *c = sign * (img.Bilinear(xb, yb) - img.Bilinear(xa, ya));
+  return true;
+}
+
+struct EdgeEnd {
+  double s = 0;
+  bool at_object = false;  // the edge stopped inside the image (tip, bed); else it left the image
+};
+
+// Walks along one edge line from s_from in direction dir (±1) until the edge's contrast stays
+// below half its reference for three steps, or the line leaves the image. An edge that comes back
+// (five strong steps within max_gap_px) was only hidden by a blob or a reflection, and the walk
+// goes on.
+EdgeEnd WalkEdge(const GreyImage& img, const AxisFrame& a, double u0, double slope, int sign,
+                 double reference, double s_from, double dir, double max_gap_px) {
+  double prev_c = reference, c = 0;
+  int weak = 0, strong_again = 0;
+  double first_weak = 0, before_weak_c = reference;
+  bool in_gap = false;
+  EdgeEnd candidate;
+  for (int i = 0;; ++i) {
+    const double s = s_from + dir * i;
+    if (!ContrastAt(img, a, s, u0 + slope * s, sign, &c)) {
+      return in_gap ? candidate : EdgeEnd{s - dir, false};
+    }
+    if (in_gap) {
+      strong_again = c >= 0.5 * reference ? strong_again + 1 : 0;
+      if (strong_again >= 5) {
+        in_gap = false;
+        weak = 0;
+      } else if (std::abs(s - candidate.s) > max_gap_px) {
+        return candidate;
+      }
+      prev_c = c;
+      continue;
+    }
+    if (c < 0.5 * reference) {
+      if (weak++ == 0) {
+        first_weak = s;
+        before_weak_c = prev_c;
+      }
+      if (weak >= 3) {
+        // Interpolate the half-contrast crossing between the last strong and the first weak step.
+        double c_weak = 0;
+        ContrastAt(img, a, first_weak, u0 + slope * first_weak, sign, &c_weak);
+        const double t = std::clamp((before_weak_c - 0.5 * reference) /
+                                        std::max(1e-9, before_weak_c - c_weak),
+                                    0.0, 1.0);
+        candidate = {first_weak - dir + dir * t, true};
+        in_gap = true;
+        strong_again = 0;
+      }
+    } else {
+      weak = 0;
+    }
+    prev_c = c;
+  }
+}
+
+// Median contrast of an edge over the candidate's stretch.
+double ReferenceContrast(const GreyImage& img, const AxisFrame& a, double u0, double slope,
+                         int sign, double length) {
+  std::vector<double> cs;
+  for (double s = 0; s <= length; s += 2.0) {
+    double c;
+    if (ContrastAt(img, a, s, u0 + slope * s, sign, &c)) cs.push_back(c);
+  }
+  return Median(cs);
+}
+
+// For a pair of segments leaving the image at one border only, is it an object cut lengthwise by
+// the ROI? (One long edge whose object side runs uniformly to the nearer side border.)
+bool CutByBorder(const GreyImage& img, const std::vector<EdgeSegment>& edges, double min_length) {
+  std::vector<double> levels;
+  for (int y = 4; y < img.m.rows; y += 8)
+    for (int x = 4; x < img.m.cols; x += 8) levels.push_back(img.At(x, y));
+  const double background = Median(levels);
+  for (const auto& e : edges) {
+    // Cut lengthwise, the object runs along the side border; a steep edge (a nozzle flank) is not.
+    if (e.length_px() < std::max(3.0 * min_length, 0.3 * img.m.rows)) continue;
+    if (std::abs(e.bottom.x - e.top.x) > std::tan(15.0 * kDegToRad) * (e.bottom.y - e.top.y))
+      continue;
+    const cv::Point2d mid = 0.5 * (e.top + e.bottom);
+    const int y = static_cast<int>(std::lround(mid.y));
+    const bool to_left = mid.x < 0.5 * img.m.cols;
+    const int x_from = static_cast<int>(std::lround(mid.x)) + (to_left ? -4 : 4);
+    const int x_to = to_left ? 0 : img.m.cols - 1;
+    if (x_from < 0 || x_from >= img.m.cols) continue;
+    std::vector<double> v;
+    for (int x = x_from; to_left ? x >= x_to : x <= x_to; x += to_left ? -1 : 1)
+      v.push_back(img.At(x, y));
+    if (v.size() < 2) continue;
+    const double level = Median(v);
+    const double far_side = img.At(std::clamp(x_from + (to_left ? 8 : -8), 0, img.m.cols - 1), y);
+    const double step = std::abs(level - far_side);
+    if (step < 1e-9 || std::abs(level - background) < 0.5 * step) continue;
+    double max_dev = 0;
+    for (double x : v) max_dev = std::max(max_dev, std::abs(x - level));
+    if (max_dev < 0.3 * step) return true;
+  }
+  return false;
+}
+
+std::string Describe(const PairCandidate& c) {
+  return fmt::format("width {:.1f} px, {:.0f} px long, {:.1f}° tilt, edge SNR {:.0f}, score {:.0f}",
+                     c.width_px, c.length_px, std::atan2(c.axis.dx, c.axis.dy) * kRadToDeg,
+                     c.snr, c.score);
+}
+
+}  // namespace
+
+bool FollowPair(const GreyImage& img, const SceneOptions& o, const PairCandidate& c, int left_sign,
+                int right_sign, StrandGeometry* g, std::string* why) {
+  const AxisFrame& a = c.axis;
+  const double ref_l = ReferenceContrast(img, a, c.left_u0, c.edge_slope, left_sign, c.length_px);
+  const double ref_r = ReferenceContrast(img, a, c.right_u0, c.edge_slope, right_sign, c.length_px);
+  if (!(ref_l > 0.5 * o.min_contrast && ref_r > 0.5 * o.min_contrast)) {
+    *why = fmt::format("edge contrast {:.0f}/{:.0f} too weak along the pair", ref_l, ref_r);
+    return false;
+  }
+  // Walks start inside the stretch: a segment's detected end already lies in the fading zone.
+  const double inset = std::min(0.25 * c.length_px, 12.0);
+  const double top = inset, bottom = c.length_px - inset;
+  const double gap = std::max(20.0, 0.5 * c.width_px);
+  const auto walk = [&](double u0, int sign, double ref, double from, double dir) {
+    return WalkEdge(img, a, u0, c.edge_slope, sign, ref, from, dir, gap);
+  };
+  const EdgeEnd up_l = walk(c.left_u0, left_sign, ref_l, top, -1);
+  const EdgeEnd up_r = walk(c.right_u0, right_sign, ref_r, top, -1);
+  const EdgeEnd dn_l = walk(c.left_u0, left_sign, ref_l, bottom, +1);
+  const EdgeEnd dn_r = walk(c.right_u0, right_sign, ref_r, bottom, +1);
+  double s_origin;
+  g->has_tip = up_l.at_object && up_r.at_object;
+  if (o.target == MeasureTarget::kStrand) {
+    if (!g->has_tip) {
+      *why = up_l.at_object || up_r.at_object
+                 ? "only one edge ends upward: no nozzle tip across the strand"
+                 : "the edges run to the frame or ROI top: no nozzle tip in view";
+      return false;
+    }
+    // A nozzle face ends both edges together (a strand hanging up to ~8° off the nozzle axis).
+    const double mismatch = std::abs(up_l.s - up_r.s);
+    if (mismatch > std::max(4.0, 0.14 * c.width_px)) {
+      *why = fmt::format("the edges end {:.0f} px apart: no common nozzle tip", mismatch);
+      return false;
+    }
+    s_origin = 0.5 * (up_l.s + up_r.s);
+  } else {
+    s_origin = std::max(up_l.s, up_r.s);
+  }
+  const double s_end = std::min(dn_l.s, dn_r.s);
+  const bool end_object = dn_l.s <= dn_r.s ? dn_l.at_object : dn_r.at_object;
+  g->axis = {a.ImageX(s_origin, 0), a.ImageY(s_origin, 0), a.dx, a.dy};
+  g->left_u0 = c.left_u0 + c.edge_slope * s_origin;
+  g->right_u0 = c.right_u0 + c.edge_slope * s_origin;
+  g->edge_slope = c.edge_slope;
+  g->width_px = c.width_px;
+  g->left_sign = left_sign;
+  g->right_sign = right_sign;
+  g->polarity = c.polarity;
+  g->s_end = s_end - s_origin;
+  g->end_is_object = end_object;
+  g->score = c.score;
+  return true;
+}
+
+SceneResult FindScene(const std::vector<cv::Mat>& channels, const SceneOptions& o) {
+  SceneResult best;
+  best.status = FrameStatus::kNoStrand;
+  best.detail = "no long straight edges";
+  double best_score = -1;
+  // Each channel is searched on its own; the one whose best pair scores highest is used.
+  for (int ch = 0; ch < static_cast<int>(channels.size()); ++ch) {
+    const Detection d = DetectEdgePoints(channels[ch], o);
+    std::vector<Piece> pieces;
+    for (const auto& chain : LinkChains(d, o.max_tilt_deg))
+      SplitStraight(chain, 0, chain.size() - 1, &pieces);
+    MergeCollinear(&pieces, d.row_step);
+    SceneResult r;
+    r.channel = ch;
+    r.gradient_noise = d.noise / d.factor;
+    for (const Piece& p : pieces) {
+      EdgeSegment s = ToSegment(p, d);
+      if (s.length_px() >= o.min_length_px) r.edges.push_back(s);
+    }
+    r.candidates = PairSegments(r.edges, r.gradient_noise, channels[ch].cols, o);
+    SuppressNested(&r.candidates);
+    double top = 0;
+    for (const auto& c : r.candidates)
+      if (c.verdict.empty()) top = std::max(top, c.score);
+    if (top > best_score) {
+      best_score = top;
+      best = std::move(r);
+    }
+  }
+  SceneResult& r = best;
+  const cv::Mat& chosen_channel = channels[r.channel];
+  const GreyImage img{chosen_channel, chosen_channel.depth() == CV_16U};
+
+  // Follow the best candidates on the full-resolution image; the first that holds up is chosen.
+  std::vector<int> followed;
+  std::string first_reason;
+  int examined = 0;
+  for (int i = 0; i < static_cast<int>(r.candidates.size()) && examined < kMaxFollowed; ++i) {
+    PairCandidate& c = r.candidates[i];
+    if (!c.verdict.empty()) continue;
+    if (c.score < o.min_score) {
+      c.verdict = fmt::format("score below {:.0f}", o.min_score);
+      continue;
+    }
+    ++examined;
+    StrandGeometry g;
+    std::string why;
+    if (!FollowPair(img, o, c, r.edges[c.left].sign, r.edges[c.right].sign, &g, &why)) {
+      c.verdict = why;
+      if (first_reason.empty()) first_reason = why;
+      continue;
+    }
+    if (r.chosen < 0) {
+      r.chosen = i;
+      r.geometry = g;
+      c.verdict = "chosen";
+      continue;
+    }
+    // A second pair that holds up: ambiguous when it is a separate object of similar score.
+    const PairCandidate& b = r.candidates[r.chosen];
+    const bool shares = c.left == b.left || c.left == b.right || c.right == b.left ||
+                        c.right == b.right;
+    const auto [bl, br] = Interval(b, b.axis);
+    const auto [cl, cr] = Interval(c, b.axis);
+    const bool disjoint = !shares && (cr < bl || cl > br);
+    if (disjoint && c.score >= o.ambiguity_ratio * b.score) {
+      c.verdict = "as likely as the chosen pair";
+      r.status = FrameStatus::kAmbiguous;
+      r.detail = fmt::format("two strand-like pairs of similar score: {} and {}", Describe(b),
+                             Describe(c));
+      return r;
+    }
+    c.verdict = fmt::format("scores {:.0f} % of the chosen pair", 100 * c.score / b.score);
+  }
+  if (r.chosen >= 0) {
+    r.status = FrameStatus::kValid;
+    r.detail.clear();
+    return r;
+  }
+  const PairCandidate* top = nullptr;
+  for (const auto& c : r.candidates)
+    if (!top || c.score > top->score) top = &c;
+  if (top && top->score >= o.min_score && o.target == MeasureTarget::kStrand &&
+      first_reason.find("tip") != std::string::npos) {
+    r.status = FrameStatus::kNoTip;
+    r.detail = fmt::format("best pair ({}): {}", Describe(*top), first_reason);
+    return r;
+  }
+  if (CutByBorder(img, r.edges, o.min_length_px)) {
+    r.status = FrameStatus::kTouchesBorder;
+    r.detail = "a long object runs into the frame or ROI side: its other edge is outside";
+    return r;
+  }
+  r.status = FrameStatus::kNoStrand;
+  if (top) {
+    r.detail = fmt::format("best pair ({}) lost: {}", Describe(*top),
+                           top->verdict.empty() ? "no better candidate" : top->verdict);
+  } else {
+    r.detail = fmt::format("no pair of parallel edges at least {:.0f} px long ({} straight edges)",
+                           o.min_length_px, r.edges.size());
+  }
+  return r;
+}
+
+}  // namespace clogscope::vision
