@@ -29,6 +29,7 @@ constexpr double kDefaultBandStartUm = 50.0;
 constexpr double kDefaultBandHeightUm = 150.0;
 constexpr double kNominalScaleUmPerPx = 3.0;
 constexpr int kVideoOverlayEvery = 25;
+constexpr double kWholeStretchPx = 1e6;  // band height that means "as far as the stretch goes"
 
 struct Row {
   std::string source;
@@ -85,10 +86,14 @@ void MeasureCommandOptions::ResolveBand() {
   }
   const double scale =
       calibration ? calibration->scale_um_per_px : scale_um_per_px.value_or(kNominalScaleUmPerPx);
+  // A filament has no tip: by default its band is the whole visible straight stretch.
+  const bool filament = strand.target == vision::MeasureTarget::kFilament;
+  const double default_start_um = filament ? 0.0 : kDefaultBandStartUm;
+  const double default_height_um = filament ? kWholeStretchPx * scale : kDefaultBandHeightUm;
   strand.band_start_px =
-      band_start_px ? *band_start_px : band_start_um.value_or(kDefaultBandStartUm) / scale;
+      band_start_px ? *band_start_px : band_start_um.value_or(default_start_um) / scale;
   strand.band_height_px =
-      band_height_px ? *band_height_px : band_height_um.value_or(kDefaultBandHeightUm) / scale;
+      band_height_px ? *band_height_px : band_height_um.value_or(default_height_um) / scale;
   if (!(strand.band_start_px >= 0)) throw std::invalid_argument("band start: must not be negative");
   if (!(strand.band_height_px >= 4)) {
     throw std::invalid_argument(
@@ -198,7 +203,7 @@ int RunMeasure(int argc, char** argv) {
   CLI::App app{"Measure the strand width in every frame of images, image directories or videos.",
                "clogscope measure"};
   MeasureCommandOptions o;
-  std::string roi, polarity = "auto";
+  std::string roi, polarity = "auto", target = "strand";
   double min_contrast_levels = 0;
   bool no_outliers = false;
   ExperimentCommandOptions exp;
@@ -230,6 +235,10 @@ int RunMeasure(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--polarity", polarity, "auto, bright (lit strand) or dark (silhouette)")
       ->capture_default_str();
+  app.add_option("--target", target,
+                 "strand (below a nozzle tip; band from the tip) or filament (no tip: feedstock, "
+                 "needle, pin; band along the whole visible stretch)")
+      ->capture_default_str();
   app.add_option("--max-blur-px", o.strand.max_blur_px,
                  "Frames blurrier than this are out of focus")
       ->capture_default_str();
@@ -243,6 +252,7 @@ int RunMeasure(int argc, char** argv) {
       "  clogscope measure step1.mp4 --calib calib.yaml --out-frames frames.csv\n"
       "  clogscope measure --manifest steps.yaml --calib calib.yaml --out results/\n"
       "  clogscope measure a.png b.png --roi 400,150,480,400 --polarity dark --out-frames f.csv\n"
+      "  clogscope measure feed.avi --target filament --out-frames filament.csv\n"
       "Exit status: 0 all inputs read, 2 some inputs unreadable, 1 nothing measured.");
   CLI11_PARSE(app, argc, argv);
   if (!exp.manifest.empty()) {
@@ -258,6 +268,7 @@ int RunMeasure(int argc, char** argv) {
   if (!roi.empty()) o.strand.roi = ParseRoi(roi);
   if (!calib_path.empty()) o.calibration = calib::ReadCalibrationFile(calib_path);
   o.strand.polarity = vision::ParsePolarity(polarity);
+  o.strand.target = vision::ParseMeasureTarget(target);
   if (app.count("--min-contrast")) {
     if (!(min_contrast_levels > 0 && min_contrast_levels < 255))
       throw std::invalid_argument("--min-contrast: must be in (0, 255) grey levels");

@@ -1,5 +1,7 @@
 #include "vision/batch.h"
 
+#include "vision/track.h"
+
 #include <condition_variable>
 #include <deque>
 #include <exception>
@@ -40,6 +42,7 @@ int MeasureFrames(FrameSource& source, const StrandMeasureOptions& options,
 
   int count = 0;
   std::exception_ptr consumer_error;
+  StrandTracker tracker(options);
   try {
     while (true) {
       InputFrame f;
@@ -56,7 +59,7 @@ int MeasureFrames(FrameSource& source, const StrandMeasureOptions& options,
         m.status = FrameStatus::kUnreadable;
         m.detail = f.error;
       } else {
-        m = MeasureStrand(f.image, options);
+        m = tracker.Measure(f.image);
         if (!f.error.empty() && m.detail.empty()) m.detail = f.error;  // e.g. damaged but decoded
       }
       on_frame(f, m);

@@ -13,6 +13,9 @@ namespace clogscope::vision {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
+// Median F statistic above which a side is fitted with shading: far beyond chance (F(1, 60) is 12
+// at 0.1 %), since compression artefacts are structured and would pass a mild test.
+constexpr double kShadingEvidence = 30.0;
 
 // Sub-pixel start for an edge fit: along the normal at s, from u_guess - half to u_guess + half in
 // half-pixel steps, the crossing of the local mid-level (between the profile's extremes) nearest to
@@ -48,6 +51,7 @@ double RefineEdgeGuess(const GreyImage& img, const AxisFrame& f, double s, doubl
 
 struct CaliperFit {
   EdgeFit left, right;
+  EdgeFit left_shaded, right_shaded;  // while the model is undecided
   bool inside_roi = true;
   int saturated = 0;
   int samples = 0;
@@ -146,6 +150,9 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   m->calipers_total = n_cal;
 
   std::vector<CaliperFit> fits(n_cal);
+  // Per side (left, right): −1 undecided, 0 plain blurred step, 1 shaded step.
+  int shade[2] = {opt.shading ? g.shading_left : 0, opt.shading ? g.shading_right : 0};
+  std::vector<double> shade_evidence[2];
   std::vector<EdgeSample> samples;
   samples.reserve(512);
   double sigma_guess = 1.5;
@@ -170,7 +177,11 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   // edge.
   constexpr int kMaxPasses = 4;
   for (int pass = 0; pass < kMaxPasses; ++pass) {
-    const double outer = std::max(6.5, 3.0 * sigma_guess + 2.5);
+    double outer = std::max(6.5, 3.0 * sigma_guess + 2.5);
+    // A guess from the scene (a gradient peak) lies inside a shaded silhouette by a few px: the
+    // first pass looks wider so that both plateaus are in its windows.
+    // The shading model needs room to see the ramp's shape, too.
+    if ((pass == 0 && !g.precise) || shade[0] != 0 || shade[1] != 0) outer = std::max(outer, 10.0);
     const double inner = std::min(outer, std::max(4.0, 0.3 * width0));
     total_samples = total_saturated = 0;
     border = false;
@@ -189,16 +200,48 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
           break;
         }
         cf.samples += static_cast<int>(samples.size());
-        EdgeFit fit = FitBlurredStep(samples, e0, sigma_guess, e0);
         // Reject fits that wandered out of their window or have the wrong sign of step.
-        const bool in_window = fit.edge_px > u0 + 1.0 && fit.edge_px < u1 - 1.0;
         const int expected = side == 0 ? g.left_sign : g.right_sign;
-        if (!(in_window && fit.step * expected > 0)) fit.converged = false;
+        const auto usable = [&](const EdgeFit& fit) {
+          return fit.converged && fit.edge_px > u0 + 1.0 && fit.edge_px < u1 - 1.0 &&
+                 fit.contrast * expected > 0;
+        };
+        // The shading model only where the side is known (or may turn out) to be shaded: on a
+        // plain edge its extra parameter costs precision for nothing.
+        const int model = shade[side];
+        EdgeFit plain, shaded;
+        if (model != 1) plain = FitBlurredStep(samples, e0, sigma_guess, e0);
+        if (model != 0) shaded = FitShadedStep(samples, e0, sigma_guess, e0, side == 0 ? 1 : -1);
+        if (!usable(plain)) plain.converged = false;
+        if (!usable(shaded)) shaded.converged = false;
+        if (model < 0) {
+          // Evidence for shading: how much the extra term lowers the residuals, in units of the
+          // residual variance (an F statistic with 1 and n − 6 degrees of freedom). An edge only
+          // the shaded model describes counts as strong evidence.
+          double evidence = 0;
+          if (shaded.converged && !plain.converged) {
+            evidence = 1e9;
+          } else if (shaded.converged && plain.converged && shaded.samples > 6) {
+            const double rss_p = plain.rms * plain.rms * plain.samples;
+            const double rss_s = shaded.rms * shaded.rms * shaded.samples;
+            evidence = (rss_p - rss_s) / std::max(1e-12, rss_s / (shaded.samples - 6));
+          }
+          if (plain.converged || shaded.converged) shade_evidence[side].push_back(evidence);
+        }
+        (side == 0 ? cf.left_shaded : cf.right_shaded) = shaded;
+        const EdgeFit fit = model == 1 || (model < 0 && !plain.converged) ? shaded : plain;
         (side == 0 ? cf.left : cf.right) = fit;
       }
       if (!cf.inside_roi) border = true;
       total_samples += cf.samples;
       total_saturated += cf.saturated;
+    }
+    // After the first pass each undecided side settles on one model for all its calipers.
+    for (int side = 0; side < 2; ++side) {
+      if (shade[side] >= 0) continue;
+      shade[side] = Median(shade_evidence[side]) > kShadingEvidence ? 1 : 0;
+      if (shade[side] == 0) continue;
+      for (auto& cf : fits) (side == 0 ? cf.left : cf.right) = side == 0 ? cf.left_shaded : cf.right_shaded;
     }
     const EdgeLines lines = FitEdgeLines(fits, band_s0, opt.caliper_spacing_px);
     if (lines.calipers < 2) {
@@ -244,9 +287,10 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     c.left_u_px = fits[k].left.edge_px;
     c.right_u_px = fits[k].right.edge_px;
     c.width_px = (c.right_u_px - c.left_u_px) * cos_d;
+    c.width_sigma_px = std::hypot(fits[k].left.edge_sigma_px, fits[k].right.edge_sigma_px) * cos_d;
     cal_widths.push_back(c.width_px);
-    steps.push_back(std::abs(fits[k].left.step));
-    steps.push_back(std::abs(fits[k].right.step));
+    steps.push_back(std::abs(fits[k].left.contrast));
+    steps.push_back(std::abs(fits[k].right.contrast));
     for (const EdgeFit* e : {&fits[k].left, &fits[k].right}) {
       // The fitted width holds the PSF and the pixel footprint, whose variance across any straight
       // edge is 1/12 px² whatever its tilt.
@@ -254,6 +298,8 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     }
   }
   m->has_geometry = true;
+  m->shading_left = shade[0] == 1;
+  m->shading_right = shade[1] == 1;
   m->axis_dx = f.dx;
   m->axis_dy = f.dy;
   m->left_u0_px = left_guess;
@@ -289,8 +335,11 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   }
 
   // The coarse width comes from the whole pair, most of it outside the band: a blob covering one
-  // edge over the band makes the band's edges agree with each other but not with the strand.
-  if (std::abs(m->width_px - width0) > std::max(3.0, 0.04 * width0)) {
+  // edge over the band makes the band's edges agree with each other but not with the strand. A
+  // filament's band is the whole stretch: there is no elsewhere, and occlusion shows as calipers
+  // that disagree.
+  const bool filament = opt.target == MeasureTarget::kFilament;
+  if (!filament && std::abs(m->width_px - width0) > std::max(3.0, 0.04 * width0)) {
     return fail(
         FrameStatus::kOccluded,
         fmt::format("width in the band {:.1f} px disagrees with the strand's {:.1f} px elsewhere",
@@ -302,7 +351,11 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   if (m->blur_px > opt.max_blur_px)
     return fail(FrameStatus::kOutOfFocus,
                 fmt::format("edge blur {:.2f} px above {:.2f} px", m->blur_px, opt.max_blur_px));
-  if (used < opt.min_caliper_fraction * n_cal)
+  // A filament's band is its whole visible stretch, parts of which a drive gear or a guide may
+  // hide: a quarter of it (at least 8 calipers) will do. A strand's short band must be clean.
+  const double min_used = filament ? std::max(8.0, 0.5 * opt.min_caliper_fraction * n_cal)
+                                   : opt.min_caliper_fraction * n_cal;
+  if (used < min_used)
     return fail(FrameStatus::kOccluded, fmt::format("{} of {} calipers consistent", used, n_cal));
   m->status = FrameStatus::kValid;
   m->detail.clear();

@@ -20,6 +20,10 @@ struct EdgeFit {
   double step = 0;           // signed: value far at +u minus value far at −u
   double base = 0;
   double slope_per_px = 0;
+  double shading = 0;  // FitShadedStep: amplitude of the blurred √d ramp on the object side
+  // Signed like `step`: the model's change from the outside to 2σ inside the object, shading
+  // included (equals `step` without shading). A shaded edge may have almost no step at all.
+  double contrast = 0;
   double rms = 0;  // residual RMS, grey levels
   int samples = 0;
   int iterations = 0;
@@ -31,6 +35,15 @@ struct EdgeFit {
 // 5-parameter dense solve costs less than Ceres' per-problem set-up.
 EdgeFit FitBlurredStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
                        double sigma_guess_px, double u_ref);
+
+// The blurred step with a lit cylinder's shading on the object side:
+//   value(u) = base + slope·(u − u_ref) + step·Φ(z) + shading·G(ι·z),  z = (u − edge_px)/sigma_px,
+// G the unit-blurred √d ramp (a Lambertian cylinder brightens like √d inward from its silhouette)
+// and ι = object_side (+1: the object lies at +u). edge_px is then the silhouette itself, not the
+// 50 % level of a sloping plateau. With no shading present the fit returns shading ≈ 0 and the
+// same edge as FitBlurredStep.
+EdgeFit FitShadedStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
+                      double sigma_guess_px, double u_ref, int object_side);
 
 // Fit of a thin line's profile, value(u) = base + slope·(u − centre_guess) + depth·exp(−z²/2),
 // z = (u − centre)/width. The result's edge_px is the line centre, sigma_px its Gaussian width,

@@ -59,6 +59,7 @@ struct Detection {
   int row_step = 2;  // small px between sampled rows
   double noise = 0;  // σ of the horizontal gradient from noise, grey per small px
   std::vector<std::vector<EdgePoint>> rows;
+  std::vector<float> row_y;
 };
 
 Detection DetectEdgePoints(const cv::Mat& channel, const SceneOptions& o) {
@@ -76,14 +77,22 @@ Detection DetectEdgePoints(const cv::Mat& channel, const SceneOptions& o) {
   cv::Sobel(f32, gx, CV_32F, 1, 0, 3, 1.0 / 8, 0, cv::BORDER_REPLICATE);
   cv::Sobel(f32, gy, CV_32F, 0, 1, 3, 1.0 / 8, 0, cv::BORDER_REPLICATE);
 
-  // Noise of the gradient from the median |gx| of the sampled rows: edges are a small minority of
-  // pixels, so the median sees noise and texture.
-  std::vector<double> mags;
-  for (int y = d.row_step / 2; y < gx.rows; y += d.row_step) {
-    const float* g = gx.ptr<float>(y);
-    for (int x = 1; x < gx.cols - 1; x += 2) mags.push_back(std::abs(g[x]));
+  // Pixel noise by Immerkær's mask [1 −2 1; −2 4 −2; 1 −2 1] (σ of its response is 6σ for white
+  // noise), robustly through the median: a second difference hardly sees smooth texture or
+  // straight edges, whereas a median gradient would count a textured scene as noise. The Sobel
+  // gradient scaled by 1/8 carries 0.433σ of it.
+  std::vector<double> lap;
+  for (int y = std::max(1, d.row_step / 2); y + 1 < f32.rows; y += d.row_step) {
+    const float* a = f32.ptr<float>(y - 1);
+    const float* b = f32.ptr<float>(y);
+    const float* c = f32.ptr<float>(y + 1);
+    for (int x = 1; x + 1 < f32.cols; x += 2) {
+      lap.push_back(std::abs(a[x - 1] - 2 * a[x] + a[x + 1] - 2 * (b[x - 1] - 2 * b[x] + b[x + 1]) +
+                             c[x - 1] - 2 * c[x] + c[x + 1]));
+    }
   }
-  d.noise = std::max(1.4826 * Median(mags), o.min_contrast / 60.0);
+  const double pixel_noise = Median(lap) / (0.6745 * 6.0);
+  d.noise = std::max(0.433 * pixel_noise, o.min_contrast / 60.0);
   // An edge of the weakest accepted step at the largest blur still rises above this.
   const float threshold = static_cast<float>(std::max(5.0 * d.noise, o.min_contrast / 8.0));
   const float tan_max = static_cast<float>(std::tan(std::min(85.0, o.max_tilt_deg + 10) * kDegToRad));
@@ -117,6 +126,7 @@ Detection DetectEdgePoints(const cv::Mat& channel, const SceneOptions& o) {
       pts.push_back({static_cast<float>(sx / sw), static_cast<float>(y), a, g[x] > 0 ? 1 : -1});
     }
     d.rows.push_back(std::move(pts));
+    d.row_y.push_back(static_cast<float>(y));
   }
   return d;
 }
@@ -284,57 +294,172 @@ Polarity PairPolarity(int left_sign, int right_sign) {
   return Polarity::kMixed;
 }
 
-// Scores every pair of long segments as a strand silhouette.
-std::vector<PairCandidate> PairSegments(const std::vector<EdgeSegment>& edges, double noise_full,
-                                        int roi_width, const SceneOptions& o) {
-  std::vector<PairCandidate> out;
+// Two edges as a strand silhouette: geometry and score, or false when they are not parallel, too
+// short together, too narrow or too wide. `left`/`right` in the result are 0 and 1 (a and b).
+bool MakeCandidate(const EdgeSegment& a, const EdgeSegment& b, double noise_full, int roi_width,
+                   double min_overlap, const SceneOptions& o, PairCandidate* out) {
+  const cv::Point2d da = (a.bottom - a.top) / a.length_px();
+  const cv::Point2d db = (b.bottom - b.top) / b.length_px();
+  const double min_len = std::min(a.length_px(), b.length_px());
+  const double dangle = std::abs(std::atan2(da.x, da.y) - std::atan2(db.x, db.y));
+  if (dangle > std::max(3.0 * kDegToRad, std::atan(3.0 / min_len))) return false;
+  cv::Point2d dir = a.length_px() * da + b.length_px() * db;
+  dir /= cv::norm(dir);
+  if (std::abs(std::atan2(dir.x, dir.y)) > o.max_tilt_deg * kDegToRad) return false;
+  AxisFrame ax{0.25 * (a.top.x + a.bottom.x + b.top.x + b.bottom.x),
+               0.25 * (a.top.y + a.bottom.y + b.top.y + b.bottom.y), dir.x, dir.y};
+  LineInAxis la = InAxis(a, ax), lb = InAxis(b, ax);
+  int li = 0, ri = 1;
+  if (la.U(0.5 * (la.s0 + la.s1)) > lb.U(0.5 * (lb.s0 + lb.s1))) {
+    std::swap(la, lb);
+    std::swap(li, ri);
+  }
+  const double s0 = std::max(la.s0, lb.s0), s1 = std::min(la.s1, lb.s1);
+  const double len = s1 - s0;
+  if (len < min_overlap) return false;
+  const double w0 = lb.U(s0) - la.U(s0), w1 = lb.U(s1) - la.U(s1);
+  const double width = 0.5 * (w0 + w1);
+  if (width < o.min_width_px || width > 0.9 * roi_width) return false;
+  if (std::abs(w1 - w0) > std::max(2.0, 0.03 * width)) return false;  // not parallel enough
+  const EdgeSegment& L = li == 0 ? a : b;
+  const EdgeSegment& R = li == 0 ? b : a;
+  const Polarity pol = PairPolarity(L.sign, R.sign);
+  if (o.polarity != Polarity::kAuto && pol != o.polarity) return false;
+  PairCandidate c;
+  c.left = li;
+  c.right = ri;
+  c.polarity = pol;
+  c.length_px = len;
+  c.width_px = width;
+  c.snr = std::min(L.strength, R.strength) / noise_full;
+  // Length and continuity first; contrast with diminishing returns (a highlight stripe inside a
+  // strand is as long as the strand but weaker).
+  c.score = len * 0.5 * (L.coverage + R.coverage) * c.snr / (c.snr + 10.0) *
+            (pol == Polarity::kMixed ? kMixedPenalty : 1.0);
+  // Origin on the axis at the top of the common stretch.
+  const double uc = 0.5 * (la.U(s0) + lb.U(s0));
+  c.axis = {ax.ImageX(s0, uc), ax.ImageY(s0, uc), dir.x, dir.y};
+  c.left_u0 = la.U(s0) - uc;
+  c.right_u0 = lb.U(s0) - uc;
+  c.edge_slope = 0.5 * ((la.U(s1) - la.U(s0)) + (lb.U(s1) - lb.U(s0))) / len;
+  *out = c;
+  return true;
+}
+
+// Re-counts a seed pair's support from every edge point near its two lines (same sign), not only
+// the segments it came from: a jagged or broken edge (gear teeth, a reflection) arrives as many
+// short pieces along one line. Keeps the longest run of rows where both edges are present (short
+// gaps allowed) and refits both lines there. Returns the two edges, or false without a run.
+bool ExtendPair(const Detection& d, const EdgeSegment& a, const EdgeSegment& b,
+                EdgeSegment* ea, EdgeSegment* eb) {
+  const double f = d.factor, off = 0.5 * (d.factor - 1);
+  struct Line {
+    double a, b;
+    int sign;
+  };
+  auto to_small = [&](const EdgeSegment& e) {
+    const double y0 = (e.top.y - off) / f, y1 = (e.bottom.y - off) / f;
+    const double x0 = (e.top.x - off) / f, x1 = (e.bottom.x - off) / f;
+    const double slope = y1 > y0 ? (x1 - x0) / (y1 - y0) : 0.0;
+    return Line{x0 - slope * y0, slope, e.sign};
+  };
+  Line lines[2] = {to_small(a), to_small(b)};
+  constexpr double kTolPx = 2.0;  // small px either side of the line
+  constexpr int kMaxGapRows = 6;
+  const int n = static_cast<int>(d.rows.size());
+  std::vector<const EdgePoint*> hit[2];
+  for (int pass = 0; pass < 2; ++pass) {
+    for (int side = 0; side < 2; ++side) {
+      hit[side].assign(n, nullptr);
+      const Line& l = lines[side];
+      for (int r = 0; r < n; ++r) {
+        const double x = l.a + l.b * d.row_y[r];
+        const auto& pts = d.rows[r];
+        auto it = std::lower_bound(pts.begin(), pts.end(), x - kTolPx,
+                                   [](const EdgePoint& p, double v) { return p.x < v; });
+        double best = kTolPx;
+        for (; it != pts.end() && it->x <= x + kTolPx; ++it) {
+          if (it->sign == l.sign && std::abs(it->x - x) <= best) {
+            best = std::abs(it->x - x);
+            hit[side][r] = &*it;
+          }
+        }
+      }
+    }
+    // The longest run of rows where both are present, gaps of up to kMaxGapRows.
+    int best_lo = -1, best_hi = -1, best_count = 0, lo = -1, last = -1, count = 0;
+    for (int r = 0; r <= n; ++r) {
+      const bool both = r < n && hit[0][r] && hit[1][r];
+      if (r == n || (both && last >= 0 && r - last - 1 > kMaxGapRows)) {
+        if (count > best_count) {
+          best_count = count;
+          best_lo = lo;
+          best_hi = last;
+        }
+        lo = -1;
+        count = 0;
+      }
+      if (both) {
+        if (lo < 0) lo = r;
+        last = r;
+        ++count;
+      }
+    }
+    if (best_count < kMinPiecePoints) return false;
+    // Refit both lines on the run's points.
+    for (int side = 0; side < 2; ++side) {
+      Piece p;
+      p.sign = lines[side].sign;
+      for (int r = best_lo; r <= best_hi; ++r)
+        if (hit[0][r] && hit[1][r]) p.pts.push_back(*hit[side][r]);
+      p.Fit();
+      lines[side] = {p.a, p.b, p.sign};
+      if (pass == 1) {
+        EdgeSegment& e = side == 0 ? *ea : *eb;
+        e = ToSegment(p, d);
+        e.coverage = best_count / (best_hi - best_lo + 1.0);
+      }
+    }
+  }
+  return true;
+}
+
+// Scores pairs of long segments as strand silhouettes: every parallel, overlapping pair seeds two
+// lines, whose support is then counted over all edge points (ExtendPair).
+std::vector<PairCandidate> PairSegments(const Detection& d, const std::vector<EdgeSegment>& edges,
+                                        double noise_full, int roi_width, const SceneOptions& o) {
+  std::vector<PairCandidate> seeds;
   for (size_t i = 0; i < edges.size(); ++i) {
     for (size_t j = i + 1; j < edges.size(); ++j) {
-      const EdgeSegment& a = edges[i];
-      const EdgeSegment& b = edges[j];
-      const cv::Point2d da = (a.bottom - a.top) / a.length_px();
-      const cv::Point2d db = (b.bottom - b.top) / b.length_px();
-      const double min_len = std::min(a.length_px(), b.length_px());
-      const double dangle = std::abs(std::atan2(da.x, da.y) - std::atan2(db.x, db.y));
-      if (dangle > std::max(3.0 * kDegToRad, std::atan(3.0 / min_len))) continue;
-      cv::Point2d dir = a.length_px() * da + b.length_px() * db;
-      dir /= cv::norm(dir);
-      AxisFrame ax{0.25 * (a.top.x + a.bottom.x + b.top.x + b.bottom.x),
-                   0.25 * (a.top.y + a.bottom.y + b.top.y + b.bottom.y), dir.x, dir.y};
-      LineInAxis la = InAxis(a, ax), lb = InAxis(b, ax);
-      int li = static_cast<int>(i), ri = static_cast<int>(j);
-      if (la.U(0.5 * (la.s0 + la.s1)) > lb.U(0.5 * (lb.s0 + lb.s1))) {
-        std::swap(la, lb);
-        std::swap(li, ri);
-      }
-      const double s0 = std::max(la.s0, lb.s0), s1 = std::min(la.s1, lb.s1);
-      const double len = s1 - s0;
-      if (len < o.min_length_px) continue;
-      const double w0 = lb.U(s0) - la.U(s0), w1 = lb.U(s1) - la.U(s1);
-      const double width = 0.5 * (w0 + w1);
-      if (width < o.min_width_px || width > 0.9 * roi_width) continue;
-      if (std::abs(w1 - w0) > std::max(2.0, 0.03 * width)) continue;  // not parallel enough
-      const EdgeSegment& L = edges[li];
-      const EdgeSegment& R = edges[ri];
-      const Polarity pol = PairPolarity(L.sign, R.sign);
-      if (o.polarity != Polarity::kAuto && pol != o.polarity) continue;
       PairCandidate c;
-      c.left = li;
-      c.right = ri;
-      c.polarity = pol;
-      c.length_px = len;
-      c.width_px = width;
-      c.snr = std::min(L.strength, R.strength) / noise_full;
-      c.score = len * 0.5 * (L.coverage + R.coverage) * std::min(1.0, c.snr / 20.0) *
-                (pol == Polarity::kMixed ? kMixedPenalty : 1.0);
-      // Origin on the axis at the top of the common stretch.
-      const double uc = 0.5 * (la.U(s0) + lb.U(s0));
-      c.axis = {ax.ImageX(s0, uc), ax.ImageY(s0, uc), dir.x, dir.y};
-      c.left_u0 = la.U(s0) - uc;
-      c.right_u0 = lb.U(s0) - uc;
-      c.edge_slope = 0.5 * ((la.U(s1) - la.U(s0)) + (lb.U(s1) - lb.U(s0))) / len;
-      out.push_back(c);
+      if (!MakeCandidate(edges[i], edges[j], noise_full, roi_width, 0.5 * o.min_length_px, o, &c))
+        continue;
+      c.left = c.left == 0 ? static_cast<int>(i) : static_cast<int>(j);
+      c.right = c.right == 0 ? static_cast<int>(i) : static_cast<int>(j);
+      seeds.push_back(c);
     }
+  }
+  std::sort(seeds.begin(), seeds.end(),
+            [](const PairCandidate& a, const PairCandidate& b) { return a.score > b.score; });
+  std::vector<PairCandidate> out;
+  for (size_t k = 0; k < seeds.size() && k < 3 * kMaxCandidates; ++k) {
+    EdgeSegment el, er;
+    if (!ExtendPair(d, edges[seeds[k].left], edges[seeds[k].right], &el, &er)) continue;
+    PairCandidate c;
+    if (!MakeCandidate(el, er, noise_full, roi_width, o.min_length_px, o, &c)) continue;
+    c.left = seeds[k].left;
+    c.right = seeds[k].right;
+    // Seeds along the same two lines end up as one candidate: keep it once.
+    bool duplicate = false;
+    for (const auto& e : out) {
+      if (std::abs(e.width_px - c.width_px) < 1.0 &&
+          std::abs(e.axis.U(c.axis.ox, c.axis.oy)) < 1.0 &&
+          std::abs(e.axis.dx * c.axis.dy - e.axis.dy * c.axis.dx) < 0.01) {
+        duplicate = true;
+        break;
+      }
+    }
+    if (!duplicate) out.push_back(c);
   }
   std::sort(out.begin(), out.end(),
             [](const PairCandidate& a, const PairCandidate& b) { return a.score > b.score; });
@@ -359,13 +484,16 @@ void SuppressNested(std::vector<PairCandidate>* cands) {
   for (size_t i = 0; i < c.size(); ++i) {
     for (size_t j = 0; j < c.size(); ++j) {
       if (i == j || !c[j].verdict.empty()) continue;
-      if (c[i].width_px <= c[j].width_px + 1.0) continue;
+      if (c[i].width_px <= c[j].width_px + 3.0) continue;
+      // Strictly inside on both sides: a pair sharing one edge is an alternative, not a detail.
       const auto [l, r] = Interval(c[j], c[i].axis);
       const auto [ol, orr] = Interval(c[i], c[i].axis);
-      if (l < ol - 0.5 || r > orr + 0.5) continue;
+      if (l < ol + 1.5 || r > orr - 1.5) continue;
       const double sj = c[i].axis.S(c[j].axis.ox, c[j].axis.oy);
-      if (sj > c[i].length_px || sj + c[j].length_px < 0) continue;  // not beside each other
-      if (c[i].score >= 0.3 * c[j].score)
+      const double overlap =
+          std::min(sj + c[j].length_px, c[i].length_px) - std::max(sj, 0.0);
+      if (overlap < 0.5 * c[j].length_px) continue;
+      if (c[i].score >= 0.8 * c[j].score)
         c[j].verdict = fmt::format("inside a wider pair ({:.1f} px)", c[i].width_px);
     }
   }
@@ -561,7 +689,7 @@ SceneResult FindScene(const std::vector<cv::Mat>& channels, const SceneOptions& 
       EdgeSegment s = ToSegment(p, d);
       if (s.length_px() >= o.min_length_px) r.edges.push_back(s);
     }
-    r.candidates = PairSegments(r.edges, r.gradient_noise, channels[ch].cols, o);
+    r.candidates = PairSegments(d, r.edges, r.gradient_noise, channels[ch].cols, o);
     SuppressNested(&r.candidates);
     double top = 0;
     for (const auto& c : r.candidates)
@@ -607,7 +735,8 @@ SceneResult FindScene(const std::vector<cv::Mat>& channels, const SceneOptions& 
     const auto [bl, br] = Interval(b, b.axis);
     const auto [cl, cr] = Interval(c, b.axis);
     const bool disjoint = !shares && (cr < bl || cl > br);
-    if (disjoint && c.score >= o.ambiguity_ratio * b.score) {
+    // Two strands in one view look alike; a gap between objects (a mixed pair) is another thing.
+    if (disjoint && c.polarity == b.polarity && c.score >= o.ambiguity_ratio * b.score) {
       c.verdict = "as likely as the chosen pair";
       r.status = FrameStatus::kAmbiguous;
       r.detail = fmt::format("two strand-like pairs of similar score: {} and {}", Describe(b),

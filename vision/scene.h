@@ -17,7 +17,7 @@ struct SceneOptions {
   Polarity polarity = Polarity::kAuto;  // forced: only pairs of that polarity count
   double max_tilt_deg = 45.0;           // axes leaning more than this from vertical are ignored
   double min_length_px = 30.0;          // shortest common stretch of the two edges
-  double min_width_px = 4.0;
+  double min_width_px = 8.0;            // narrower pairs are lines (scratches, glints), not strands
   double min_contrast = 15.0;     // edge step below this (grey levels of the data's range): too weak
   double ambiguity_ratio = 0.8;   // a disjoint runner-up scoring this much of the best: ambiguous
   double min_score = 15.0;        // below this no candidate is a strand (score units: px of edge)
@@ -54,6 +54,10 @@ struct StrandGeometry {
   int left_sign = 0, right_sign = 0;
   Polarity polarity = Polarity::kAuto;
   bool has_tip = false;
+  bool precise = false;    // edge lines from fitted calipers (tracking), not from the gradient
+  // Edge model per side: −1 decide from the calipers, 0 plain blurred step, 1 shaded (tracking
+  // keeps the first frame's decision).
+  int shading_left = -1, shading_right = -1;
   double s_end = 0;        // where the pair ends downward (bed, obstacle or border), from origin
   bool end_is_object = false;  // the pair ends at an object (bed) rather than the border
   double score = 0;

@@ -12,11 +12,7 @@
 #include "vision/scene.h"
 
 namespace clogscope::vision {
-namespace {
-
-// The views of the ROI the strand is looked for in: the grey frame, or a colour frame's luma and
-// its three channels (an orange strand on a blue background may show no luma edge at all).
-std::vector<cv::Mat> Channels(const cv::Mat& frame, const cv::Rect& roi) {
+std::vector<cv::Mat> SearchChannels(const cv::Mat& frame, const cv::Rect& roi) {
   if (frame.depth() != CV_8U && frame.depth() != CV_16U) {
     throw std::invalid_argument("frame: unsupported pixel depth (need 8- or 16-bit integer)");
   }
@@ -34,7 +30,34 @@ std::vector<cv::Mat> Channels(const cv::Mat& frame, const cv::Rect& roi) {
   return out;
 }
 
-}  // namespace
+cv::Mat SearchChannel(const cv::Mat& frame, const cv::Rect& roi, int index) {
+  if (frame.channels() == 1 || index == 0) return SearchChannels(frame, roi)[0];
+  cv::Mat out;
+  cv::extractChannel(frame(roi), out, index - 1);
+  return out;
+}
+
+cv::Rect ResolveRoi(const cv::Mat& frame, const StrandMeasureOptions& opt) {
+  std::string why;
+  if (!opt.Validate(&why)) throw std::invalid_argument("measure options: " + why);
+  if (frame.empty()) throw std::invalid_argument("frame: empty image");
+  const cv::Rect roi = opt.roi.empty() ? cv::Rect(0, 0, frame.cols, frame.rows) : opt.roi;
+  if ((roi & cv::Rect(0, 0, frame.cols, frame.rows)) != roi) {
+    throw std::invalid_argument(fmt::format("--roi {},{},{},{} lies outside the {}x{} frame", roi.x,
+                                            roi.y, roi.width, roi.height, frame.cols, frame.rows));
+  }
+  return roi;
+}
+
+SceneOptions SceneOptionsFor(const StrandMeasureOptions& opt, double data_max) {
+  SceneOptions so;
+  so.target = opt.target;
+  so.polarity = opt.polarity;
+  so.max_tilt_deg = opt.max_tilt_deg;
+  so.min_length_px = opt.min_length_px;
+  so.min_contrast = opt.min_contrast_fraction * data_max;
+  return so;
+}
 
 double DataMax(const cv::Mat& image) {
   if (image.depth() != CV_16U) return 255.0;
@@ -73,33 +96,21 @@ bool StrandMeasureOptions::Validate(std::string* why) const {
 }
 
 StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions& opt) {
-  std::string why;
-  if (!opt.Validate(&why)) throw std::invalid_argument("measure options: " + why);
-  if (frame.empty()) throw std::invalid_argument("frame: empty image");
-  const cv::Rect roi = opt.roi.empty() ? cv::Rect(0, 0, frame.cols, frame.rows) : opt.roi;
-  if ((roi & cv::Rect(0, 0, frame.cols, frame.rows)) != roi) {
-    throw std::invalid_argument(fmt::format("--roi {},{},{},{} lies outside the {}x{} frame", roi.x,
-                                            roi.y, roi.width, roi.height, frame.cols, frame.rows));
-  }
-  const std::vector<cv::Mat> channels = Channels(frame, roi);
+  const cv::Rect roi = ResolveRoi(frame, opt);
+  const std::vector<cv::Mat> channels = SearchChannels(frame, roi);
   const double data_max = DataMax(frame(roi));
-  SceneOptions so;
-  so.target = opt.target;
-  so.polarity = opt.polarity;
-  so.max_tilt_deg = opt.max_tilt_deg;
-  so.min_length_px = opt.min_length_px;
-  so.min_contrast = opt.min_contrast_fraction * data_max;
-  const SceneResult scene = FindScene(channels, so);
-  return MeasureInScene(channels[scene.channel], data_max, scene, roi, opt);
+  const SceneResult scene = FindScene(channels, SceneOptionsFor(opt, data_max));
+  return MeasureInScene(channels[scene.channel], data_max, scene.status, scene.detail,
+                        scene.geometry, roi, opt);
 }
 
-StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, const SceneResult& scene,
+StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameStatus status,
+                                 const std::string& detail, const StrandGeometry& g,
                                  const cv::Rect& roi, const StrandMeasureOptions& opt) {
   StrandMeasurement m;
-  m.status = scene.status;
-  m.detail = scene.detail;
-  if (scene.status != FrameStatus::kValid) return m;
-  const StrandGeometry& g = scene.geometry;
+  m.status = status;
+  m.detail = detail;
+  if (status != FrameStatus::kValid) return m;
   m.polarity = g.polarity;
   m.tip_x_px = g.axis.ox + roi.x;
   m.tip_y_px = g.axis.oy + roi.y;

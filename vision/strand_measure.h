@@ -26,6 +26,9 @@ struct StrandMeasureOptions {
   // band_height_px along it (at most to its end).
   MeasureTarget target = MeasureTarget::kStrand;
   double min_length_px = 30.0;  // shortest straight stretch of both edges that counts as a strand
+  // Fit a lit cylinder's shading on the object side of each edge (edge_fit.h: FitShadedStep), so
+  // a front-lit strand's silhouette is found rather than the 50 % level of its sloping plateau.
+  bool shading = true;
   double min_caliper_fraction = 0.5;     // fewer consistent calipers than this: occluded
   double max_saturated_fraction = 0.05;  // more clipped pixels at the edges than this: saturated
 
@@ -38,6 +41,7 @@ struct Caliper {
   double left_u_px = 0;  // fitted edges
   double right_u_px = 0;
   double width_px = 0;  // perpendicular width (edges corrected for the axis tilt)
+  double width_sigma_px = 0;  // its standard error from the two edge fits' residuals
   bool fitted = false;  // both edges fitted
   bool inlier = false;  // used in the frame's width
 };
@@ -62,6 +66,7 @@ struct StrandMeasurement {
   // Measurement frame for overlays: origin at the tip, axis direction (down the strand), and the
   // fitted edge lines u = left_u0_px + edge_slope·s (right likewise) in that frame.
   bool has_geometry = false;
+  bool shading_left = false, shading_right = false;  // each side fitted with the shading model
   double axis_dx = 0, axis_dy = 1;
   double band_start_px = 0, band_end_px = 0;
   double left_u0_px = 0, right_u0_px = 0, edge_slope = 0;
@@ -75,11 +80,27 @@ struct StrandMeasurement {
 // type or options that do not validate.
 StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions& options);
 
-struct SceneResult;
-// The second half of MeasureStrand: the band and calipers in a scene already found in `channel`
-// (the ROI view the scene chose). Tracking calls it with a scene followed from the last frame.
-StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, const SceneResult& scene,
+struct StrandGeometry;
+struct SceneOptions;
+// The second half of MeasureStrand: the band and calipers on a strand already found in `channel`
+// (the ROI view the scene chose). A status other than kValid is passed through with its detail.
+// Tracking calls it with the geometry of the last frame.
+StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameStatus status,
+                                 const std::string& detail, const StrandGeometry& geometry,
                                  const cv::Rect& roi, const StrandMeasureOptions& options);
+
+// The ROI views the strand is looked for in: the grey frame, or a colour frame's luma and its B, G
+// and R channels (an orange strand on a blue background may show no luma edge at all); and one of
+// them by index.
+std::vector<cv::Mat> SearchChannels(const cv::Mat& frame, const cv::Rect& roi);
+cv::Mat SearchChannel(const cv::Mat& frame, const cv::Rect& roi, int index);
+
+// The options' ROI, or the whole frame; throws std::invalid_argument when the options do not
+// validate, the frame is empty or the ROI leaves it.
+cv::Rect ResolveRoi(const cv::Mat& frame, const StrandMeasureOptions& options);
+
+// Scene-finding options from the measurement options and the data's range.
+SceneOptions SceneOptionsFor(const StrandMeasureOptions& options, double data_max);
 
 // The largest value the frame's data can hold: 255 for 8 bit; for 16 bit, 2^b − 1 for the smallest
 // b (8…16) that holds its largest pixel (12-bit cameras write 16-bit files).
