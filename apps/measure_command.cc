@@ -245,6 +245,9 @@ int RunMeasure(int argc, char** argv) {
   app.add_option("--min-contrast", min_contrast_levels,
                  "Minimum edge contrast in 8-bit grey levels (default 15)");
   app.add_flag("--no-outlier-flags", no_outliers, "Do not mark width outliers between frames");
+  bool no_shading = false;
+  app.add_flag("--no-shading", no_shading,
+               "Fit every edge as a plain blurred step (no shading term for front-lit strands)");
   app.footer(
       "Examples:\n"
       "  clogscope measure step1.mp4 --scale-um-per-px 3.0 --out-frames frames.csv\n"
@@ -275,6 +278,7 @@ int RunMeasure(int argc, char** argv) {
     o.strand.min_contrast_fraction = min_contrast_levels / 255.0;
   }
   o.flag_outliers = !no_outliers;
+  o.strand.shading = !no_shading;
   const MeasureSummary s = MeasureInputs(o);
   spdlog::info("{} of {} frames valid from {} input(s) in {:.2f} s; wrote {}", s.valid_frames,
                s.frames, s.inputs_ok, s.seconds, o.out_frames);

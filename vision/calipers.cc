@@ -13,9 +13,18 @@ namespace clogscope::vision {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
-// Median F statistic above which a side is fitted with shading: far beyond chance (F(1, 60) is 12
-// at 0.1 %), since compression artefacts are structured and would pass a mild test.
-constexpr double kShadingEvidence = 30.0;
+// Whether a side's calipers show shading: each caliper's F statistic for the shading term is about
+// χ²(1) without shading (mean 1, σ √2), so their mean over n calipers stays near 1 ± √(2/n).
+// Shading is taken when the mean (each F capped, so that one odd caliper cannot decide) is 6σ
+// above that, plus a margin for structured noise such as compression artefacts.
+constexpr double kMinShadingShiftPx = 0.1;
+bool ShadingEvident(const std::vector<double>& f) {
+  if (f.empty()) return false;
+  double sum = 0;
+  for (double x : f) sum += std::min(x, 50.0);
+  const double n = static_cast<double>(f.size());
+  return sum / n > 1.0 + 6.0 * std::sqrt(2.0 / n) + 10.0 / n;
+}
 
 // Sub-pixel start for an edge fit: along the normal at s, from u_guess - half to u_guess + half in
 // half-pixel steps, the crossing of the local mid-level (between the profile's extremes) nearest to
@@ -152,7 +161,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   std::vector<CaliperFit> fits(n_cal);
   // Per side (left, right): −1 undecided, 0 plain blurred step, 1 shaded step.
   int shade[2] = {opt.shading ? g.shading_left : 0, opt.shading ? g.shading_right : 0};
-  std::vector<double> shade_evidence[2];
+  std::vector<double> shade_evidence[2], shade_shift[2];
   std::vector<EdgeSample> samples;
   samples.reserve(512);
   double sigma_guess = 1.5;
@@ -218,15 +227,22 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
           // Evidence for shading: how much the extra term lowers the residuals, in units of the
           // residual variance (an F statistic with 1 and n − 6 degrees of freedom). An edge only
           // the shaded model describes counts as strong evidence.
-          double evidence = 0;
+          // And where the silhouette moves: shading pulls a plain fit inward, so the shaded edge
+          // lies outward of it; structured noise moves it either way.
+          double evidence = 0, outward = 0;
           if (shaded.converged && !plain.converged) {
             evidence = 1e9;
+            outward = 1.0;
           } else if (shaded.converged && plain.converged && shaded.samples > 6) {
             const double rss_p = plain.rms * plain.rms * plain.samples;
             const double rss_s = shaded.rms * shaded.rms * shaded.samples;
             evidence = (rss_p - rss_s) / std::max(1e-12, rss_s / (shaded.samples - 6));
+            outward = (shaded.edge_px - plain.edge_px) * (side == 0 ? -1.0 : 1.0);
           }
-          if (plain.converged || shaded.converged) shade_evidence[side].push_back(evidence);
+          if (plain.converged || shaded.converged) {
+            shade_evidence[side].push_back(evidence);
+            shade_shift[side].push_back(outward);
+          }
         }
         (side == 0 ? cf.left_shaded : cf.right_shaded) = shaded;
         const EdgeFit fit = model == 1 || (model < 0 && !plain.converged) ? shaded : plain;
@@ -239,7 +255,8 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     // After the first pass each undecided side settles on one model for all its calipers.
     for (int side = 0; side < 2; ++side) {
       if (shade[side] >= 0) continue;
-      shade[side] = Median(shade_evidence[side]) > kShadingEvidence ? 1 : 0;
+      shade[side] =
+          ShadingEvident(shade_evidence[side]) && Median(shade_shift[side]) > kMinShadingShiftPx;
       if (shade[side] == 0) continue;
       for (auto& cf : fits) (side == 0 ? cf.left : cf.right) = side == 0 ? cf.left_shaded : cf.right_shaded;
     }

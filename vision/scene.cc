@@ -19,6 +19,7 @@ constexpr int kMaxCandidates = 40;       // pairs kept after scoring
 constexpr int kMaxFollowed = 6;          // pairs followed along the full-resolution image
 constexpr double kFollowOffsetPx = 3.0;  // edge contrast is read this far either side
 constexpr double kMixedPenalty = 0.5;    // a pair brighter on one side only is less likely
+constexpr double kEndFraction = 0.3;     // an edge ends where its contrast falls below this share
 
 struct EdgePoint {
   float x, y;  // small-image px
@@ -386,38 +387,62 @@ bool ExtendPair(const Detection& d, const EdgeSegment& a, const EdgeSegment& b,
         }
       }
     }
-    // The longest run of rows where both are present, gaps of up to kMaxGapRows.
-    int best_lo = -1, best_hi = -1, best_count = 0, lo = -1, last = -1, count = 0;
-    for (int r = 0; r <= n; ++r) {
-      const bool both = r < n && hit[0][r] && hit[1][r];
-      if (r == n || (both && last >= 0 && r - last - 1 > kMaxGapRows)) {
-        if (count > best_count) {
-          best_count = count;
-          best_lo = lo;
-          best_hi = last;
+    // Each side's runs of rows with support (gaps of up to kMaxGapRows); the pair of runs whose
+    // stretches overlap most along the axis (a short, wide, tilted strand has its two edges on
+    // different rows).
+    struct RunRange {
+      int lo, hi, count;
+    };
+    std::vector<RunRange> runs[2];
+    for (int side = 0; side < 2; ++side) {
+      int lo = -1, last = -1, count = 0;
+      for (int r = 0; r <= n; ++r) {
+        const bool here = r < n && hit[side][r];
+        if (r == n || (here && last >= 0 && r - last - 1 > kMaxGapRows)) {
+          if (count >= kMinPiecePoints) runs[side].push_back({lo, last, count});
+          lo = -1;
+          count = 0;
         }
-        lo = -1;
-        count = 0;
-      }
-      if (both) {
-        if (lo < 0) lo = r;
-        last = r;
-        ++count;
+        if (here) {
+          if (lo < 0) lo = r;
+          last = r;
+          ++count;
+        }
       }
     }
-    if (best_count < kMinPiecePoints) return false;
-    // Refit both lines on the run's points.
+    // Along-axis position of a row on a side's line: the seed axis is close to both lines.
+    const double ax = 0.5 * (lines[0].b + lines[1].b), norm = std::sqrt(1 + ax * ax);
+    const auto s_of = [&](int side, int r) {
+      const double y = d.row_y[r];
+      return (lines[side].a + lines[side].b * y) * ax / norm + y / norm;
+    };
+    int best[2] = {-1, -1};
+    double best_overlap = 0;
+    for (size_t i = 0; i < runs[0].size(); ++i) {
+      for (size_t j = 0; j < runs[1].size(); ++j) {
+        const double lo = std::max(s_of(0, runs[0][i].lo), s_of(1, runs[1][j].lo));
+        const double hi = std::min(s_of(0, runs[0][i].hi), s_of(1, runs[1][j].hi));
+        if (hi - lo > best_overlap) {
+          best_overlap = hi - lo;
+          best[0] = static_cast<int>(i);
+          best[1] = static_cast<int>(j);
+        }
+      }
+    }
+    if (best[0] < 0) return false;
+    // Refit both lines on their runs' points.
     for (int side = 0; side < 2; ++side) {
+      const RunRange& run = runs[side][best[side]];
       Piece p;
       p.sign = lines[side].sign;
-      for (int r = best_lo; r <= best_hi; ++r)
-        if (hit[0][r] && hit[1][r]) p.pts.push_back(*hit[side][r]);
+      for (int r = run.lo; r <= run.hi; ++r)
+        if (hit[side][r]) p.pts.push_back(*hit[side][r]);
       p.Fit();
       lines[side] = {p.a, p.b, p.sign};
       if (pass == 1) {
         EdgeSegment& e = side == 0 ? *ea : *eb;
         e = ToSegment(p, d);
-        e.coverage = best_count / (best_hi - best_lo + 1.0);
+        e.coverage = run.count / (run.hi - run.lo + 1.0);
       }
     }
   }
@@ -485,15 +510,18 @@ void SuppressNested(std::vector<PairCandidate>* cands) {
     for (size_t j = 0; j < c.size(); ++j) {
       if (i == j || !c[j].verdict.empty()) continue;
       if (c[i].width_px <= c[j].width_px + 3.0) continue;
-      // Strictly inside on both sides: a pair sharing one edge is an alternative, not a detail.
+      // Inside, or sharing one edge and inside with the other (half a highlight stripe with the
+      // strand's far edge; a shading ridge with the other silhouette).
       const auto [l, r] = Interval(c[j], c[i].axis);
       const auto [ol, orr] = Interval(c[i], c[i].axis);
-      if (l < ol + 1.5 || r > orr - 1.5) continue;
+      if (l < ol - 1.5 || r > orr + 1.5) continue;
       const double sj = c[i].axis.S(c[j].axis.ox, c[j].axis.oy);
       const double overlap =
           std::min(sj + c[j].length_px, c[i].length_px) - std::max(sj, 0.0);
       if (overlap < 0.5 * c[j].length_px) continue;
-      if (c[i].score >= 0.8 * c[j].score)
+      // A highlight stripe on a shaded strand can outscore the strand's own soft silhouette.
+      const bool same_kind = c[i].polarity == c[j].polarity;
+      if (c[i].score >= (same_kind ? 0.3 : 0.8) * c[j].score)
         c[j].verdict = fmt::format("inside a wider pair ({:.1f} px)", c[i].width_px);
     }
   }
@@ -530,7 +558,7 @@ EdgeEnd WalkEdge(const GreyImage& img, const AxisFrame& a, double u0, double slo
       return in_gap ? candidate : EdgeEnd{s - dir, false};
     }
     if (in_gap) {
-      strong_again = c >= 0.5 * reference ? strong_again + 1 : 0;
+      strong_again = std::abs(c) >= kEndFraction * reference ? strong_again + 1 : 0;
       if (strong_again >= 5) {
         in_gap = false;
         weak = 0;
@@ -540,7 +568,8 @@ EdgeEnd WalkEdge(const GreyImage& img, const AxisFrame& a, double u0, double slo
       prev_c = c;
       continue;
     }
-    if (c < 0.5 * reference) {
+    // |c|: an object behind the strand may turn the edge's sign without ending it.
+    if (std::abs(c) < kEndFraction * reference) {
       if (weak++ == 0) {
         first_weak = s;
         before_weak_c = prev_c;
@@ -549,6 +578,8 @@ EdgeEnd WalkEdge(const GreyImage& img, const AxisFrame& a, double u0, double slo
         // Interpolate the half-contrast crossing between the last strong and the first weak step.
         double c_weak = 0;
         ContrastAt(img, a, first_weak, u0 + slope * first_weak, sign, &c_weak);
+        before_weak_c = std::abs(before_weak_c);
+        c_weak = std::abs(c_weak);
         const double t = std::clamp((before_weak_c - 0.5 * reference) /
                                         std::max(1e-9, before_weak_c - c_weak),
                                     0.0, 1.0);

@@ -13,6 +13,7 @@
 
 #include "common/atomic_file.h"
 #include "vision/edge_profile.h"
+#include "vision/synthetic_extras.h"
 #include "vision/video_io.h"
 
 namespace clogscope::vision {
@@ -111,6 +112,18 @@ bool SceneParams::Validate(std::string* why) const {
     if (!(pitch_um > 2 * line_width_um)) return fail("pitch_um must exceed twice the line width");
     if (pitch_um / scale_um_per_px < 4) return fail("micrometer lines closer than 4 px");
   }
+  if (!(texture_amplitude >= 0 && texture_amplitude <= 100))
+    return fail("texture_amplitude must be within 0..100 grey levels");
+  if (!(texture_wavelength_px >= 8)) return fail("texture_wavelength_px must be at least 8");
+  if (clutter_discs < 0 || clutter_gears < 0 || clutter_discs + clutter_gears > 20)
+    return fail("clutter: 0 to 20 discs and gears");
+  if (!(shading_ambient >= 0 && shading_ambient <= 1))
+    return fail("shading_ambient must be within 0..1");
+  if (!(vignetting >= 0 && vignetting < 1)) return fail("vignetting must be within [0, 1)");
+  for (const double* tint : {strand_tint, background_tint, nozzle_tint}) {
+    for (int c = 0; c < 3; ++c)
+      if (!(tint[c] >= 0 && tint[c] <= 1.5)) return fail("colour tints must be within 0..1.5");
+  }
   for (double level : {background_level, strand_level, nozzle_level, bed_level}) {
     if (level < 0 || level > 255) return fail("grey levels must be within 0..255 (8-bit scale)");
   }
@@ -122,6 +135,55 @@ void SceneParams::SetSilhouette() {
   strand_level = 55.0;
   nozzle_level = 45.0;
   bed_level = 60.0;
+}
+
+SceneParams RandomRealisticScene(uint64_t seed) {
+  std::mt19937_64 rng(seed * 0x9e3779b97f4a7c15ull + 17);
+  std::uniform_real_distribution<double> u01(0, 1);
+  const auto uni = [&](double a, double b) { return a + (b - a) * u01(rng); };
+  SceneParams p;
+  p.seed = seed;
+  const bool lit = u01(rng) < 0.6;
+  if (lit) {
+    p.background_level = uni(15, 80);
+    p.strand_level = uni(p.background_level + 70, 235);
+  } else {
+    p.background_level = uni(170, 240);
+    p.strand_level = uni(20, p.background_level - 90);
+  }
+  p.nozzle = u01(rng) >= 0.2;
+  p.nozzle_level = uni(0, 255);
+  p.strand_width_um = uni(250, 450);
+  p.tilt_deg = uni(-20, 20);
+  p.blur_sigma_px = uni(0.8, 3.0);
+  p.noise_sigma = uni(1.0, 4.0);
+  p.tip_x_px = uni(520, 760);
+  p.tip_y_px = uni(120, 300);
+  p.texture_amplitude = uni(0, 20);
+  p.texture_wavelength_px = uni(80, 250);
+  p.clutter_discs = static_cast<int>(uni(0, 3.99));
+  p.clutter_gears = static_cast<int>(uni(0, 2.99));
+  if (lit && u01(rng) < 0.5) p.shading_ambient = uni(0.4, 1.0);
+  if (!lit && u01(rng) < 0.25) {
+    p.clear_strand = true;
+    p.clear_line_gain = uni(30, 255 - p.strand_level);
+  }
+  if (lit && u01(rng) < 0.3) p.highlight = true;
+  if (p.nozzle && u01(rng) < 0.2) p.bed = true;
+  p.gradient_fraction = uni(0, 0.2);
+  p.gradient_angle_deg = uni(0, 360);
+  p.vignetting = uni(0, 0.3);
+  if (u01(rng) < 0.3) {
+    // An orange strand on a blue background.
+    p.colour = true;
+    const double strand[3] = {0.25, 0.6, 1.0}, background[3] = {1.0, 0.55, 0.2};
+    for (int c = 0; c < 3; ++c) {
+      p.strand_tint[c] = strand[c];
+      p.background_tint[c] = background[c];
+      p.nozzle_tint[c] = uni(0.3, 1.0);
+    }
+  }
+  return p;
 }
 
 FrameTruth FrameTruthFor(const SceneParams& p, int frame_index) {
@@ -181,47 +243,84 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
   const double diag = std::hypot(p.width_px, p.height_px);
   const Vec2 centre{0.5 * (p.width_px - 1), 0.5 * (p.height_px - 1)};
 
-  cv::Mat radiance(p.height_px, p.width_px, CV_64F);
+  // The realistic extras: texture and clutter behind the strand, its shading, clear-strand lines.
+  const render::Texture texture(p.texture_amplitude, p.texture_wavelength_px, p.seed);
+  const std::vector<render::ClutterObject> clutter = render::PlaceClutter(
+      p.clutter_discs, p.clutter_gears, p.tip_x_px, p.tip_y_px, -n_strand.y, n_strand.x, w,
+      p.nozzle ? p.tip_y_px : 0.0, p.width_px, p.height_px, p.strand_level, p.seed);
+  const bool shaded = p.shading_ambient < 1.0 && p.target != Target::kMicrometer;
+  const render::ShadingProfile shading(shaded ? w : 1.0, p.strand_level, p.shading_ambient, sigma,
+                                       n_strand.x, n_strand.y);
+  const double cl_h = 0.03 * w;
+  const SoftHalfPlane clear_l1{n_strand, -0.3 * w - cl_h}, clear_r1{n_strand, -0.3 * w + cl_h};
+  const SoftHalfPlane clear_l2{n_strand, 0.3 * w - cl_h}, clear_r2{n_strand, 0.3 * w + cl_h};
+  const bool has_nozzle = p.target == Target::kStrand && p.nozzle;
+  const int nc = p.colour ? 3 : 1;
+  static const double kGrey[3] = {1.0, 1.0, 1.0};
+  const double* tb = p.colour ? p.background_tint : kGrey;
+  const double* ts = p.colour ? p.strand_tint : kGrey;
+  const double* tn = p.colour ? p.nozzle_tint : kGrey;
+  const double corner2 = centre.x * centre.x + centre.y * centre.y;
+
+  std::vector<cv::Mat> radiance(nc);
+  for (auto& r : radiance) r.create(p.height_px, p.width_px, CV_64F);
   // Rows are independent: render them on all cores.
   cv::parallel_for_(cv::Range(0, p.height_px), [&](const cv::Range& rows) {
     for (int y = rows.start; y < rows.end; ++y) {
-      double* row = radiance.ptr<double>(y);
       for (int x = 0; x < p.width_px; ++x) {
         const Vec2 d{x - p.tip_x_px, y - p.tip_y_px};
-        double v;
+        // Background with its texture and the objects standing in it.
+        double bg = p.background_level + texture.At(x, y);
+        for (const auto& o : clutter) {
+          const double a = o.Coverage(x, y, sigma);
+          if (a > 0) bg = bg * (1 - a) + o.level * a;
+        }
+        double cov, front;  // strand coverage, and the strand's light where it covers
         if (p.target == Target::kMicrometer) {
           // The nearest lines only: they are at least 4 px apart and the reach of one is 9 sigma.
           const double u = Dot(n_strand, d);
           const long k0 = std::lround(u / pitch_px);
-          double cov = 0;
+          cov = 0;
           for (long k = k0 - 2; k <= k0 + 2; ++k) {
             const double c = k * pitch_px;
             cov += PixelMeanOfBlurredStep(u - c + 0.5 * w, sigma, n_strand.x, n_strand.y) -
                    PixelMeanOfBlurredStep(u - c - 0.5 * w, sigma, n_strand.x, n_strand.y);
           }
-          v = p.background_level + (p.strand_level - p.background_level) * cov;
+          front = p.strand_level * cov;
         } else {
-          const double cov = strand_left.Eval(d, sigma) - strand_right.Eval(d, sigma);
-          v = p.background_level + (p.strand_level - p.background_level) * cov;
+          cov = strand_left.Eval(d, sigma) - strand_right.Eval(d, sigma);
+          front = p.strand_level * cov;
+          if (shaded) front += shading.At(Dot(n_strand, d));
           if (p.highlight)
-            v += p.highlight_gain * (hl_left.Eval(d, sigma) - hl_right.Eval(d, sigma));
-        }
-        if (p.target == Target::kStrand) {
-          if (p.bed) {
-            const double a = bed.Eval(d, sigma);
-            v = v * (1 - a) + p.bed_level * a;
+            front += p.highlight_gain * (hl_left.Eval(d, sigma) - hl_right.Eval(d, sigma));
+          if (p.clear_strand) {
+            front += p.clear_line_gain * (clear_l1.Eval(d, sigma) - clear_r1.Eval(d, sigma) +
+                                          clear_l2.Eval(d, sigma) - clear_r2.Eval(d, sigma));
           }
+        }
+        double bed_a = 0, nozzle_a = 0;
+        if (p.target == Target::kStrand && p.bed) bed_a = bed.Eval(d, sigma);
+        if (has_nozzle) {
           // The product of three soft half-planes is exact away from the two flank corners, which
           // lie far from the measurement band.
-          double a = nozzle_face.Eval(d, sigma);
-          if (a > 0) a *= nozzle_right.Eval(d, sigma) * nozzle_left.Eval(d, sigma);
-          v = v * (1 - a) + p.nozzle_level * a;
+          nozzle_a = nozzle_face.Eval(d, sigma);
+          if (nozzle_a > 0) nozzle_a *= nozzle_right.Eval(d, sigma) * nozzle_left.Eval(d, sigma);
         }
+        double gain = 1.0;
         if (p.gradient_fraction != 0) {
           const Vec2 c{x - centre.x, y - centre.y};
-          v *= 1.0 - p.gradient_fraction * Dot(c, g_dir) / diag;
+          gain *= 1.0 - p.gradient_fraction * Dot(c, g_dir) / diag;
         }
-        row[x] = v;
+        if (p.vignetting != 0) {
+          const double r2 = (x - centre.x) * (x - centre.x) + (y - centre.y) * (y - centre.y);
+          gain *= 1.0 - p.vignetting * r2 / corner2;
+        }
+        for (int c = 0; c < nc; ++c) {
+          double v = bg * tb[c] * (1 - cov) + front * ts[c];
+          v = v * (1 - bed_a) + p.bed_level * tb[c] * bed_a;
+          v = v * (1 - nozzle_a) + p.nozzle_level * tn[c] * nozzle_a;
+          radiance[c].ptr<double>(y)[x] = v * gain;
+        }
       }
     }
   });
@@ -230,26 +329,22 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
   const double level_scale = full_scale / 255.0;
   const int depth = p.bit_depth == 16 ? CV_16U : CV_8U;
   cv::RNG noise_rng(static_cast<uint64_t>(FrameRng(p.seed, frame_index, 2)()));
-  auto to_image = [&](const cv::Mat& plane_radiance) {
-    cv::Mat noisy = plane_radiance * level_scale;
+  std::vector<cv::Mat> planes;
+  for (const cv::Mat& r : radiance) {
+    cv::Mat noisy = r * level_scale;
     if (p.noise_sigma > 0) {
       cv::Mat noise(noisy.size(), CV_64F);
       noise_rng.fill(noise, cv::RNG::NORMAL, 0.0, p.noise_sigma * level_scale);
       noisy += noise;
     }
-    cv::Mat out;
-    noisy.convertTo(out, depth);  // rounds and saturates
-    return out;
-  };
+    planes.emplace_back();
+    noisy.convertTo(planes.back(), depth);  // rounds and saturates
+  }
   cv::Mat image;
-  if (p.colour) {
-    // Orange PLA under white light: the red channel carries most of the signal.
-    const double tint[3] = {0.45, 0.75, 1.0};  // B, G, R
-    std::vector<cv::Mat> planes;
-    for (double t : tint) planes.push_back(to_image(radiance * t));
+  if (nc == 3) {
     cv::merge(planes, image);
   } else {
-    image = to_image(radiance);
+    image = planes[0];
   }
   if (truth_out) *truth_out = truth;
   return image;
@@ -283,6 +378,16 @@ std::string TruthToJson(const SceneParams& p, const std::vector<FrameTruth>& tru
       {"pitch_um", p.pitch_um},
       {"line_width_um", p.line_width_um},
       {"colour", p.colour},
+      {"nozzle", p.nozzle},
+      {"texture_amplitude", p.texture_amplitude},
+      {"texture_wavelength_px", p.texture_wavelength_px},
+      {"clutter_discs", p.clutter_discs},
+      {"clutter_gears", p.clutter_gears},
+      {"shading_ambient", p.shading_ambient},
+      {"clear_strand", p.clear_strand},
+      {"vignetting", p.vignetting},
+      {"strand_tint", {p.strand_tint[0], p.strand_tint[1], p.strand_tint[2]}},
+      {"background_tint", {p.background_tint[0], p.background_tint[1], p.background_tint[2]}},
       {"bit_depth", p.bit_depth},
       {"seed", p.seed},
   };

@@ -71,7 +71,23 @@ struct SceneParams {
   // point. The pin (kPin) is strand_width_um wide along the axis through the tip point.
   double pitch_um = 100.0;
   double line_width_um = 8.0;
-  bool colour = false;  // BGR output with an orange tint instead of grey
+  // Realism beyond the reference scene (truth stays the geometric width and tip):
+  bool nozzle = true;              // false: no nozzle in view (a filament, a needle)
+  double texture_amplitude = 0.0;  // low-frequency background texture, ± grey levels
+  double texture_wavelength_px = 120.0;
+  int clutter_discs = 0;  // opaque discs beside (and partly behind) the strand
+  int clutter_gears = 0;  // gear-like discs with teeth
+  // Lambertian shading of a front-lit strand: inside, strand_level·(a + (1 − a)·√(1 − (2u/w)²))
+  // with a the ambient fraction; 1 = flat.
+  double shading_ambient = 1.0;
+  // A clear strand: two bright internal lines (refraction) at ±0.3 of the width from the axis.
+  bool clear_strand = false;
+  double clear_line_gain = 60.0;
+  double vignetting = 0.0;  // relative darkening at the frame corners (radial, quadratic)
+  bool colour = false;  // BGR output: orange strand (strand_tint) on background_tint
+  double strand_tint[3] = {0.45, 0.75, 1.0};  // B, G, R gains (colour only)
+  double background_tint[3] = {0.45, 0.75, 1.0};
+  double nozzle_tint[3] = {0.45, 0.75, 1.0};
   int bit_depth = 8;    // 8 or 16
   uint64_t seed = 1;
 
@@ -80,6 +96,13 @@ struct SceneParams {
   // Makes this a silhouette on a backlight (dark strand, nozzle and bed on a bright background).
   void SetSilhouette();
 };
+
+// A randomised scene far from the defaults, for robustness tests and benchmarks: a lit strand or a
+// silhouette, tilt within ±20°, blur 0.8–3 px, a nozzle of any grey level (or none, one in five),
+// background texture, discs and gears beside the strand, Lambertian shading (ambient ≥ 0.4) on
+// lit strands, clear strands on backlights, a coloured strand on a coloured background, an
+// illumination gradient, vignetting, highlights and beds. `seed` picks everything.
+SceneParams RandomRealisticScene(uint64_t seed);
 
 // The exact geometry of one rendered frame.
 struct FrameTruth {

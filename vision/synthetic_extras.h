@@ -1,0 +1,60 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+namespace clogscope::vision::render {
+
+// Pieces of a realistic scene for the renderer (synthetic.cc). Levels are 8-bit grey levels.
+
+// Low-frequency background texture: a fixed sum of plane waves with wavelengths from 1 to 4 times
+// `wavelength_px`, zero mean, peaking near ±amplitude. The same seed gives the same texture.
+class Texture {
+ public:
+  Texture(double amplitude, double wavelength_px, uint64_t seed);
+  double At(double x, double y) const;
+
+ private:
+  struct Wave {
+    double kx, ky, phase, weight;
+  };
+  std::vector<Wave> waves_;
+};
+
+// An opaque disc, or a gear (a disc with trapezoidal teeth), standing behind the strand.
+struct ClutterObject {
+  double cx = 0, cy = 0;  // centre, image px
+  double radius_px = 0;   // disc radius; a gear's root radius
+  double level = 0;
+  int teeth = 0;  // 0: a disc
+  double tooth_depth_px = 0;
+  double phase = 0;
+  // Fraction of the pixel at (x, y) the object covers, blurred by sigma_px (the edge is treated as
+  // locally straight: exact enough for distractors, which carry no truth).
+  double Coverage(double x, double y, double sigma_px) const;
+};
+
+// `discs` discs and `gears` gears placed beside a strand whose axis passes through (x0, y0) with
+// direction (dx, dy) and which is width_px wide, below y_min; some overlap the strand's edges (and
+// are hidden behind it). Their levels differ from avoid_level by at least 40 grey levels.
+std::vector<ClutterObject> PlaceClutter(int discs, int gears, double x0, double y0, double dx,
+                                        double dy, double width_px, double y_min, int image_width,
+                                        int image_height, double avoid_level, uint64_t seed);
+
+// The change a lit cylinder's shading makes to a strand of uniform level: inside the strand the
+// radiance is level·(ambient + (1 − ambient)·√(1 − (2u/w)²)) instead of level. Tabulated over
+// the across-axis distance u as the exact pixel mean of that change blurred by the PSF (cell
+// averages of the profile, convolved with cell integrals of PSF ⊗ pixel footprint; the grid puts
+// the strand's edges on cell boundaries), then read by linear interpolation.
+class ShadingProfile {
+ public:
+  ShadingProfile(double width_px, double level, double ambient, double sigma_px, double nx,
+                 double ny);
+  double At(double u_px) const;
+
+ private:
+  double u0_ = 0, h_ = 1;
+  std::vector<double> values_;
+};
+
+}  // namespace clogscope::vision::render
