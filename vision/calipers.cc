@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <Eigen/Dense>
 #include <cmath>
 
 #include "common/robust.h"
@@ -18,6 +19,8 @@ constexpr double kRadToDeg = 180.0 / M_PI;
 // Shading is taken when the mean (each F capped, so that one odd caliper cannot decide) is 6σ
 // above that, plus a margin for structured noise such as compression artefacts.
 constexpr double kMinShadingShiftPx = 0.1;
+constexpr int kReferenceCalipers = 5;
+constexpr double kMaxSagPx = 1.0, kMaxSagFraction = 0.01;  // curvature of the width along the band  // outside the band, for the occlusion check
 bool ShadingEvident(const std::vector<double>& f) {
   if (f.empty()) return false;
   double sum = 0;
@@ -342,6 +345,29 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     ++used;
   }
   m->calipers_used = used;
+  // A strand's width along the band is constant (or changes linearly: die swell); the chord of a
+  // disc sags toward the ends. Periodic roughness (a filament marked by drive-gear teeth) averages
+  // out of a quadratic over several periods.
+  if (used >= 5) {
+    Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+    const double s_mid = 0.5 * (m->band_start_px + m->band_end_px);
+    for (const auto& c : m->calipers) {
+      if (!c.inlier) continue;
+      const Eigen::Vector3d row(1.0, c.s_px - s_mid, (c.s_px - s_mid) * (c.s_px - s_mid));
+      ata += row * row.transpose();
+      atb += row * c.width_px;
+    }
+    const Eigen::Vector3d coef = ata.ldlt().solve(atb);
+    const double half = 0.5 * (m->band_end_px - m->band_start_px);
+    const double sag = std::abs(coef[2]) * half * half;
+    if (sag > std::max(kMaxSagPx, kMaxSagFraction * med)) {
+      return fail(FrameStatus::kNoStrand,
+                  fmt::format("the edges curve: the width changes by {:.1f} px over the band (a "
+                              "disc or bend, not a straight strand)",
+                              sag));
+    }
+  }
   m->width_px = sum / used;
   if (used >= 2) {
     const double var = std::max(0.0, (sum2 - sum * sum / used) / (used - 1));
@@ -351,16 +377,46 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     m->width_sigma_px = std::hypot(k.left.edge_sigma_px, k.right.edge_sigma_px);
   }
 
-  // The coarse width comes from the whole pair, most of it outside the band: a blob covering one
-  // edge over the band makes the band's edges agree with each other but not with the strand. A
-  // filament's band is the whole stretch: there is no elsewhere, and occlusion shows as calipers
-  // that disagree.
-  const bool filament = opt.target == MeasureTarget::kFilament;
-  if (!filament && std::abs(m->width_px - width0) > std::max(3.0, 0.04 * width0)) {
-    return fail(
-        FrameStatus::kOccluded,
-        fmt::format("width in the band {:.1f} px disagrees with the strand's {:.1f} px elsewhere",
-                    m->width_px, width0));
+  // The same calipers further down the strand, outside the band: a blob covering one edge over
+  // the band makes the band's edges agree with each other but not with the strand. (A filament's
+  // band is its whole stretch: there is no elsewhere, and occlusion shows as calipers that
+  // disagree.)
+  if (opt.target == MeasureTarget::kStrand) {
+    const double lo = m->band_end_px + 2 * opt.caliper_spacing_px;
+    const double hi = g.s_end - 10.0 - 12.0 * std::abs(f.dx);
+    std::vector<double> elsewhere;
+    const double outer = std::max(6.5, 3.0 * sigma_guess + 2.5) + (shade[0] || shade[1] ? 3.5 : 0);
+    const double inner = std::min(outer, std::max(4.0, 0.3 * width0));
+    for (int i = 0; i < kReferenceCalipers && hi - lo > opt.caliper_spacing_px; ++i) {
+      const double s0 = lo + (hi - lo - opt.caliper_spacing_px) * (i + 0.5) / kReferenceCalipers;
+      const double s1 = s0 + opt.caliper_spacing_px, sc = 0.5 * (s0 + s1);
+      double edge[2];
+      bool ok = true;
+      for (int side = 0; side < 2 && ok; ++side) {
+        const double e0 = (side == 0 ? left_guess : right_guess) + slope_guess * sc;
+        const double u0 = side == 0 ? e0 - outer : e0 - inner;
+        const double u1 = side == 0 ? e0 + inner : e0 + outer;
+        int clipped = 0;
+        if (!GatherEdgeSamples(img, f, s0, s1, u0, u1, data_max, &samples, &clipped)) break;
+        const EdgeFit fit = shade[side] == 1
+                                ? FitShadedStep(samples, e0, sigma_guess, e0, side == 0 ? 1 : -1)
+                                : FitBlurredStep(samples, e0, sigma_guess, e0);
+        const int expected = side == 0 ? g.left_sign : g.right_sign;
+        ok = fit.converged && fit.edge_px > u0 + 1 && fit.edge_px < u1 - 1 &&
+             fit.contrast * expected > 0;
+        edge[side] = fit.edge_px;
+      }
+      if (ok) elsewhere.push_back((edge[1] - edge[0]) * cos_d);
+    }
+    if (elsewhere.size() >= 3) {
+      const double ref = Median(elsewhere);
+      if (std::abs(m->width_px - ref) > std::max(3.0, 0.04 * ref)) {
+        return fail(FrameStatus::kOccluded,
+                    fmt::format("width in the band {:.1f} px disagrees with the strand's {:.1f} px "
+                                "further down",
+                                m->width_px, ref));
+      }
+    }
   }
   if (m->contrast < min_contrast)
     return fail(FrameStatus::kLowContrast,
@@ -370,6 +426,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
                 fmt::format("edge blur {:.2f} px above {:.2f} px", m->blur_px, opt.max_blur_px));
   // A filament's band is its whole visible stretch, parts of which a drive gear or a guide may
   // hide: a quarter of it (at least 8 calipers) will do. A strand's short band must be clean.
+  const bool filament = opt.target == MeasureTarget::kFilament;
   const double min_used = filament ? std::max(8.0, 0.5 * opt.min_caliper_fraction * n_cal)
                                    : opt.min_caliper_fraction * n_cal;
   if (used < min_used)

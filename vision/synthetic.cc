@@ -183,6 +183,14 @@ SceneParams RandomRealisticScene(uint64_t seed) {
       p.nozzle_tint[c] = uni(0.3, 1.0);
     }
   }
+  // Headroom: the gradient brightens one side by up to half its fraction, noise adds 3σ; a
+  // clipped edge is a fair "saturated", but not what this scene is for.
+  p.strand_level = std::min(p.strand_level, (250.0 - 3 * p.noise_sigma) / (1 + 0.5 * p.gradient_fraction));
+  p.background_level = std::min(p.background_level, (250.0 - 3 * p.noise_sigma) / (1 + 0.5 * p.gradient_fraction));
+  // And at the dark end, after texture, vignetting and the gradient have darkened it.
+  const double floor = (3 * p.noise_sigma + 8 + p.texture_amplitude) / ((1 - p.vignetting) * (1 - 0.5 * p.gradient_fraction));
+  p.background_level = std::max(p.background_level, floor);
+  p.strand_level = std::max(p.strand_level, floor);
   return p;
 }
 
@@ -288,12 +296,12 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
           }
           front = p.strand_level * cov;
         } else {
-          cov = strand_left.Eval(d, sigma) - strand_right.Eval(d, sigma);
+          cov = p.strand ? strand_left.Eval(d, sigma) - strand_right.Eval(d, sigma) : 0.0;
           front = p.strand_level * cov;
-          if (shaded) front += shading.At(Dot(n_strand, d));
-          if (p.highlight)
+          if (shaded && p.strand) front += shading.At(Dot(n_strand, d));
+          if (p.highlight && p.strand)
             front += p.highlight_gain * (hl_left.Eval(d, sigma) - hl_right.Eval(d, sigma));
-          if (p.clear_strand) {
+          if (p.clear_strand && p.strand) {
             front += p.clear_line_gain * (clear_l1.Eval(d, sigma) - clear_r1.Eval(d, sigma) +
                                           clear_l2.Eval(d, sigma) - clear_r2.Eval(d, sigma));
           }
@@ -379,6 +387,7 @@ std::string TruthToJson(const SceneParams& p, const std::vector<FrameTruth>& tru
       {"line_width_um", p.line_width_um},
       {"colour", p.colour},
       {"nozzle", p.nozzle},
+      {"strand", p.strand},
       {"texture_amplitude", p.texture_amplitude},
       {"texture_wavelength_px", p.texture_wavelength_px},
       {"clutter_discs", p.clutter_discs},

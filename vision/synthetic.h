@@ -73,6 +73,7 @@ struct SceneParams {
   double line_width_um = 8.0;
   // Realism beyond the reference scene (truth stays the geometric width and tip):
   bool nozzle = true;              // false: no nozzle in view (a filament, a needle)
+  bool strand = true;              // false: nothing below the nozzle (no-strand tests)
   double texture_amplitude = 0.0;  // low-frequency background texture, ± grey levels
   double texture_wavelength_px = 120.0;
   int clutter_discs = 0;  // opaque discs beside (and partly behind) the strand

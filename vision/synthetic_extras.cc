@@ -79,7 +79,7 @@ std::vector<ClutterObject> PlaceClutter(int discs, int gears, double x0, double 
     if (o.cx < -o.radius_px || o.cx > image_width + o.radius_px) o.cx = x0 - off;
     // A level well away from the strand's, so that the strand's edge stays visible in front.
     do {
-      o.level = 255 * u01(rng);
+      o.level = 12 + 231 * u01(rng);  // off the rails: a clipped distractor is another test
     } while (std::abs(o.level - avoid_level) < 40);
     out.push_back(o);
   }
