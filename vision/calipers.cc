@@ -348,12 +348,13 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   // A strand's width along the band is constant (or changes linearly: die swell); the chord of a
   // disc sags toward the ends. Periodic roughness (a filament marked by drive-gear teeth) averages
   // out of a quadratic over several periods.
-  if (used >= 5) {
+  // All fitted calipers: on a disc the chord's change leaves few of them within the MAD cut.
+  if (cal_widths.size() >= 4) {
     Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
     Eigen::Vector3d atb = Eigen::Vector3d::Zero();
     const double s_mid = 0.5 * (m->band_start_px + m->band_end_px);
     for (const auto& c : m->calipers) {
-      if (!c.inlier) continue;
+      if (!c.fitted) continue;
       const Eigen::Vector3d row(1.0, c.s_px - s_mid, (c.s_px - s_mid) * (c.s_px - s_mid));
       ata += row * row.transpose();
       atb += row * c.width_px;

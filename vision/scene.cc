@@ -61,6 +61,7 @@ struct Detection {
   double noise = 0;  // σ of the horizontal gradient from noise, grey per small px
   std::vector<std::vector<EdgePoint>> rows;
   std::vector<float> row_y;
+  cv::Mat image;  // the channel at the detection scale, CV_32F
 };
 
 Detection DetectEdgePoints(const cv::Mat& channel, const SceneOptions& o) {
@@ -75,6 +76,7 @@ Detection DetectEdgePoints(const cv::Mat& channel, const SceneOptions& o) {
   }
   cv::Mat f32, gx, gy;
   small.convertTo(f32, CV_32F);
+  d.image = f32;
   cv::Sobel(f32, gx, CV_32F, 1, 0, 3, 1.0 / 8, 0, cv::BORDER_REPLICATE);
   cv::Sobel(f32, gy, CV_32F, 0, 1, 3, 1.0 / 8, 0, cv::BORDER_REPLICATE);
 
@@ -508,7 +510,7 @@ void SuppressNested(std::vector<PairCandidate>* cands) {
   auto& c = *cands;
   for (size_t i = 0; i < c.size(); ++i) {
     for (size_t j = 0; j < c.size(); ++j) {
-      if (i == j || !c[j].verdict.empty()) continue;
+      if (i == j || !c[j].verdict.empty() || !c[i].verdict.empty()) continue;
       if (c[i].width_px <= c[j].width_px + 3.0) continue;
       // Inside, or sharing one edge and inside with the other (half a highlight stripe with the
       // strand's far edge; a shading ridge with the other silhouette).
@@ -525,6 +527,43 @@ void SuppressNested(std::vector<PairCandidate>* cands) {
         c[j].verdict = fmt::format("inside a wider pair ({:.1f} px)", c[i].width_px);
     }
   }
+}
+
+// Whether a pair's inside is one object: a pair made of the outer edges of two strands side by
+// side holds the background between them. Samples the inside at the detection scale and counts
+// how much of it sits at the background's level (within a quarter of the step).
+bool InsideIsOneObject(const Detection& d, const PairCandidate& c) {
+  const cv::Mat& img = d.image;  // CV_32F
+  const double f = d.factor, off = 0.5 * (d.factor - 1), gap = 2.0 * d.factor + 2.0;
+  std::vector<double> inside, outside, rim;
+  for (int i = 1; i <= 5; ++i) {
+    const double s = c.length_px * i / 6.0;
+    const double ul = c.left_u0 + c.edge_slope * s, ur = c.right_u0 + c.edge_slope * s;
+    auto at = [&](double u, std::vector<double>* out) {
+      const double x = (c.axis.ImageX(s, u) - off) / f, y = (c.axis.ImageY(s, u) - off) / f;
+      if (x < 0 || y < 0 || x > img.cols - 1.001 || y > img.rows - 1.001) return;
+      const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
+      const double fx = x - x0, fy = y - y0;
+      const float* r0 = img.ptr<float>(y0);
+      const float* r1 = img.ptr<float>(y0 + 1);
+      out->push_back((r0[x0] * (1 - fx) + r0[x0 + 1] * fx) * (1 - fy) +
+                     (r1[x0] * (1 - fx) + r1[x0 + 1] * fx) * fy);
+    };
+    at(ul - gap, &outside);
+    at(ur + gap, &outside);
+    at(ul + gap, &rim);
+    at(ur - gap, &rim);
+    for (double u = ul + gap; u <= ur - gap; u += f) at(u, &inside);
+  }
+  if (inside.size() < 10 || outside.size() < 2 || rim.size() < 2) return true;
+  // The object's level just inside its edges; the background's just outside them.
+  const double background = Median(outside), body = Median(rim);
+  const double step = std::abs(body - background);
+  if (step <= 0) return true;
+  int at_background = 0;
+  for (double v : inside) at_background += std::abs(v - background) < 0.25 * step;
+
+  return at_background < 0.2 * inside.size();
 }
 
 // Edge contrast across the line u(s) at s: positive when the edge is there with its sign.
@@ -721,6 +760,10 @@ SceneResult FindScene(const std::vector<cv::Mat>& channels, const SceneOptions& 
       if (s.length_px() >= o.min_length_px) r.edges.push_back(s);
     }
     r.candidates = PairSegments(d, r.edges, r.gradient_noise, channels[ch].cols, o);
+    for (auto& c : r.candidates) {
+      if (!InsideIsOneObject(d, c))
+        c.verdict = "spans separate objects: the background shows between its edges";
+    }
     SuppressNested(&r.candidates);
     double top = 0;
     for (const auto& c : r.candidates)
