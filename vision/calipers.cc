@@ -20,7 +20,9 @@ constexpr double kRadToDeg = 180.0 / M_PI;
 // above that, plus a margin for structured noise such as compression artefacts.
 constexpr double kMinShadingShiftPx = 0.1;
 constexpr int kReferenceCalipers = 5;
-constexpr double kMaxSagPx = 1.0, kMaxSagFraction = 0.01;  // curvature of the width along the band  // outside the band, for the occlusion check
+// Curvature of the width along the band: more than 1 px of sag, bending like a disc (|w''|/2 above
+// 0.25/w, i.e. a chord of a circle less than 4 widths in radius).
+constexpr double kMaxSagPx = 1.0, kMaxBend = 0.25;  // outside the band, for the occlusion check
 bool ShadingEvident(const std::vector<double>& f) {
   if (f.empty()) return false;
   double sum = 0;
@@ -361,8 +363,10 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     }
     const Eigen::Vector3d coef = ata.ldlt().solve(atb);
     const double half = 0.5 * (m->band_end_px - m->band_start_px);
+    // A disc's chord w(s) ≈ 2R − s²/R bends with |w''|/2 = 1/R ≈ 2/w; a strand's slow changes
+    // (or a filament's along a long stretch) bend hundreds of widths more gently.
     const double sag = std::abs(coef[2]) * half * half;
-    if (sag > std::max(kMaxSagPx, kMaxSagFraction * med)) {
+    if (sag > kMaxSagPx && std::abs(coef[2]) > kMaxBend / med) {
       return fail(FrameStatus::kNoStrand,
                   fmt::format("the edges curve: the width changes by {:.1f} px over the band (a "
                               "disc or bend, not a straight strand)",
