@@ -21,6 +21,7 @@
 #include "vision/frame_source.h"
 #include "vision/strand_measure.h"
 #include "vision/synthetic.h"
+#include "vision/track.h"
 #include "vision/video_decoder.h"
 
 namespace {
@@ -29,6 +30,7 @@ using clogscope::vision::FrameTruth;
 using clogscope::vision::MeasureStrand;
 using clogscope::vision::SceneParams;
 using clogscope::vision::StrandMeasureOptions;
+using clogscope::vision::StrandTracker;
 using Clock = std::chrono::steady_clock;
 
 double Seconds(Clock::time_point a, Clock::time_point b) {
@@ -47,14 +49,19 @@ void BenchMeasure() {
     std::vector<cv::Mat> frames;
     for (int i = 0; i < 16; ++i) frames.push_back(RenderFrame(p, i, nullptr));
     StrandMeasureOptions opt;
-    int n = 0, valid = 0;
-    const auto t0 = Clock::now();
-    while (Seconds(t0, Clock::now()) < 3.0) {
-      for (const auto& f : frames) valid += MeasureStrand(f, opt).valid(), ++n;
+    // Each frame searched afresh (MeasureStrand, images), and a video's frames tracked.
+    for (bool tracked : {false, true}) {
+      StrandTracker tracker(opt);
+      int n = 0, valid = 0;
+      const auto t0 = Clock::now();
+      while (Seconds(t0, Clock::now()) < 3.0) {
+        for (const auto& f : frames)
+          valid += (tracked ? tracker.Measure(f) : MeasureStrand(f, opt)).valid(), ++n;
+      }
+      const double s = Seconds(t0, Clock::now());
+      fmt::print("| {}, {} ({} of {} valid) | {:.0f} | {:.3f} |\n", colour ? "colour BGR" : "grey",
+                 tracked ? "tracked" : "found afresh", valid, n, n / s, 1000 * s / n);
     }
-    const double s = Seconds(t0, Clock::now());
-    fmt::print("| {} ({} of {} valid) | {:.0f} | {:.3f} |\n", colour ? "colour BGR" : "grey", valid,
-               n, n / s, 1000 * s / n);
   }
 }
 

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "vision/edge_fit.h"
+#include "vision/strand_measure.h"
 
 namespace clogscope::vision {
 namespace {
@@ -82,7 +83,8 @@ MicrometerLines FindMicrometerLines(const cv::Mat& image, const MicrometerOption
     cv::cvtColor(image(roi), g, image.channels() == 4 ? cv::COLOR_BGRA2GRAY : cv::COLOR_BGR2GRAY);
     g.convertTo(grey, CV_32F);
   }
-  const double full_scale = image.depth() == CV_16U ? 65535.0 : 255.0;
+  // 12-bit cameras write 16-bit files: contrast limits follow the data's range, not 65535.
+  const double full_scale = DataMax(image);
   const double min_depth = opt.min_contrast_fraction * full_scale;
   MicrometerLines out;
   if (grey.rows < 3 * kStripRows || grey.cols < 32) {

@@ -225,6 +225,38 @@ TEST(StrandMeasureTest, UnsupportedPixelTypesAndOptionsThrow) {
                std::invalid_argument);
 }
 
+// A front-lit strand darkens toward its silhouette (Lambertian, ambient 0.5): the shading model
+// finds the silhouette; a plain blurred step finds the 50 % level of the sloping plateau, inside.
+TEST(StrandMeasureTest, ShadedStrandMeasuredAtItsSilhouette) {
+  SceneParams p;
+  p.shading_ambient = 0.5;
+  p.strand_level = 230;
+  const ErrorStats shaded = Measure(p, 8);
+  ASSERT_EQ(shaded.valid, 8);
+  EXPECT_LE(std::abs(shaded.mean), 0.1);
+  StrandMeasureOptions plain;
+  plain.shading = false;
+  const ErrorStats biased = Measure(p, 8, plain);
+  EXPECT_LT(biased.mean, -0.4);  // the issue saw −0.75 px at ambient 0.5
+}
+
+// 16-bit frames holding 12-bit data: limits follow the data's range, not 65535.
+TEST(StrandMeasureTest, TwelveBitDataInSixteenBitFrames) {
+  SceneParams p;
+  FrameTruth t;
+  cv::Mat eight = RenderFrame(p, 0, &t), twelve;
+  eight.convertTo(twelve, CV_16U, 16.0);  // 0…4080
+  EXPECT_EQ(DataMax(twelve), 4095.0);
+  EXPECT_EQ(DataMax(eight), 255.0);
+  const StrandMeasurement m = MeasureStrand(twelve, {});
+  ASSERT_TRUE(m.valid()) << m.detail;
+  EXPECT_NEAR(m.width_px, t.width_px, 0.05);
+  EXPECT_NEAR(m.contrast, 160 * 16, 160 * 16 * 0.03);
+  // Judged against 65535 the same frame would have an edge step of 4 % of full scale: below the
+  // 6 % low-contrast limit.
+  EXPECT_LT(m.contrast / 65535.0, StrandMeasureOptions().min_contrast_fraction);
+}
+
 TEST(StrandMeasureTest, FlagWidthOutliersMarksOnlyTheOutlier) {
   std::vector<StrandMeasurement> frames(40);
   for (int i = 0; i < 40; ++i) {
