@@ -1,5 +1,7 @@
 #include "pipeline/experiment.h"
 
+#include "vision/track.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -290,6 +292,8 @@ StepResult MeasureStep(const StepSpec& spec, const ExperimentOptions& o, int dec
   int index = 0;
   cv::Mat img;
   std::string source;
+  // The step's frames show one scene: follow the strand from sample to sample.
+  vision::StrandTracker tracker(o.strand);
   while (frames->Next(&t, &index, &img, &source)) {
     if (o.cancel && o.cancel->load()) break;
     if (t < a - 1e-9) continue;
@@ -305,7 +309,7 @@ StepResult MeasureStep(const StepSpec& spec, const ExperimentOptions& o, int dec
       f.m.status = vision::FrameStatus::kUnreadable;
       f.m.detail = "cannot decode";
     } else {
-      f.m = vision::MeasureStrand(img, o.strand);
+      f.m = tracker.Measure(img);
     }
     ++r.n_examined;
     if (f.m.valid()) {

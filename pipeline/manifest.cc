@@ -167,7 +167,7 @@ Manifest LoadManifest(const std::string& path) {
     if (!root.IsMap())
       throw std::invalid_argument(path + ": expected a mapping (name:, steps:, …)");
     y.CheckKeys(root, {"name", "samples", "settle_s", "scale_um_per_px", "calibration", "calibrate",
-                       "extruder", "extruder_set", "roi", "polarity", "band_start_um",
+                       "extruder", "extruder_set", "roi", "polarity", "target", "band_start_um",
                        "band_height_um", "steps", "video", "temperature_log", "video_start_s",
                        "hold_tolerance_c", "min_step_s"});
     m.path = path;
@@ -200,6 +200,11 @@ Manifest LoadManifest(const std::string& path) {
     if (root["extruder_set"]) m.extruder_set = y.TextList(root["extruder_set"], "extruder_set");
     if (root["roi"]) m.roi = y.Text(root["roi"], "roi");
     if (root["polarity"]) m.polarity = y.Text(root["polarity"], "polarity");
+    if (root["target"]) {
+      m.target = y.Text(root["target"], "target");
+      if (m.target != "strand" && m.target != "filament")
+        y.Fail(root["target"], "target: expected strand or filament, not '" + m.target + "'");
+    }
     if (root["band_start_um"]) m.band_start_um = y.Number(root["band_start_um"], "band_start_um");
     if (root["band_height_um"])
       m.band_height_um = y.Number(root["band_height_um"], "band_height_um");

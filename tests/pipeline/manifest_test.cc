@@ -48,6 +48,15 @@ TEST(ManifestTest, ReadsYamlWithPathsRelativeToTheManifest) {
   EXPECT_EQ(m.steps[1].line, 8);
 }
 
+TEST(ManifestTest, TargetKey) {
+  const std::string steps = "steps:\n  - {step: 1, temperature_c: 220, images: frames}\n";
+  EXPECT_EQ(LoadManifest(Write("t0.yaml", steps)).target, "strand");
+  EXPECT_EQ(LoadManifest(Write("t1.yaml", "target: filament\n" + steps)).target, "filament");
+  const std::string err = ErrorOf(Write("t2.yaml", "target: nozzle\n" + steps));
+  EXPECT_NE(err.find("t2.yaml:1"), std::string::npos) << err;
+  EXPECT_NE(err.find("strand or filament"), std::string::npos) << err;
+}
+
 TEST(ManifestTest, CsvForm) {
   const Manifest m = LoadManifest(Write(
       "steps.csv", "step,temperature_c,source,start_s,end_s\n1,220,a.mp4,,\n2,210,frames,,\n"));
