@@ -9,6 +9,7 @@
 #include "model/parameters.h"
 #include "model/predictor.h"
 #include "pipeline/experiment.h"
+#include "vision/scene.h"
 #include "vision/strand_measure.h"
 #include "vision/synthetic.h"
 
@@ -22,6 +23,7 @@ int RunMeasure(int argc, char** argv);
 int RunPredict(int argc, char** argv);
 int RunCalibrate(int argc, char** argv);
 int RunRun(int argc, char** argv);
+int RunInspect(int argc, char** argv);
 
 // --- render --------------------------------------------------------------------------------
 struct RenderCommandOptions {
@@ -68,6 +70,30 @@ MeasureSummary MeasureInputs(MeasureCommandOptions options);
 
 // The per-frame CSV's columns, in order.
 const std::vector<std::string>& FrameCsvColumns();
+
+// --- inspect -------------------------------------------------------------------------------
+struct InspectCommandOptions {
+  std::string input;  // an image, a directory of images or a video
+  int frame = 0;      // which frame of it
+  std::string out_png = "inspect.png";
+  vision::StrandMeasureOptions strand;  // roi, polarity; the target when target_given
+  bool target_given = false;            // else: strand, or filament when no tip is in view
+  bool Validate(std::string* why) const;
+};
+
+struct InspectReport {
+  vision::MeasureTarget target = vision::MeasureTarget::kStrand;
+  vision::SceneResult scene;
+  vision::StrandMeasurement measurement;
+  cv::Rect frame_rect, suggested_roi;  // empty ROI: none to suggest
+  std::string text;                    // the report, with the suggested command and manifest keys
+};
+
+// Looks at one frame as `measure` would and explains what it found: every candidate edge pair
+// with its score and verdict, the chosen one, tip, band and calipers (an annotated PNG at
+// out_png, written atomically), and a suggested command line and manifest snippet. Throws
+// std::invalid_argument for an input that cannot be read or has no such frame.
+InspectReport InspectInput(const InspectCommandOptions& options);
 
 // --- calibrate -----------------------------------------------------------------------------
 struct CalibrateCommandOptions {

@@ -29,6 +29,8 @@ const Command kCommands[] = {
      "the whole pipeline from one manifest: calibrate, measure, predict"},
     {"predict", clogscope::apps::RunPredict,
      "diameter table -> predicted vibration and motor current; fits"},
+    {"inspect", clogscope::apps::RunInspect,
+     "camera set-up: what the tool sees in one frame, and the options to use"},
 };
 
 void PrintUsage() {

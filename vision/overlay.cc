@@ -21,7 +21,7 @@ cv::Point Fixed(double x, double y, double zoom = 1.0, cv::Point2d offset = {0, 
 cv::Mat ToBgr8(const cv::Mat& frame) {
   cv::Mat eight;
   if (frame.depth() == CV_16U) {
-    frame.convertTo(eight, CV_8U, 1.0 / 257.0);
+    frame.convertTo(eight, CV_8U, 255.0 / DataMax(frame));  // 12-bit data shows as bright as 16
   } else {
     eight = frame;
   }
@@ -117,6 +117,33 @@ cv::Mat DrawOverlay(const cv::Mat& frame, const StrandMeasurement& m, double sca
     Text(out, lines[i], {10, static_cast<int>((i + 1) * line_h)}, font);
   }
   return out;
+}
+
+void DrawCandidates(cv::Mat& overlay, const SceneResult& scene, cv::Point roi_offset,
+                    int max_candidates) {
+  const cv::Scalar kOrange(0, 140, 255), kGrey(150, 150, 150);
+  const cv::Point2d off(roi_offset.x, roi_offset.y);
+  for (int i = std::min<int>(max_candidates, scene.candidates.size()) - 1; i >= 0; --i) {
+    const PairCandidate& c = scene.candidates[i];
+    const bool chosen = i == scene.chosen;
+    const bool ruled_out = c.verdict.find("inside") != std::string::npos ||
+                           c.verdict.find("spans") != std::string::npos ||
+                           c.verdict.find("tip") != std::string::npos;
+    const cv::Scalar colour = chosen ? kGreen : ruled_out ? kGrey : kOrange;
+    for (double u0 : {c.left_u0, c.right_u0}) {
+      const cv::Point2d a(c.axis.ImageX(0, u0), c.axis.ImageY(0, u0));
+      const cv::Point2d b(c.axis.ImageX(c.length_px, u0 + c.edge_slope * c.length_px),
+                          c.axis.ImageY(c.length_px, u0 + c.edge_slope * c.length_px));
+      cv::line(overlay, Fixed(a.x + off.x, a.y + off.y), Fixed(b.x + off.x, b.y + off.y), colour,
+               chosen ? 2 : 1, cv::LINE_AA, kShift);
+    }
+    const cv::Point label(static_cast<int>(c.axis.ox + off.x) - 8,
+                          std::max(12, static_cast<int>(c.axis.oy + off.y) - 6));
+    cv::putText(overlay, fmt::format("#{}", i + 1), label, cv::FONT_HERSHEY_SIMPLEX, 0.45, kBlack, 3,
+                cv::LINE_AA);
+    cv::putText(overlay, fmt::format("#{}", i + 1), label, cv::FONT_HERSHEY_SIMPLEX, 0.45, colour,
+                1, cv::LINE_AA);
+  }
 }
 
 }  // namespace clogscope::vision

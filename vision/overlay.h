@@ -2,6 +2,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "vision/scene.h"
 #include "vision/strand_measure.h"
 
 namespace clogscope::vision {
@@ -13,5 +14,12 @@ namespace clogscope::vision {
 // <= 0 leaves it out.
 cv::Mat DrawOverlay(const cv::Mat& frame, const StrandMeasurement& m, double scale_um_per_px,
                     double edge_bias_px = 0.0);
+
+// Draws a scene's candidate edge pairs onto an overlay (BGR, full-frame coordinates; the scene's
+// are the ROI's, shifted by roi_offset): each pair's two edge lines over its stretch with its
+// number at the top (#1 is the best score), the chosen pair in green, the others in orange, those
+// that lost by rule (nested, spanning objects, no tip) in grey.
+void DrawCandidates(cv::Mat& overlay, const SceneResult& scene, cv::Point roi_offset,
+                    int max_candidates = 8);
 
 }  // namespace clogscope::vision

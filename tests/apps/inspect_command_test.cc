@@ -1,0 +1,63 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+
+#include "apps/commands.h"
+#include "tests/apps/cli_test_util.h"
+#include "vision/synthetic.h"
+
+namespace clogscope::apps {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string Render(const fs::path& dir, const std::string& name, const vision::SceneParams& p) {
+  const std::string path = (dir / name).string();
+  cv::imwrite(path, vision::RenderFrame(p, 0, nullptr));
+  return path;
+}
+
+TEST(InspectCommandTest, ExplainsTheFrameAndSuggestsOptions) {
+  const fs::path d = testing::FreshDir("clogscope_inspect");
+  vision::SceneParams p;
+  p.nozzle_level = 30;  // darker than the background
+  p.clutter_discs = 2;
+  InspectCommandOptions o;
+  o.input = Render(d, "strand.png", p);
+  o.out_png = (d / "inspect.png").string();
+  const InspectReport r = InspectInput(o);
+  ASSERT_TRUE(r.measurement.valid()) << r.text;
+  EXPECT_EQ(r.target, vision::MeasureTarget::kStrand);
+  EXPECT_NE(r.text.find("chosen"), std::string::npos) << r.text;
+  EXPECT_NE(r.text.find("--target strand"), std::string::npos) << r.text;
+  EXPECT_NE(r.text.find("polarity: bright"), std::string::npos) << r.text;
+  // The suggested ROI holds the tip and the band.
+  EXPECT_TRUE(r.suggested_roi.contains(cv::Point(640, 245))) << r.text;
+  EXPECT_TRUE(r.suggested_roi.contains(cv::Point(640, 300))) << r.text;
+  const cv::Mat png = cv::imread(o.out_png);
+  EXPECT_EQ(png.cols, 1280);
+
+  // No tip in view: the filament target is suggested.
+  p = vision::SceneParams();
+  p.nozzle = false;
+  o.input = Render(d, "filament.png", p);
+  const InspectReport f = InspectInput(o);
+  EXPECT_EQ(f.target, vision::MeasureTarget::kFilament) << f.text;
+  EXPECT_TRUE(f.measurement.valid()) << f.text;
+  EXPECT_NE(f.text.find("target: filament"), std::string::npos);
+
+  // Nothing to see: the reason, and no ROI.
+  p.strand = false;
+  o.input = Render(d, "empty.png", p);
+  const InspectReport e = InspectInput(o);
+  EXPECT_FALSE(e.measurement.valid());
+  EXPECT_TRUE(e.suggested_roi.empty());
+  EXPECT_NE(e.text.find("no_strand"), std::string::npos) << e.text;
+
+  o.frame = 3;  // an image has one frame
+  EXPECT_THROW(InspectInput(o), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace clogscope::apps
