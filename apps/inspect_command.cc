@@ -27,7 +27,8 @@ vision::InputFrame ReadFrame(const std::string& input, int index) {
     ++read;
     if (f.index < index) continue;
     if (f.image.empty())
-      throw std::invalid_argument(fmt::format("{}: frame {} unreadable: {}", input, index, f.error));
+      throw std::invalid_argument(
+          fmt::format("{}: frame {} unreadable: {}", input, index, f.error));
     return f;
   }
   throw std::invalid_argument(
@@ -49,15 +50,17 @@ cv::Rect SuggestRoi(const vision::StrandGeometry& g, const cv::Rect& roi, const 
   const double s0 = g.has_tip ? -std::max(20.0, 0.3 * g.width_px) : 0.0;
   double x0 = 1e30, y0 = 1e30, x1 = -1e30, y1 = -1e30;
   for (double s : {s0, g.s_end}) {
-    for (double u : {g.left_u0 + g.edge_slope * s - margin, g.right_u0 + g.edge_slope * s + margin}) {
+    for (double u :
+         {g.left_u0 + g.edge_slope * s - margin, g.right_u0 + g.edge_slope * s + margin}) {
       x0 = std::min(x0, g.axis.ImageX(s, u));
       x1 = std::max(x1, g.axis.ImageX(s, u));
       y0 = std::min(y0, g.axis.ImageY(s, u));
       y1 = std::max(y1, g.axis.ImageY(s, u));
     }
   }
-  const cv::Rect r(static_cast<int>(std::floor(x0)) + roi.x, static_cast<int>(std::floor(y0)) + roi.y,
-                   static_cast<int>(std::ceil(x1 - x0)), static_cast<int>(std::ceil(y1 - y0)));
+  const cv::Rect r(static_cast<int>(std::floor(x0)) + roi.x,
+                   static_cast<int>(std::floor(y0)) + roi.y, static_cast<int>(std::ceil(x1 - x0)),
+                   static_cast<int>(std::ceil(y1 - y0)));
   return r & cv::Rect(cv::Point(0, 0), size);
 }
 
@@ -87,8 +90,7 @@ InspectReport InspectInput(const InspectCommandOptions& o) {
   const double data_max = vision::DataMax(img(roi));
   // Without a target given: a strand below a tip, or else whatever straight stretch is in view.
   std::vector<vision::MeasureTarget> tries = {o.strand.target};
-  if (!o.target_given)
-    tries = {vision::MeasureTarget::kStrand, vision::MeasureTarget::kFilament};
+  if (!o.target_given) tries = {vision::MeasureTarget::kStrand, vision::MeasureTarget::kFilament};
   vision::StrandMeasureOptions mo;
   for (const auto t : tries) {
     mo = ForTarget(o.strand, t);
@@ -96,47 +98,53 @@ InspectReport InspectInput(const InspectCommandOptions& o) {
     rep.scene = vision::FindScene(channels, vision::SceneOptionsFor(mo, data_max));
     if (rep.scene.status != vision::FrameStatus::kNoTip) break;
   }
-  rep.measurement = vision::MeasureInScene(channels[rep.scene.channel], data_max,
-                                           rep.scene.status, rep.scene.detail,
-                                           rep.scene.geometry, roi, mo);
+  rep.measurement = vision::MeasureInScene(channels[rep.scene.channel], data_max, rep.scene.status,
+                                           rep.scene.detail, rep.scene.geometry, roi, mo);
   const vision::StrandMeasurement& m = rep.measurement;
 
   std::string& t = rep.text;
   t += fmt::format("{} frame {}: {}x{}, {} channel(s), {}-bit data (largest value {:.0f})\n",
                    f.source, f.index, img.cols, img.rows, img.channels(),
                    static_cast<int>(std::round(std::log2(data_max + 1))), data_max);
-  t += fmt::format("searched {} in {}, gradient noise {:.2f} grey levels/px\n",
-                   roi == rep.frame_rect ? "the whole frame" : fmt::format("ROI {},{},{},{}", roi.x, roi.y, roi.width, roi.height),
-                   img.channels() == 1 ? "grey" : kChannelNames[rep.scene.channel],
-                   rep.scene.gradient_noise);
+  t += fmt::format(
+      "searched {} in {}, gradient noise {:.2f} grey levels/px\n",
+      roi == rep.frame_rect ? "the whole frame"
+                            : fmt::format("ROI {},{},{},{}", roi.x, roi.y, roi.width, roi.height),
+      img.channels() == 1 ? "grey" : kChannelNames[rep.scene.channel], rep.scene.gradient_noise);
   t += fmt::format("target {}{}\n", vision::MeasureTargetName(rep.target),
-                   o.target_given ? "" : " (chosen: a tip is " +
-                                             std::string(rep.target == vision::MeasureTarget::kStrand ? "in view)" : "not in view)"));
+                   o.target_given ? ""
+                                  : " (chosen: a tip is " +
+                                        std::string(rep.target == vision::MeasureTarget::kStrand
+                                                        ? "in view)"
+                                                        : "not in view)"));
   t += "candidate edge pairs, best first (numbered as in the picture):\n";
   for (size_t i = 0; i < rep.scene.candidates.size() && i < 8; ++i) {
     const auto& c = rep.scene.candidates[i];
-    t += fmt::format("  #{:<2} width {:7.1f} px  length {:5.0f} px  tilt {:+5.1f}°  {:6} SNR {:4.0f}  "
-                     "score {:5.0f}  {}\n",
-                     i + 1, c.width_px, c.length_px, std::atan2(c.axis.dx, c.axis.dy) * 180 / M_PI,
-                     vision::PolarityName(c.polarity), c.snr, c.score,
-                     c.verdict.empty() ? "not examined" : c.verdict);
+    t += fmt::format(
+        "  #{:<2} width {:7.1f} px  length {:5.0f} px  tilt {:+5.1f}°  {:6} SNR {:4.0f}  "
+        "score {:5.0f}  {}\n",
+        i + 1, c.width_px, c.length_px, std::atan2(c.axis.dx, c.axis.dy) * 180 / M_PI,
+        vision::PolarityName(c.polarity), c.snr, c.score,
+        c.verdict.empty() ? "not examined" : c.verdict);
   }
   if (rep.scene.candidates.empty()) t += "  none\n";
   if (m.valid()) {
     t += fmt::format(
-        "result: width {:.3f} ± {:.3f} px, angle {:+.2f}°, {} ({:.1f}, {:.1f}), band {:.0f}–{:.0f} px, "
+        "result: width {:.3f} ± {:.3f} px, angle {:+.2f}°, {} ({:.1f}, {:.1f}), band {:.0f}–{:.0f} "
+        "px, "
         "{} of {} calipers, blur {:.2f} px, contrast {:.0f}, edges {} / {}\n",
         m.width_px, m.width_sigma_px, m.angle_deg,
-        rep.target == vision::MeasureTarget::kStrand ? "tip" : "stretch top", m.tip_x_px, m.tip_y_px,
-        m.band_start_px, m.band_end_px, m.calipers_used, m.calipers_total, m.blur_px, m.contrast,
-        m.shading_left ? "shaded" : "plain", m.shading_right ? "shaded" : "plain");
+        rep.target == vision::MeasureTarget::kStrand ? "tip" : "stretch top", m.tip_x_px,
+        m.tip_y_px, m.band_start_px, m.band_end_px, m.calipers_used, m.calipers_total, m.blur_px,
+        m.contrast, m.shading_left ? "shaded" : "plain", m.shading_right ? "shaded" : "plain");
     rep.suggested_roi = SuggestRoi(rep.scene.geometry, roi, img.size());
   } else {
     t += fmt::format("result: {}: {}\n", vision::FrameStatusName(m.status), m.detail);
   }
   // What to give measure (and the manifest) for this camera.
-  const std::string polarity =
-      m.valid() && m.polarity != vision::Polarity::kMixed ? vision::PolarityName(m.polarity) : "auto";
+  const std::string polarity = m.valid() && m.polarity != vision::Polarity::kMixed
+                                   ? vision::PolarityName(m.polarity)
+                                   : "auto";
   std::string cmd = fmt::format("clogscope measure {} --target {}", o.input,
                                 vision::MeasureTargetName(rep.target));
   std::string yaml = fmt::format("target: {}\n", vision::MeasureTargetName(rep.target));
@@ -184,7 +192,8 @@ int RunInspect(int argc, char** argv) {
       "  clogscope inspect step1.mp4 --out inspect.png\n"
       "  clogscope inspect feed.avi --frame 100 --target filament\n"
       "The picture numbers every candidate edge pair (green: chosen, orange: lost on score, grey:\n"
-      "ruled out), with the band, calipers and tip of the measurement and the suggested ROI (white).");
+      "ruled out), with the band, calipers and tip of the measurement and the suggested ROI "
+      "(white).");
   CLI11_PARSE(app, argc, argv);
   if (!roi.empty()) o.strand.roi = ParseRoi(roi);
   o.strand.polarity = vision::ParsePolarity(polarity);

@@ -2,10 +2,12 @@
 
 #include <CLI/CLI.hpp>
 #include <filesystem>
+#include <sstream>
 #include <stdexcept>
 
 #include "apps/cli_util.h"
 #include "apps/commands.h"
+#include "common/csv.h"
 #include "vision/video_io.h"
 
 namespace clogscope::apps {
@@ -98,6 +100,24 @@ int RunRender(int argc, char** argv) {
   app.add_flag("--colour,--color", s.colour, "BGR frames with an orange tint");
   app.add_option("--bit-depth", s.bit_depth, "8 or 16 (PNG only)")->capture_default_str();
   app.add_option("--seed", s.seed, "Random seed")->capture_default_str();
+  bool no_nozzle = false, no_strand = false;
+  std::string strand_tint, background_tint;
+  app.add_option("--nozzle-level", s.nozzle_level, "Nozzle grey level (0 black … 255 white)")
+      ->capture_default_str();
+  app.add_flag("--no-nozzle", no_nozzle, "No nozzle in view (a filament or needle)");
+  app.add_flag("--no-strand", no_strand, "Nothing below the nozzle");
+  app.add_option("--texture", s.texture_amplitude,
+                 "Low-frequency background texture, ± grey levels");
+  app.add_option("--discs", s.clutter_discs, "Discs beside and behind the strand");
+  app.add_option("--gears", s.clutter_gears, "Gears beside and behind the strand");
+  app.add_option("--shading-ambient", s.shading_ambient,
+                 "Lambertian shading of a lit strand: ambient fraction (1 = flat)")
+      ->capture_default_str();
+  app.add_flag("--clear", s.clear_strand, "A clear strand with two bright internal lines");
+  app.add_option("--vignetting", s.vignetting, "Relative darkening at the corners");
+  app.add_option("--strand-tint", strand_tint, "With --colour: B,G,R gains of the strand");
+  app.add_option("--background-tint", background_tint,
+                 "With --colour: B,G,R gains of the background");
   app.footer(
       "Examples:\n"
       "  clogscope render --out frames/ --frames 10\n"
@@ -108,6 +128,22 @@ int RunRender(int argc, char** argv) {
       "micro/");
   CLI11_PARSE(app, argc, argv);
   s.target = vision::ParseTarget(target);
+  s.nozzle = !no_nozzle;
+  s.strand = !no_strand;
+  // "B,G,R" gains, each through the shared number parser.
+  const auto tint = [](const std::string& text, const char* option, double* out) {
+    std::stringstream ss(text);
+    std::string item;
+    int c = 0;
+    while (std::getline(ss, item, ',')) {
+      if (c == 3) break;
+      out[c++] = ParseNumberField(item, option, "gain");
+    }
+    if (c != 3 || std::getline(ss, item))
+      throw std::invalid_argument(std::string(option) + " '" + text + "': expected B,G,R gains");
+  };
+  if (!strand_tint.empty()) tint(strand_tint, "--strand-tint", s.strand_tint);
+  if (!background_tint.empty()) tint(background_tint, "--background-tint", s.background_tint);
   if (silhouette) {
     const double bg = s.background_level, st = s.strand_level;
     s.SetSilhouette();

@@ -1,7 +1,5 @@
 #include "pipeline/experiment.h"
 
-#include "vision/track.h"
-
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -19,6 +17,7 @@
 #include "common/provenance.h"
 #include "pipeline/statistics.h"
 #include "vision/overlay.h"
+#include "vision/track.h"
 #include "vision/video_decoder.h"
 #include "vision/video_io.h"
 

@@ -21,9 +21,9 @@ struct StepSpec {
 // An experiment: its steps and how to measure them. Paths are resolved against the manifest's
 // folder. YAML keys (all optional but the steps):
 //   name, samples, settle_s, scale_um_per_px, calibration (file), calibrate: {pins | micrometer,
-//   pitch_um}, extruder, extruder_set: [name=value…], roi, polarity, target, band_start_um, band_height_um,
-//   steps: [{step, temperature_c, video | images, start_s, end_s}…]
-//   or instead of steps: video, temperature_log, video_start_s, hold_tolerance_c, min_step_s.
+//   pitch_um}, extruder, extruder_set: [name=value…], roi, polarity, target, band_start_um,
+//   band_height_um, steps: [{step, temperature_c, video | images, start_s, end_s}…] or instead of
+//   steps: video, temperature_log, video_start_s, hold_tolerance_c, min_step_s.
 // The CSV form holds steps only: step,temperature_c,source[,start_s,end_s].
 struct Manifest {
   std::string path;

@@ -1,12 +1,12 @@
 #include "vision/batch.h"
 
-#include "vision/track.h"
-
 #include <condition_variable>
 #include <deque>
 #include <exception>
 #include <mutex>
 #include <thread>
+
+#include "vision/track.h"
 
 namespace clogscope::vision {
 

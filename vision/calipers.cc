@@ -2,9 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <array>
-#include <Eigen/Dense>
 #include <cmath>
 
 #include "common/robust.h"
@@ -148,9 +148,8 @@ EdgeLines FitEdgeLines(const std::vector<CaliperFit>& fits, double band_s0, doub
 
 }  // namespace
 
-void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry& g,
-                     double band_s0, double band_s1, const StrandMeasureOptions& opt,
-                     StrandMeasurement* m) {
+void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry& g, double band_s0,
+                     double band_s1, const StrandMeasureOptions& opt, StrandMeasurement* m) {
   auto fail = [&](FrameStatus st, std::string detail) {
     m->status = st;
     m->detail = std::move(detail);
@@ -176,10 +175,14 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     const double sa = band_s0 + 0.5 * opt.caliper_spacing_px;
     const double sb = band_s0 + (n_cal - 0.5) * opt.caliper_spacing_px;
     const double half = std::min(10.0, 0.25 * width0);
-    const double la = RefineEdgeGuess(img, f, sa, left_guess + slope_guess * sa, half, min_contrast);
-    const double lb = RefineEdgeGuess(img, f, sb, left_guess + slope_guess * sb, half, min_contrast);
-    const double ra = RefineEdgeGuess(img, f, sa, right_guess + slope_guess * sa, half, min_contrast);
-    const double rb = RefineEdgeGuess(img, f, sb, right_guess + slope_guess * sb, half, min_contrast);
+    const double la =
+        RefineEdgeGuess(img, f, sa, left_guess + slope_guess * sa, half, min_contrast);
+    const double lb =
+        RefineEdgeGuess(img, f, sb, left_guess + slope_guess * sb, half, min_contrast);
+    const double ra =
+        RefineEdgeGuess(img, f, sa, right_guess + slope_guess * sa, half, min_contrast);
+    const double rb =
+        RefineEdgeGuess(img, f, sb, right_guess + slope_guess * sb, half, min_contrast);
     if (sb > sa) slope_guess = 0.5 * ((lb - la) + (rb - ra)) / (sb - sa);
     left_guess = 0.5 * (la + lb) - slope_guess * 0.5 * (sa + sb);
     right_guess = 0.5 * (ra + rb) - slope_guess * 0.5 * (sa + sb);
@@ -263,7 +266,8 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       shade[side] =
           ShadingEvident(shade_evidence[side]) && Median(shade_shift[side]) > kMinShadingShiftPx;
       if (shade[side] == 0) continue;
-      for (auto& cf : fits) (side == 0 ? cf.left : cf.right) = side == 0 ? cf.left_shaded : cf.right_shaded;
+      for (auto& cf : fits)
+        (side == 0 ? cf.left : cf.right) = side == 0 ? cf.left_shaded : cf.right_shaded;
     }
     const EdgeLines lines = FitEdgeLines(fits, band_s0, opt.caliper_spacing_px);
     if (lines.calipers < 2) {

@@ -25,8 +25,8 @@ inline void StepShape(double z, double* f, double* df) {
   const double x = std::abs(z) * kInvSqrt2;
   const double t = 1.0 / (1.0 + 0.3275911 * x);
   const double poly =
-      t * (0.254829592 +
-           t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
+      t *
+      (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
   const double half_erfc = 0.5 * poly * g;  // (1 - erf(x)) / 2
   *f = z >= 0 ? 1.0 - half_erfc : half_erfc;
 }

@@ -139,8 +139,8 @@ void DrawCandidates(cv::Mat& overlay, const SceneResult& scene, cv::Point roi_of
     }
     const cv::Point label(static_cast<int>(c.axis.ox + off.x) - 8,
                           std::max(12, static_cast<int>(c.axis.oy + off.y) - 6));
-    cv::putText(overlay, fmt::format("#{}", i + 1), label, cv::FONT_HERSHEY_SIMPLEX, 0.45, kBlack, 3,
-                cv::LINE_AA);
+    cv::putText(overlay, fmt::format("#{}", i + 1), label, cv::FONT_HERSHEY_SIMPLEX, 0.45, kBlack,
+                3, cv::LINE_AA);
     cv::putText(overlay, fmt::format("#{}", i + 1), label, cv::FONT_HERSHEY_SIMPLEX, 0.45, colour,
                 1, cv::LINE_AA);
   }

@@ -18,9 +18,9 @@ struct SceneOptions {
   double max_tilt_deg = 45.0;           // axes leaning more than this from vertical are ignored
   double min_length_px = 30.0;          // shortest common stretch of the two edges
   double min_width_px = 8.0;            // narrower pairs are lines (scratches, glints), not strands
-  double min_contrast = 15.0;     // edge step below this (grey levels of the data's range): too weak
-  double ambiguity_ratio = 0.8;   // a disjoint runner-up scoring this much of the best: ambiguous
-  double min_score = 15.0;        // below this no candidate is a strand (score units: px of edge)
+  double min_contrast = 15.0;    // edge step below this (grey levels of the data's range): too weak
+  double ambiguity_ratio = 0.8;  // a disjoint runner-up scoring this much of the best: ambiguous
+  double min_score = 15.0;       // below this no candidate is a strand (score units: px of edge)
 };
 
 // A straight piece of an intensity edge, ROI pixel coordinates at full resolution.
@@ -34,14 +34,14 @@ struct EdgeSegment {
 
 // One candidate: two edges as the strand's silhouette. The axis is the bisector of the pair.
 struct PairCandidate {
-  int left = -1, right = -1;  // indices into SceneResult::edges
+  int left = -1, right = -1;            // indices into SceneResult::edges
   Polarity polarity = Polarity::kAuto;  // bright, dark, or kMixed (brighter on one side only)
-  AxisFrame axis;                        // origin on the axis at the top of the common stretch
-  double left_u0 = 0, right_u0 = 0;      // edge lines u = u0 + slope·s in `axis`
+  AxisFrame axis;                       // origin on the axis at the top of the common stretch
+  double left_u0 = 0, right_u0 = 0;     // edge lines u = u0 + slope·s in `axis`
   double edge_slope = 0;
-  double length_px = 0;                  // common stretch (from the segments)
-  double width_px = 0;                   // perpendicular separation
-  double snr = 0;                        // weaker edge's gradient over the gradient noise
+  double length_px = 0;  // common stretch (from the segments)
+  double width_px = 0;   // perpendicular separation
+  double snr = 0;        // weaker edge's gradient over the gradient noise
   double score = 0;
   std::string verdict;  // "chosen", or why it lost
 };
@@ -50,15 +50,15 @@ struct PairCandidate {
 struct StrandGeometry {
   AxisFrame axis;  // origin on the axis: at the tip (strand) or the top of the stretch (filament)
   double left_u0 = 0, right_u0 = 0, edge_slope = 0;
-  double width_px = 0;     // coarse width of the pair
+  double width_px = 0;  // coarse width of the pair
   int left_sign = 0, right_sign = 0;
   Polarity polarity = Polarity::kAuto;
   bool has_tip = false;
-  bool precise = false;    // edge lines from fitted calipers (tracking), not from the gradient
+  bool precise = false;  // edge lines from fitted calipers (tracking), not from the gradient
   // Edge model per side: −1 decide from the calipers, 0 plain blurred step, 1 shaded (tracking
   // keeps the first frame's decision).
   int shading_left = -1, shading_right = -1;
-  double s_end = 0;        // where the pair ends downward (bed, obstacle or border), from origin
+  double s_end = 0;  // where the pair ends downward (bed, obstacle or border), from origin
   bool end_is_object = false;  // the pair ends at an object (bed) rather than the border
   double score = 0;
 };

@@ -127,11 +127,10 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
                               : 3.0 * opt.caliper_spacing_px;
   if (band_s1 - band_s0 < min_band) {
     m.status = FrameStatus::kBandOutsideFrame;
-    m.detail = fmt::format(
-        "band {:.0f}-{:.0f} px below the {} runs into {} {:.0f} px below it", band_s0,
-        band_s0 + std::min(opt.band_height_px, 1e5),
-        opt.target == MeasureTarget::kStrand ? "tip" : "top of the stretch",
-        g.end_is_object ? "an object" : "the frame or ROI edge", g.s_end);
+    m.detail = fmt::format("band {:.0f}-{:.0f} px below the {} runs into {} {:.0f} px below it",
+                           band_s0, band_s0 + std::min(opt.band_height_px, 1e5),
+                           opt.target == MeasureTarget::kStrand ? "tip" : "top of the stretch",
+                           g.end_is_object ? "an object" : "the frame or ROI edge", g.s_end);
     return m;
   }
   const GreyImage img{channel, channel.depth() == CV_16U};

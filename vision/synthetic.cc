@@ -185,10 +185,13 @@ SceneParams RandomRealisticScene(uint64_t seed) {
   }
   // Headroom: the gradient brightens one side by up to half its fraction, noise adds 3σ; a
   // clipped edge is a fair "saturated", but not what this scene is for.
-  p.strand_level = std::min(p.strand_level, (250.0 - 3 * p.noise_sigma) / (1 + 0.5 * p.gradient_fraction));
-  p.background_level = std::min(p.background_level, (250.0 - 3 * p.noise_sigma) / (1 + 0.5 * p.gradient_fraction));
+  p.strand_level =
+      std::min(p.strand_level, (250.0 - 3 * p.noise_sigma) / (1 + 0.5 * p.gradient_fraction));
+  p.background_level =
+      std::min(p.background_level, (250.0 - 3 * p.noise_sigma) / (1 + 0.5 * p.gradient_fraction));
   // And at the dark end, after texture, vignetting and the gradient have darkened it.
-  const double floor = (3 * p.noise_sigma + 8 + p.texture_amplitude) / ((1 - p.vignetting) * (1 - 0.5 * p.gradient_fraction));
+  const double floor = (3 * p.noise_sigma + 8 + p.texture_amplitude) /
+                       ((1 - p.vignetting) * (1 - 0.5 * p.gradient_fraction));
   p.background_level = std::max(p.background_level, floor);
   p.strand_level = std::max(p.strand_level, floor);
   return p;

@@ -85,11 +85,11 @@ struct SceneParams {
   bool clear_strand = false;
   double clear_line_gain = 60.0;
   double vignetting = 0.0;  // relative darkening at the frame corners (radial, quadratic)
-  bool colour = false;  // BGR output: orange strand (strand_tint) on background_tint
+  bool colour = false;      // BGR output: orange strand (strand_tint) on background_tint
   double strand_tint[3] = {0.45, 0.75, 1.0};  // B, G, R gains (colour only)
   double background_tint[3] = {0.45, 0.75, 1.0};
   double nozzle_tint[3] = {0.45, 0.75, 1.0};
-  int bit_depth = 8;    // 8 or 16
+  int bit_depth = 8;  // 8 or 16
   uint64_t seed = 1;
 
   // True when the parameters make a renderable scene; otherwise says why.

@@ -47,11 +47,13 @@ double ClutterObject::Coverage(double x, double y, double sigma_px) const {
     const double s = 1.6 * std::sin(teeth * phi + phase);
     const double c = std::clamp(s, -1.0, 1.0);
     r += 0.5 * tooth_depth_px * (1 + c);
-    if (std::abs(s) < 1.0) slope = 0.5 * tooth_depth_px * 1.6 * teeth * std::cos(teeth * phi + phase);
+    if (std::abs(s) < 1.0)
+      slope = 0.5 * tooth_depth_px * 1.6 * teeth * std::cos(teeth * phi + phase);
   }
   if (rho < 1e-9) return 1.0;
   // Signed distance to the boundary, first order in its slope.
-  const double t = (r - rho) / std::sqrt(1 + (slope / std::max(rho, 1.0)) * (slope / std::max(rho, 1.0)));
+  const double t =
+      (r - rho) / std::sqrt(1 + (slope / std::max(rho, 1.0)) * (slope / std::max(rho, 1.0)));
   return PixelMeanOfBlurredStep(t, sigma_px, rx / rho, ry / rho);
 }
 
@@ -72,7 +74,8 @@ std::vector<ClutterObject> PlaceClutter(int discs, int gears, double x0, double 
     // Beside the strand, some reaching behind its edge (they are hidden there).
     const double side = u01(rng) < 0.5 ? -1.0 : 1.0;
     const double gap = (-0.3 + 1.3 * u01(rng)) * o.radius_px;
-    const double along = y_min + o.radius_px + u01(rng) * std::max(1.0, image_height - y_min - o.radius_px);
+    const double along =
+        y_min + o.radius_px + u01(rng) * std::max(1.0, image_height - y_min - o.radius_px);
     const double off = side * (0.5 * width_px + o.radius_px + o.tooth_depth_px + gap);
     o.cx = x0 + (along - y0) / dy * dx + off * dy;
     o.cy = along - off * dx;

@@ -70,7 +70,8 @@ bool StrandTracker::Follow(const cv::Mat& frame, StrandMeasurement* out) {
       g.s_end = now.s_end + tip_shift;
     }
   }
-  StrandMeasurement m = MeasureInScene(channel, data_max, FrameStatus::kValid, "", g, roi, options_);
+  StrandMeasurement m =
+      MeasureInScene(channel, data_max, FrameStatus::kValid, "", g, roi, options_);
   // A frame that does not measure like the last one is looked at afresh.
   if (!m.valid() || std::abs(m.width_px - width_px_) > std::max(2.0, 0.03 * width_px_))
     return false;

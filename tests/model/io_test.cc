@@ -57,9 +57,10 @@ TEST(ModelIoTest, BadTablesNameFileAndLine) {
               ReadDiameterTable(Write("c.csv", "step,mean_um\n1,400\n1,390\n"), 220);
             }).find("twice"),
             std::string::npos);
-  EXPECT_NE(
-      ErrorOf([] { ReadDiameterTable(Write("e.csv", "step,mean_um\n1,\n"), 220); }).find("mean_um is missing"),
-      std::string::npos);
+  EXPECT_NE(ErrorOf([] {
+              ReadDiameterTable(Write("e.csv", "step,mean_um\n1,\n"), 220);
+            }).find("mean_um is missing"),
+            std::string::npos);
 }
 
 TEST(ModelIoTest, MeasurementsMatchByStepOrTemperature) {
