@@ -4,19 +4,9 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "common/robust.h"
+
 namespace clogscope::pipeline {
-namespace {
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  const size_t m = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + m, v.end());
-  double med = v[m];
-  if (v.size() % 2 == 0) med = 0.5 * (med + *std::max_element(v.begin(), v.begin() + m));
-  return med;
-}
-
-}  // namespace
 
 double StudentT975(int dof) {
   static const double kTable[] = {0, 12.7062047, 4.30265273, 3.18244631, 2.77644511, 2.57058184};
