@@ -75,8 +75,8 @@ struct SceneResult {
 };
 
 // Finds the strand in one or more single-channel 8/16-bit views of the same ROI (grey, or a
-// colour frame's channels): the channel whose best pair scores highest is used. `data_max` is the
-// largest value the data can hold (255, 4095, 65535…).
+// colour frame's luma and channels): the channel whose best pair scores highest is used. Contrast
+// limits come from options.min_contrast, in the data's own range.
 SceneResult FindScene(const std::vector<cv::Mat>& channels, const SceneOptions& options);
 
 // Follows a known pair (from an earlier frame) in `grey`: finds its ends again. Used by tracking;
