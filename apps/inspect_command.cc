@@ -86,20 +86,15 @@ InspectReport InspectInput(const InspectCommandOptions& o) {
   InspectReport rep;
   rep.frame_rect = cv::Rect(0, 0, img.cols, img.rows);
   const cv::Rect roi = vision::ResolveRoi(img, o.strand);
-  const std::vector<cv::Mat> channels = vision::SearchChannels(img, roi);
   const double data_max = vision::DataMax(img(roi));
   // Without a target given: a strand below a tip, or else whatever straight stretch is in view.
   std::vector<vision::MeasureTarget> tries = {o.strand.target};
   if (!o.target_given) tries = {vision::MeasureTarget::kStrand, vision::MeasureTarget::kFilament};
-  vision::StrandMeasureOptions mo;
   for (const auto t : tries) {
-    mo = ForTarget(o.strand, t);
     rep.target = t;
-    rep.scene = vision::FindScene(channels, vision::SceneOptionsFor(mo, data_max));
+    rep.measurement = vision::FindAndMeasure(img, ForTarget(o.strand, t), &rep.scene);
     if (rep.scene.status != vision::FrameStatus::kNoTip) break;
   }
-  rep.measurement = vision::MeasureInScene(channels[rep.scene.channel], data_max, rep.scene.status,
-                                           rep.scene.detail, rep.scene.geometry, roi, mo);
   const vision::StrandMeasurement& m = rep.measurement;
 
   std::string& t = rep.text;

@@ -105,6 +105,13 @@ bool GatherEdgeSamples(const GreyImage& img, const AxisFrame& f, double s0, doub
   return true;
 }
 
+// A fit counts when it converged inside its window [u0, u1] (not within 1 px of its ends) with
+// the edge's expected sign of contrast.
+bool UsableFit(const EdgeFit& fit, double u0, double u1, int expected_sign) {
+  return fit.converged && fit.edge_px > u0 + 1.0 && fit.edge_px < u1 - 1.0 &&
+         fit.contrast * expected_sign > 0;
+}
+
 // The two edges as lines u = u0 + slope·s with a shared slope (parallel edges), least squares over
 // the calipers whose width agrees with the median (an occluded or damaged caliper must not tilt the
 // lines: the width's tilt correction depends on the slope).
@@ -219,10 +226,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
         cf.samples += static_cast<int>(samples.size());
         // Reject fits that wandered out of their window or have the wrong sign of step.
         const int expected = side == 0 ? g.left_sign : g.right_sign;
-        const auto usable = [&](const EdgeFit& fit) {
-          return fit.converged && fit.edge_px > u0 + 1.0 && fit.edge_px < u1 - 1.0 &&
-                 fit.contrast * expected > 0;
-        };
+        const auto usable = [&](const EdgeFit& fit) { return UsableFit(fit, u0, u1, expected); };
         // The shading model only where the side is known (or may turn out) to be shaded: on a
         // plain edge its extra parameter costs precision for nothing.
         const int model = shade[side];
@@ -406,13 +410,12 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
         const double u0 = side == 0 ? e0 - outer : e0 - inner;
         const double u1 = side == 0 ? e0 + inner : e0 + outer;
         int clipped = 0;
-        if (!GatherEdgeSamples(img, f, s0, s1, u0, u1, data_max, &samples, &clipped)) break;
+        ok = GatherEdgeSamples(img, f, s0, s1, u0, u1, data_max, &samples, &clipped);
+        if (!ok) break;
         const EdgeFit fit = shade[side] == 1
                                 ? FitShadedStep(samples, e0, sigma_guess, e0, side == 0 ? 1 : -1)
                                 : FitBlurredStep(samples, e0, sigma_guess, e0);
-        const int expected = side == 0 ? g.left_sign : g.right_sign;
-        ok = fit.converged && fit.edge_px > u0 + 1 && fit.edge_px < u1 - 1 &&
-             fit.contrast * expected > 0;
+        ok = UsableFit(fit, u0, u1, side == 0 ? g.left_sign : g.right_sign);
         edge[side] = fit.edge_px;
       }
       if (ok) elsewhere.push_back((edge[1] - edge[0]) * cos_d);

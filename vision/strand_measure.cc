@@ -31,8 +31,12 @@ std::vector<cv::Mat> SearchChannels(const cv::Mat& frame, const cv::Rect& roi) {
 }
 
 cv::Mat SearchChannel(const cv::Mat& frame, const cv::Rect& roi, int index) {
-  if (frame.channels() == 1 || index == 0) return SearchChannels(frame, roi)[0];
+  if (frame.channels() == 1) return frame(roi);
   cv::Mat out;
+  if (index == 0) {  // luma alone: no need to split the other three
+    cv::cvtColor(frame(roi), out, frame.channels() == 3 ? cv::COLOR_BGR2GRAY : cv::COLOR_BGRA2GRAY);
+    return out;
+  }
   cv::extractChannel(frame(roi), out, index - 1);
   return out;
 }
@@ -96,12 +100,19 @@ bool StrandMeasureOptions::Validate(std::string* why) const {
 }
 
 StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions& opt) {
+  return FindAndMeasure(frame, opt, nullptr);
+}
+
+StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOptions& opt,
+                                 SceneResult* scene_out) {
   const cv::Rect roi = ResolveRoi(frame, opt);
   const std::vector<cv::Mat> channels = SearchChannels(frame, roi);
   const double data_max = DataMax(frame(roi));
-  const SceneResult scene = FindScene(channels, SceneOptionsFor(opt, data_max));
-  return MeasureInScene(channels[scene.channel], data_max, scene.status, scene.detail,
-                        scene.geometry, roi, opt);
+  SceneResult scene = FindScene(channels, SceneOptionsFor(opt, data_max));
+  StrandMeasurement m = MeasureInScene(channels[scene.channel], data_max, scene.status,
+                                       scene.detail, scene.geometry, roi, opt);
+  if (scene_out) *scene_out = std::move(scene);
+  return m;
 }
 
 StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameStatus status,

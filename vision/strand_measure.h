@@ -82,6 +82,12 @@ StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions
 
 struct StrandGeometry;
 struct SceneOptions;
+struct SceneResult;
+// MeasureStrand that also hands back the scene it found (candidates, verdicts, chosen geometry)
+// when scene_out is given: for tracking and for inspect.
+StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOptions& options,
+                                 SceneResult* scene_out);
+
 // The second half of MeasureStrand: the band and calipers on a strand already found in `channel`
 // (the ROI view the scene chose). A status other than kValid is passed through with its detail.
 // Tracking calls it with the geometry of the last frame.

@@ -24,12 +24,8 @@ StrandMeasurement StrandTracker::Measure(const cv::Mat& frame) {
 
 StrandMeasurement StrandTracker::Detect(const cv::Mat& frame) {
   ++full_detections_;
-  const cv::Rect roi = ResolveRoi(frame, options_);
-  const std::vector<cv::Mat> channels = SearchChannels(frame, roi);
-  const double data_max = DataMax(frame(roi));
-  const SceneResult scene = FindScene(channels, SceneOptionsFor(options_, data_max));
-  StrandMeasurement m = MeasureInScene(channels[scene.channel], data_max, scene.status,
-                                       scene.detail, scene.geometry, roi, options_);
+  SceneResult scene;
+  StrandMeasurement m = FindAndMeasure(frame, options_, &scene);
   if (m.valid()) Remember(scene, m, frame.size());
   return m;
 }
