@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <opencv2/imgproc.hpp>
 
 #include "common/robust.h"
@@ -261,8 +262,10 @@ void SuppressNested(std::vector<PairCandidate>* cands) {
       if (overlap < 0.5 * c[j].length_px) continue;
       // A highlight stripe on a shaded strand can outscore the strand's own soft silhouette.
       const bool same_kind = c[i].polarity == c[j].polarity;
-      if (c[i].score >= (same_kind ? 0.3 : 0.8) * c[j].score)
+      if (c[i].score >= (same_kind ? 0.3 : 0.8) * c[j].score) {
         c[j].verdict = fmt::format("inside a wider pair ({:.1f} px)", c[i].width_px);
+        c[j].suppressed_by = static_cast<int>(i);
+      }
     }
   }
 }
@@ -477,42 +480,15 @@ bool FollowPair(const GreyImage& img, const SceneOptions& o, const PairCandidate
   return true;
 }
 
-SceneResult FindScene(const std::vector<cv::Mat>& channels, const SceneOptions& o) {
-  SceneResult best;
-  best.status = FrameStatus::kNoStrand;
-  best.detail = "no long straight edges";
-  double best_score = -1;
-  // Each channel is searched on its own; the one whose best pair scores highest is used.
-  for (int ch = 0; ch < static_cast<int>(channels.size()); ++ch) {
-    const Detection d = DetectEdgePoints(channels[ch], o);
-    const std::vector<Piece> pieces = StraightPieces(d, o.max_tilt_deg);
-    SceneResult r;
-    r.channel = ch;
-    r.gradient_noise = d.noise / d.factor;
-    for (const Piece& p : pieces) {
-      EdgeSegment s = ToSegment(p, d);
-      if (s.length_px() >= o.min_length_px) r.edges.push_back(s);
-    }
-    r.candidates = PairSegments(d, r.edges, r.gradient_noise, channels[ch].cols, o);
-    for (auto& c : r.candidates) {
-      if (!InsideIsOneObject(d, c))
-        c.verdict = "spans separate objects: the background shows between its edges";
-    }
-    SuppressNested(&r.candidates);
-    double top = 0;
-    for (const auto& c : r.candidates)
-      if (c.verdict.empty()) top = std::max(top, c.score);
-    if (top > best_score) {
-      best_score = top;
-      best = std::move(r);
-    }
-  }
-  SceneResult& r = best;
-  const cv::Mat& chosen_channel = channels[r.channel];
-  const GreyImage img{chosen_channel, chosen_channel.depth() == CV_16U};
+namespace {
+
+// Follows the best candidates of one channel on its full-resolution image; the first that holds
+// up is chosen (or the frame is ambiguous, or nothing holds up: r.status says which, and why).
+void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* result) {
+  SceneResult& r = *result;
+  const GreyImage img{channel, channel.depth() == CV_16U};
 
   // Follow the best candidates on the full-resolution image; the first that holds up is chosen.
-  std::vector<int> followed;
   std::string first_reason;
   int examined = 0;
   for (int i = 0; i < static_cast<int>(r.candidates.size()) && examined < kMaxFollowed; ++i) {
@@ -528,6 +504,15 @@ SceneResult FindScene(const std::vector<cv::Mat>& channels, const SceneOptions& 
     if (!FollowPair(img, o, c, r.edges[c.left].sign, r.edges[c.right].sign, &g, &why)) {
       c.verdict = why;
       if (first_reason.empty()) first_reason = why;
+      // The pairs this one outranked as their wider silhouette compete again, best first.
+      bool reinstated = false;
+      for (auto& inner : r.candidates) {
+        if (inner.suppressed_by != i) continue;
+        inner.suppressed_by = -1;
+        inner.verdict.clear();
+        reinstated = true;
+      }
+      if (reinstated) i = -1;
       continue;
     }
     if (r.chosen < 0) {
@@ -549,14 +534,15 @@ SceneResult FindScene(const std::vector<cv::Mat>& channels, const SceneOptions& 
       r.status = FrameStatus::kAmbiguous;
       r.detail = fmt::format("two strand-like pairs of similar score: {} and {}", Describe(b),
                              Describe(c));
-      return r;
+      return;
     }
     c.verdict = fmt::format("scores {:.0f} % of the chosen pair", 100 * c.score / b.score);
+    r.runners_up.emplace_back(i, g);
   }
   if (r.chosen >= 0) {
     r.status = FrameStatus::kValid;
     r.detail.clear();
-    return r;
+    return;
   }
   const PairCandidate* top = nullptr;
   for (const auto& c : r.candidates)
@@ -565,12 +551,12 @@ SceneResult FindScene(const std::vector<cv::Mat>& channels, const SceneOptions& 
       first_reason.find("tip") != std::string::npos) {
     r.status = FrameStatus::kNoTip;
     r.detail = fmt::format("best pair ({}): {}", Describe(*top), first_reason);
-    return r;
+    return;
   }
   if (CutByBorder(img, r.edges, o.min_length_px)) {
     r.status = FrameStatus::kTouchesBorder;
     r.detail = "a long object runs into the frame or ROI side: its other edge is outside";
-    return r;
+    return;
   }
   r.status = FrameStatus::kNoStrand;
   if (top) {
@@ -580,7 +566,49 @@ SceneResult FindScene(const std::vector<cv::Mat>& channels, const SceneOptions& 
     r.detail = fmt::format("no pair of parallel edges at least {:.0f} px long ({} straight edges)",
                            o.min_length_px, r.edges.size());
   }
-  return r;
+}
+
+}  // namespace
+
+SceneResult FindScene(const std::vector<cv::Mat>& channels, const SceneOptions& o) {
+  // Each channel is searched on its own. They are tried best pair first: the first channel in
+  // which a pair holds up is used (a clear strand's internal lines may outscore its silhouette in
+  // luma and leave two look-alike pairs, while the silhouette stands alone in blue).
+  std::vector<SceneResult> found;
+  std::vector<double> top_score;
+  for (int ch = 0; ch < static_cast<int>(channels.size()); ++ch) {
+    const Detection d = DetectEdgePoints(channels[ch], o);
+    const std::vector<Piece> pieces = StraightPieces(d, o.max_tilt_deg);
+    SceneResult r;
+    r.channel = ch;
+    r.gradient_noise = d.noise / d.factor;
+    for (const Piece& p : pieces) {
+      EdgeSegment s = ToSegment(p, d);
+      if (s.length_px() >= o.min_length_px) r.edges.push_back(s);
+    }
+    r.candidates = PairSegments(d, r.edges, r.gradient_noise, channels[ch].cols, o);
+    for (auto& c : r.candidates) {
+      if (!InsideIsOneObject(d, c))
+        c.verdict = "spans separate objects: the background shows between its edges";
+    }
+    SuppressNested(&r.candidates);
+    double top = 0;
+    for (const auto& c : r.candidates)
+      if (c.verdict.empty()) top = std::max(top, c.score);
+    found.push_back(std::move(r));
+    top_score.push_back(top);
+  }
+  std::vector<int> order(found.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return top_score[a] > top_score[b]; });
+  for (int ch : order) {
+    if (top_score[ch] < o.min_score && ch != order.front()) break;
+    ChoosePair(channels[ch], o, &found[ch]);
+    if (found[ch].status == FrameStatus::kValid) return std::move(found[ch]);
+  }
+  // Nothing held up anywhere: the best channel's account of why.
+  return std::move(found[order.front()]);
 }
 
 }  // namespace clogscope::vision

@@ -2,6 +2,7 @@
 
 #include <opencv2/core.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "vision/frame_status.h"
@@ -43,7 +44,8 @@ struct PairCandidate {
   double width_px = 0;   // perpendicular separation
   double snr = 0;        // weaker edge's gradient over the gradient noise
   double score = 0;
-  std::string verdict;  // "chosen", or why it lost
+  std::string verdict;     // "chosen", or why it lost
+  int suppressed_by = -1;  // the wider pair it lies inside (index into the candidates), if any
 };
 
 // The chosen pair, followed along the full-resolution image, with where it ends.
@@ -72,6 +74,9 @@ struct SceneResult {
   std::vector<PairCandidate> candidates;  // best first
   int chosen = -1;
   StrandGeometry geometry;
+  // The other pairs that held up when followed, best first (candidate index and geometry): the
+  // measurement falls back to them when the chosen pair's calipers reject it.
+  std::vector<std::pair<int, StrandGeometry>> runners_up;
 };
 
 // Finds the strand in one or more single-channel 8/16-bit views of the same ROI (grey, or a

@@ -12,6 +12,19 @@
 #include "vision/scene.h"
 
 namespace clogscope::vision {
+namespace {
+constexpr size_t kMaxFallbacks = 2;             // runner-up pairs measured after the chosen one
+constexpr double kMinFallbackScoreRatio = 0.5;  // of the chosen pair's score
+// A second guess must be clearly strand-like: weak short pairs are what clutter makes.
+constexpr double kMinFallbackScoreFactor = 3.0;  // times the scene's minimum score
+
+// Statuses that say the pair was not the strand, rather than that the frame is poor.
+bool RejectsPair(FrameStatus s) {
+  return s == FrameStatus::kNoStrand || s == FrameStatus::kOccluded ||
+         s == FrameStatus::kTouchesBorder || s == FrameStatus::kBandOutsideFrame;
+}
+}  // namespace
+
 std::vector<cv::Mat> SearchChannels(const cv::Mat& frame, const cv::Rect& roi) {
   if (frame.depth() != CV_8U && frame.depth() != CV_16U) {
     throw std::invalid_argument("frame: unsupported pixel depth (need 8- or 16-bit integer)");
@@ -108,9 +121,36 @@ StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOption
   const cv::Rect roi = ResolveRoi(frame, opt);
   const std::vector<cv::Mat> channels = SearchChannels(frame, roi);
   const double data_max = DataMax(frame(roi));
-  SceneResult scene = FindScene(channels, SceneOptionsFor(opt, data_max));
-  StrandMeasurement m = MeasureInScene(channels[scene.channel], data_max, scene.status,
-                                       scene.detail, scene.geometry, roi, opt);
+  const SceneOptions scene_options = SceneOptionsFor(opt, data_max);
+  SceneResult scene = FindScene(channels, scene_options);
+  const cv::Mat& channel = channels[scene.channel];
+  StrandMeasurement m =
+      MeasureInScene(channel, data_max, scene.status, scene.detail, scene.geometry, roi, opt);
+  // The calipers see more than the pair search: when they reject the chosen pair (its width
+  // bends like a disc's, most of it is hidden, it runs off the frame), the next pair that held up
+  // gets its turn, as long as it scored near the chosen one.
+  if (scene.chosen >= 0 && RejectsPair(m.status)) {
+    PairCandidate& first = scene.candidates[scene.chosen];
+    first.verdict = fmt::format("measured {}: {}", FrameStatusName(m.status), m.detail);
+    for (size_t k = 0; k < scene.runners_up.size() && k < kMaxFallbacks; ++k) {
+      const auto& [index, g] = scene.runners_up[k];
+      PairCandidate& next = scene.candidates[index];
+      if (next.score < std::max(kMinFallbackScoreRatio * first.score,
+                                kMinFallbackScoreFactor * scene_options.min_score))
+        break;
+      StrandMeasurement alt =
+          MeasureInScene(channel, data_max, FrameStatus::kValid, "", g, roi, opt);
+      if (!alt.valid()) {
+        next.verdict = fmt::format("measured {}: {}", FrameStatusName(alt.status), alt.detail);
+        continue;
+      }
+      next.verdict = "chosen";
+      scene.chosen = index;
+      scene.geometry = g;
+      m = std::move(alt);
+      break;
+    }
+  }
   if (scene_out) *scene_out = std::move(scene);
   return m;
 }
