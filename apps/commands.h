@@ -78,6 +78,7 @@ struct InspectCommandOptions {
   std::string out_png = "inspect.png";
   vision::StrandMeasureOptions strand;  // roi, polarity; the target when target_given
   bool target_given = false;            // else: strand, or filament when no tip is in view
+  bool band_given = false;              // the strand's band fields hold the user's band (px)
   bool Validate(std::string* why) const;
 };
 

@@ -15,7 +15,6 @@
 namespace clogscope::apps {
 namespace {
 
-constexpr double kWholeStretchPx = 1e6;
 const char* kChannelNames[] = {"luma", "blue", "green", "red"};
 
 // Frame `index` of the input, or an error naming it.
@@ -35,12 +34,15 @@ vision::InputFrame ReadFrame(const std::string& input, int index) {
       fmt::format("--frame {}: {} has only {} frame(s)", index, input, read));
 }
 
-vision::StrandMeasureOptions ForTarget(vision::StrandMeasureOptions o, vision::MeasureTarget t) {
-  if (o.target != t && t == vision::MeasureTarget::kFilament) {
-    o.band_start_px = 0;
-    o.band_height_px = kWholeStretchPx;
-  }
+// The options for a target, with its default band unless one was given.
+vision::StrandMeasureOptions ForTarget(vision::StrandMeasureOptions o, vision::MeasureTarget t,
+                                       bool band_given) {
   o.target = t;
+  if (!band_given) {
+    const vision::BandPx band = vision::DefaultBand(t, vision::kNominalScaleUmPerPx);
+    o.band_start_px = band.start_px;
+    o.band_height_px = band.height_px;
+  }
   return o;
 }
 
@@ -92,7 +94,7 @@ InspectReport InspectInput(const InspectCommandOptions& o) {
   if (!o.target_given) tries = {vision::MeasureTarget::kStrand, vision::MeasureTarget::kFilament};
   for (const auto t : tries) {
     rep.target = t;
-    rep.measurement = vision::FindAndMeasure(img, ForTarget(o.strand, t), &rep.scene);
+    rep.measurement = vision::FindAndMeasure(img, ForTarget(o.strand, t, o.band_given), &rep.scene);
     if (rep.scene.status != vision::FrameStatus::kNoTip) break;
   }
   const vision::StrandMeasurement& m = rep.measurement;
@@ -182,6 +184,10 @@ int RunInspect(int argc, char** argv) {
   app.add_option("--roi", roi, "Search only inside x,y,w,h (px)");
   app.add_option("--polarity", polarity, "auto, bright or dark")->capture_default_str();
   app.add_option("--target", target, "strand or filament (default: strand if a tip is in view)");
+  std::optional<double> band_start_px, band_height_px;
+  app.add_option("--band-start-px", band_start_px,
+                 "Band start below the tip or the top of the stretch (default: as measure)");
+  app.add_option("--band-height-px", band_height_px, "Band height (default: as measure)");
   app.footer(
       "Examples:\n"
       "  clogscope inspect step1.mp4 --out inspect.png\n"
@@ -195,6 +201,12 @@ int RunInspect(int argc, char** argv) {
   if (!target.empty()) {
     o.strand.target = vision::ParseMeasureTarget(target);
     o.target_given = true;
+  }
+  if (band_start_px || band_height_px) {
+    const vision::BandPx band = vision::DefaultBand(o.strand.target, vision::kNominalScaleUmPerPx);
+    o.strand.band_start_px = band_start_px.value_or(band.start_px);
+    o.strand.band_height_px = band_height_px.value_or(band.height_px);
+    o.band_given = true;
   }
   const InspectReport rep = InspectInput(o);
   std::fputs(rep.text.c_str(), stdout);

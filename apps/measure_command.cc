@@ -25,11 +25,7 @@ namespace {
 namespace fs = std::filesystem;
 
 // The reference band: from 50 µm to 200 µm below the tip; at the nominal 3 µm/px without a scale.
-constexpr double kDefaultBandStartUm = 50.0;
-constexpr double kDefaultBandHeightUm = 150.0;
-constexpr double kNominalScaleUmPerPx = 3.0;
 constexpr int kVideoOverlayEvery = 25;
-constexpr double kWholeStretchPx = 1e6;  // band height that means "as far as the stretch goes"
 
 struct Row {
   std::string source;
@@ -84,16 +80,15 @@ void MeasureCommandOptions::ResolveBand() {
   if ((band_start_um && band_start_px) || (band_height_um && band_height_px)) {
     throw std::invalid_argument("give the band either in µm or in px, not both");
   }
-  const double scale =
-      calibration ? calibration->scale_um_per_px : scale_um_per_px.value_or(kNominalScaleUmPerPx);
-  // A filament has no tip: by default its band is the whole visible straight stretch.
-  const bool filament = strand.target == vision::MeasureTarget::kFilament;
-  const double default_start_um = filament ? 0.0 : kDefaultBandStartUm;
-  const double default_height_um = filament ? kWholeStretchPx * scale : kDefaultBandHeightUm;
-  strand.band_start_px =
-      band_start_px ? *band_start_px : band_start_um.value_or(default_start_um) / scale;
-  strand.band_height_px =
-      band_height_px ? *band_height_px : band_height_um.value_or(default_height_um) / scale;
+  const double scale = calibration ? calibration->scale_um_per_px
+                                   : scale_um_per_px.value_or(vision::kNominalScaleUmPerPx);
+  const vision::BandPx band = vision::DefaultBand(strand.target, scale);
+  strand.band_start_px = band_start_px   ? *band_start_px
+                         : band_start_um ? *band_start_um / scale
+                                         : band.start_px;
+  strand.band_height_px = band_height_px   ? *band_height_px
+                          : band_height_um ? *band_height_um / scale
+                                           : band.height_px;
   if (!(strand.band_start_px >= 0)) throw std::invalid_argument("band start: must not be negative");
   if (!(strand.band_height_px >= 4)) {
     throw std::invalid_argument(

@@ -169,11 +169,9 @@ ExperimentReport RunExperimentCommand(const ExperimentCommandOptions& o,
   eo.strand.polarity = vision::ParsePolarity(m.polarity);
   eo.strand.target = vision::ParseMeasureTarget(m.target);
   const double scale = rep.conversion ? rep.conversion->scale_um_per_px : 3.0;
-  // A filament has no tip: its band is the whole visible stretch unless the manifest says.
-  const bool filament = eo.strand.target == vision::MeasureTarget::kFilament;
-  eo.strand.band_start_px = m.band_start_um.value_or(filament ? 0.0 : 50.0) / scale;
-  eo.strand.band_height_px =
-      m.band_height_um ? *m.band_height_um / scale : (filament ? 1e6 : 150.0 / scale);
+  const vision::BandPx band = vision::DefaultBand(eo.strand.target, scale);
+  eo.strand.band_start_px = m.band_start_um ? *m.band_start_um / scale : band.start_px;
+  eo.strand.band_height_px = m.band_height_um ? *m.band_height_um / scale : band.height_px;
   Progress progress(static_cast<int>(m.steps.size()));
   eo.on_step = [&](const pipeline::StepResult& r, int done, int) { progress.Step(r, done); };
   rep.steps = pipeline::RunExperiment(m, eo);

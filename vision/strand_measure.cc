@@ -87,6 +87,13 @@ double DataMax(const cv::Mat& image) {
   return (1 << bits) - 1.0;
 }
 
+BandPx DefaultBand(MeasureTarget target, double scale_um_per_px) {
+  if (!(scale_um_per_px > 0 && std::isfinite(scale_um_per_px)))
+    throw std::invalid_argument(fmt::format("pixel scale {}: must be positive", scale_um_per_px));
+  if (target == MeasureTarget::kFilament) return {0.0, kWholeStretchPx};
+  return {50.0 / scale_um_per_px, 150.0 / scale_um_per_px};
+}
+
 bool StrandMeasureOptions::Validate(std::string* why) const {
   auto fail = [&](const std::string& m) {
     if (why) *why = m;

@@ -35,6 +35,16 @@ struct StrandMeasureOptions {
   bool Validate(std::string* why) const;
 };
 
+// A target's default band at a pixel scale: a strand's 50 µm from the tip, 150 µm long (the
+// reference experiment's); a filament's whole visible stretch.
+struct BandPx {
+  double start_px = 0;
+  double height_px = 0;
+};
+inline constexpr double kWholeStretchPx = 1e6;  // band height meaning "as far as the stretch goes"
+inline constexpr double kNominalScaleUmPerPx = 3.0;  // the reference camera's, when none is given
+BandPx DefaultBand(MeasureTarget target, double scale_um_per_px);
+
 // One caliper: a thin slab across the strand. Positions are across (u) and along (s) the axis.
 struct Caliper {
   double s_px = 0;       // slab centre below the tip

@@ -5,6 +5,7 @@
 
 #include "apps/commands.h"
 #include "tests/apps/cli_test_util.h"
+#include "vision/strand_measure.h"
 #include "vision/synthetic.h"
 
 namespace clogscope::apps {
@@ -46,6 +47,21 @@ TEST(InspectCommandTest, ExplainsTheFrameAndSuggestsOptions) {
   EXPECT_EQ(f.target, vision::MeasureTarget::kFilament) << f.text;
   EXPECT_TRUE(f.measurement.valid()) << f.text;
   EXPECT_NE(f.text.find("target: filament"), std::string::npos);
+  // Asked for a filament, it measures what measure would: the whole stretch.
+  InspectCommandOptions asked = o;
+  asked.strand.target = vision::MeasureTarget::kFilament;
+  asked.target_given = true;
+  const InspectReport fa = InspectInput(asked);
+  ASSERT_TRUE(fa.measurement.valid()) << fa.text;
+  vision::StrandMeasureOptions mo;
+  mo.target = vision::MeasureTarget::kFilament;
+  const vision::BandPx band = vision::DefaultBand(mo.target, vision::kNominalScaleUmPerPx);
+  mo.band_start_px = band.start_px;
+  mo.band_height_px = band.height_px;
+  const vision::StrandMeasurement direct = vision::MeasureStrand(cv::imread(o.input), mo);
+  EXPECT_EQ(fa.measurement.calipers_total, direct.calipers_total);
+  EXPECT_DOUBLE_EQ(fa.measurement.width_px, direct.width_px);
+  EXPECT_GT(fa.measurement.calipers_total, 100);  // 720 px of stretch, not the strand's 50 px band
 
   // Nothing to see: the reason, and no ROI.
   p.strand = false;
