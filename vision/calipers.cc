@@ -177,8 +177,10 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   samples.reserve(512);
   double sigma_guess = 1.5;
   double left_guess = g.left_u0, right_guess = g.right_u0, slope_guess = g.edge_slope;
-  {
+  if (!g.precise) {
     // Sub-pixel starting edges at the top and bottom of the band: most frames then need one pass.
+    // (Tracked edges are the last frame's fitted lines: better than two profiles, which on a rough
+    // edge such as a knurled filament's would move the windows and cost a second pass.)
     const double sa = band_s0 + 0.5 * opt.caliper_spacing_px;
     const double sb = band_s0 + (n_cal - 0.5) * opt.caliper_spacing_px;
     const double half = std::min(10.0, 0.25 * width0);
