@@ -240,6 +240,14 @@ std::vector<std::string> FrameFields(const std::string& source, int frame, doubl
           m.detail};
 }
 
+static StepResult FailedStep(const StepSpec& spec, std::string detail) {
+  StepResult r;
+  r.spec = spec;
+  r.status = "failed";
+  r.detail = std::move(detail);
+  return r;
+}
+
 StepResult MeasureStep(const StepSpec& spec, const ExperimentOptions& o, int decoder_threads,
                        std::vector<std::pair<int, cv::Mat>>* overlay_frames) {
   StepResult r;
@@ -381,20 +389,41 @@ std::vector<StepResult> RunExperiment(const Manifest& m, const ExperimentOptions
       if (j >= todo.size()) return;
       const int i = todo[j];
       std::vector<std::pair<int, cv::Mat>> overlays;
-      StepResult r = MeasureStep(m.steps[i], o, decoder_threads, &overlays);
-      if (o.cancel && o.cancel->load()) return;  // a partial step is not kept
-      for (const auto& [frame_idx, image] : overlays) {
-        const FrameRecord& f = r.frames[frame_idx];
-        const std::string name =
-            (overlay_dir / fmt::format("step{:02d}_{:.0f}C_f{:06d}.png", r.spec.step,
-                                       r.spec.temperature_c, f.frame))
-                .string();
-        const double scale = o.conversion ? o.conversion->scale_um_per_px : 0.0;
-        const double bias = o.conversion ? o.conversion->edge_bias_px : 0.0;
-        vision::WriteImageAtomically(name, vision::DrawOverlay(image, f.m, scale, bias));
+      // Whatever goes wrong in one step (a library error, no memory, a full disk) fails that
+      // step with its reason; the other steps, the tables and the summary still get done.
+      StepResult r;
+      try {
+        r = MeasureStep(m.steps[i], o, decoder_threads, &overlays);
+      } catch (const std::exception& e) {
+        r = FailedStep(m.steps[i], fmt::format("measuring stopped: {}", e.what()));
+      } catch (...) {
+        r = FailedStep(m.steps[i], "measuring stopped: unknown error");
       }
-      WriteFileAtomically((steps_dir / StepFileName(r.spec.step)).string(),
-                          ResultToJson(r, o.samples).dump() + "\n");
+      if (o.cancel && o.cancel->load()) return;  // a partial step is not kept
+      std::vector<std::string> unsaved;
+      try {
+        for (const auto& [frame_idx, image] : overlays) {
+          const FrameRecord& f = r.frames[frame_idx];
+          const std::string name =
+              (overlay_dir / fmt::format("step{:02d}_{:.0f}C_f{:06d}.png", r.spec.step,
+                                         r.spec.temperature_c, f.frame))
+                  .string();
+          const double scale = o.conversion ? o.conversion->scale_um_per_px : 0.0;
+          const double bias = o.conversion ? o.conversion->edge_bias_px : 0.0;
+          vision::WriteImageAtomically(name, vision::DrawOverlay(image, f.m, scale, bias));
+        }
+      } catch (const std::exception& e) {
+        unsaved.push_back(fmt::format("overlay not written: {}", e.what()));
+      }
+      try {
+        WriteFileAtomically((steps_dir / StepFileName(r.spec.step)).string(),
+                            ResultToJson(r, o.samples).dump() + "\n");
+      } catch (const std::exception& e) {
+        unsaved.push_back(
+            fmt::format("step file not written (--resume will measure it again): {}", e.what()));
+      }
+      // The measurement stands; the step's detail says what could not be saved.
+      for (const auto& u : unsaved) r.detail += (r.detail.empty() ? "" : "; ") + u;
       std::lock_guard<std::mutex> lock(mu);
       ++done;
       if (o.on_step) o.on_step(r, done, total);

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "common/atomic_file.h"
 #include "common/csv.h"
@@ -140,6 +141,40 @@ TEST_F(ExperimentTest, RunWritesTablesAndResumes) {
   o.out_dir = (dir_ / "cancelled").string();
   o.cancel = &cancel;
   EXPECT_TRUE(RunExperiment(m, o).empty());
+}
+
+// A step whose files cannot be written (its step file is a directory), and a step whose source
+// makes the measurement throw: each is reported on its own step; the run and its tables go on.
+TEST_F(ExperimentTest, OneStepsErrorDoesNotStopTheRun) {
+  Manifest m;
+  m.path = (dir_ / "m.yaml").string();
+  m.name = "t";
+  for (int i = 0; i < 2; ++i) {
+    StepSpec s;
+    s.step = i + 1;
+    s.temperature_c = 220 - 10 * i;
+    s.video = Render("s" + std::to_string(i) + ".mp4", 400, 30, i + 1);
+    m.steps.push_back(s);
+  }
+  // A 16x16 image: the options' ROI lies outside it, which throws inside the worker.
+  const fs::path tiny = dir_ / "tiny";
+  fs::create_directories(tiny);
+  cv::imwrite((tiny / "a.png").string(), cv::Mat(16, 16, CV_8UC1, cv::Scalar(90)));
+  m.steps.push_back({3, 200, "", tiny.string(), 0, -1, 0, 0});
+  ExperimentOptions o = Options(5);
+  o.strand.roi = cv::Rect(0, 0, 600, 300);
+  fs::create_directories(dir_ / "out" / "steps" / "step_0002.json");
+  std::vector<StepResult> results;
+  ASSERT_NO_THROW(results = RunExperiment(m, o));
+  ASSERT_EQ(results.size(), 3u);
+  EXPECT_EQ(results[0].status, "ok") << results[0].detail;
+  EXPECT_EQ(results[1].status, "ok") << results[1].detail;
+  EXPECT_NE(results[1].detail.find("step file not written"), std::string::npos);
+  EXPECT_EQ(results[2].status, "failed");
+  EXPECT_NE(results[2].detail.find("roi"), std::string::npos) << results[2].detail;
+  std::vector<std::string> warnings;
+  WriteExperimentTables(m, results, o, &warnings);
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "diameters.csv"));
 }
 
 }  // namespace
