@@ -1,9 +1,13 @@
 #include "apps/cli_util.h"
 
+#include <fmt/format.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include <cerrno>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
@@ -47,6 +51,22 @@ void SetUpLogging(const std::string& level) {
   logger->set_pattern("%^[%l]%$ %v");
   logger->set_level(spdlog::level::from_str(level));
   spdlog::set_default_logger(logger);
+}
+
+void CheckNumbers(const CLI::App& app) {
+  for (const CLI::Option* opt : app.get_options()) {
+    for (const std::string& text : opt->results()) {
+      const char* begin = text.c_str();
+      char* end = nullptr;
+      errno = 0;
+      const double v = std::strtod(begin, &end);
+      if (end == begin || *end != '\0') continue;  // not a number: the option's parser judges it
+      if (!std::isfinite(v) || errno == ERANGE) {
+        throw std::invalid_argument(
+            fmt::format("{} {}: not a finite number of usable size", opt->get_name(), text));
+      }
+    }
+  }
 }
 
 }  // namespace clogscope::apps

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <CLI/CLI.hpp>
 #include <opencv2/core.hpp>
 #include <string>
 
@@ -10,6 +11,11 @@ bool ParseSize(const std::string& text, int* width, int* height);
 
 // "x,y,w,h" -> rectangle; throws std::invalid_argument naming --roi on a malformed value.
 cv::Rect ParseRoi(const std::string& text);
+
+// After parsing: every option value that reads as a number must be a finite one of normal size
+// ("inf", "nan", 1e309 or 4.9e-324 reach no physical quantity). Throws std::invalid_argument
+// naming the option. Each quantity's own range is checked where its options are validated.
+void CheckNumbers(const CLI::App& app);
 
 // Writes spdlog output to stderr at the given level name ("info", "warn", "debug", …).
 void SetUpLogging(const std::string& level);

@@ -196,6 +196,7 @@ int RunInspect(int argc, char** argv) {
       "ruled out), with the band, calipers and tip of the measurement and the suggested ROI "
       "(white).");
   CLI11_PARSE(app, argc, argv);
+  CheckNumbers(app);
   if (!roi.empty()) o.strand.roi = ParseRoi(roi);
   o.strand.polarity = vision::ParsePolarity(polarity);
   if (!target.empty()) {

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "apps/cli_util.h"
 #include "apps/commands.h"
 #include "common/atomic_file.h"
 #include "common/plot.h"
@@ -19,8 +20,6 @@ namespace {
 namespace fs = std::filesystem;
 using model::InfoOf;
 using model::Param;
-
-std::string Fixed(double v, int d) { return fmt::format("{:.{}f}", v, d); }
 
 void PrintTable(const PredictResult& r) {
   const auto& pr = r.prediction;
@@ -237,6 +236,7 @@ int RunPredict(int argc, char** argv) {
         return names + ", load_model (sum|difference)";
       }());
   CLI11_PARSE(app, argc, argv);
+  CheckNumbers(app);
   if (!fit_params.empty()) {
     std::string item;
     std::stringstream ss(fit_params);

@@ -127,6 +127,7 @@ int RunRender(int argc, char** argv) {
       "  clogscope render --target micrometer --pitch-um 100 --tilt-deg 2 --silhouette --out "
       "micro/");
   CLI11_PARSE(app, argc, argv);
+  CheckNumbers(app);
   s.target = vision::ParseTarget(target);
   s.nozzle = !no_nozzle;
   s.strand = !no_strand;

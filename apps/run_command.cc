@@ -302,6 +302,7 @@ int RunRun(int argc, char** argv) {
       "overlays/, steps/ (per-step results for --resume), predict/, summary.md, summary.json.\n"
       "Exit status: 0 all steps ok, 2 some steps short or failed, 1 all failed, 130 interrupted.");
   CLI11_PARSE(app, argc, argv);
+  CheckNumbers(app);
   if (samples) o.samples = samples;
   return RunExperimentCli(o);
 }

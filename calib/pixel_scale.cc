@@ -11,6 +11,7 @@
 
 namespace clogscope::calib {
 namespace {
+constexpr double kMinPitchUm = 1.0, kMaxPitchUm = 10000.0;  // stage micrometers in use
 
 // Floor on a target's standard deviation, px: below this, measured σ reflects only pixel noise,
 // not the unmodelled effects (pin roundness, line quality) that dominate real residuals.
@@ -107,6 +108,10 @@ void SolveRobust(RobustProblem& rp, int max_iterations, ceres::Solver::Summary* 
 // covariance cannot be computed (unknowns not separable).
 bool ParameterSigmas(ceres::Problem& problem, const std::vector<double*>& blocks,
                      double residual_var, std::vector<double>* sigmas) {
+  // A non-finite parameter (an absurd input scale overflowed the fit) would reach the SVD.
+  for (double* b : blocks)
+    if (!std::isfinite(*b)) return false;
+  if (!std::isfinite(residual_var)) return false;
   ceres::Covariance::Options co;
   co.algorithm_type = ceres::DENSE_SVD;
   ceres::Covariance cov(co);
@@ -289,7 +294,12 @@ ScaleCalibration FitMicrometerScale(const std::vector<LineObservation>& lines, d
                                     const ScaleFitOptions& opt) {
   std::string why;
   if (!opt.Validate(&why)) throw std::invalid_argument(why);
-  if (!(pitch_um > 0)) throw std::invalid_argument("--pitch-um must be positive");
+  // A stage micrometer's lines lie 1 µm to 10 mm apart; anything else is mistyped, and huge or
+  // tiny values overflow the fit.
+  if (!(pitch_um >= kMinPitchUm && pitch_um <= kMaxPitchUm)) {
+    throw std::invalid_argument(fmt::format("--pitch-um {}: must be between {} and {} µm", pitch_um,
+                                            kMinPitchUm, kMaxPitchUm));
+  }
   std::set<std::pair<int, int>> seen;
   int kmin = lines[0].index, kmax = lines[0].index, images = 0;
   for (const auto& l : lines) {

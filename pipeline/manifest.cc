@@ -38,17 +38,11 @@ class YamlReader {
   }
   double Number(const YAML::Node& n, const std::string& key) const {
     if (!n.IsScalar()) Fail(n, key + ": expected a number");
-    const std::string& t = n.Scalar();
-    size_t used = 0;
-    double v = NAN;
     try {
-      v = std::stod(t, &used);
-    } catch (const std::exception&) {
-      used = 0;
+      return ParseNumberField(n.Scalar(), source_, key);  // the one number parser of files
+    } catch (const std::invalid_argument&) {
+      Fail(n, fmt::format("{}: '{}' is not a number", key, n.Scalar()));
     }
-    if (used == 0 || used != t.size() || !std::isfinite(v))
-      Fail(n, fmt::format("{}: '{}' is not a number", key, t));
-    return v;
   }
   int Whole(const YAML::Node& n, const std::string& key) const {
     const double v = Number(n, key);

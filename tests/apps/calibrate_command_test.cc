@@ -134,6 +134,15 @@ TEST(CalibrateCommandTest, BadInputsWriteNoCalibration) {
       {"--micrometer " + (d / "m" / "frame_000000.png").string(), "--pitch-um must be positive"},
       {"--pins " + (d / "pins.csv").string() + " --micrometer x.png --pitch-um 100",
        "either --pins"},
+      // Numbers no quantity can have (these once overflowed the fit into a crash).
+      {"--micrometer " + (d / "m" / "frame_000000.png").string() + " --pitch-um inf",
+       "--pitch-um inf: not a finite number"},
+      {"--micrometer " + (d / "m" / "frame_000000.png").string() + " --pitch-um 1e309",
+       "--pitch-um 1e309: not a finite number"},
+      {"--micrometer " + (d / "m" / "frame_000000.png").string() + " --pitch-um 4.9e-324",
+       "--pitch-um 4.9e-324: not a finite number"},
+      {"--micrometer " + (d / "m" / "frame_000000.png").string() + " --pitch-um 1e308",
+       "must be between 1 and 10000"},
   };
   for (const auto& c : cases) {
     const fs::path out = d / "cal.yaml";
