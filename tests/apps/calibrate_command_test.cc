@@ -166,11 +166,27 @@ TEST(CalibrateCommandTest, MeasureRefusesBadCalibrationFiles) {
       (d / "neg.yaml").string(),
       "%YAML:1.0\n---\nclogscope_calibration_version: 1\nusable: 1\nscale_um_per_px: -3\n"
       "scale_sigma_um_per_px: 0\nedge_bias_px: 0\n");
-  for (const auto& [file, expect] :
-       std::vector<std::pair<std::string, std::string>>{{"garbage.yaml", "garbage.yaml"},
-                                                        {"v9.yaml", "version 9"},
-                                                        {"neg.yaml", "must be positive"},
-                                                        {"absent.yaml", "absent.yaml"}}) {
+  // Nested 50,000 deep (once a stack overflow), a NUL byte, an emptied key, an infinite scale.
+  WriteFileAtomically((d / "deep.yaml").string(), std::string(50000, '['));
+  std::string maps;
+  for (int i = 0; i < 50000; ++i) maps += "{a: ";
+  WriteFileAtomically((d / "deepmap.yaml").string(), maps);
+  WriteFileAtomically((d / "nul.yaml").string(),
+                      std::string("clogscope_calibration_version: 1\n\0usable: 1\n", 45));
+  WriteFileAtomically((d / "emptied.yaml").string(),
+                      "clogscope_calibration_version: 1\nusable: 1\nscale_um_per_px:\n");
+  WriteFileAtomically((d / "inf.yaml").string(),
+                      "clogscope_calibration_version: 1\nusable: 1\nscale_um_per_px: .inf\n");
+  for (const auto& [file, expect] : std::vector<std::pair<std::string, std::string>>{
+           {"garbage.yaml", "garbage.yaml"},
+           {"v9.yaml", "version 9"},
+           {"neg.yaml", "must be positive"},
+           {"absent.yaml", "absent.yaml"},
+           {"deep.yaml", "deep.yaml: not a calibration file"},
+           {"deepmap.yaml", "deepmap.yaml: not a calibration file"},
+           {"nul.yaml", "nul.yaml"},
+           {"emptied.yaml", "emptied.yaml: scale_um_per_px: missing"},
+           {"inf.yaml", "is not a number"}}) {
     const RunResult r = RunCli(
         "measure x.png --calib " + (d / file).string() + " --out-frames " + (d / "f.csv").string(),
         d);
