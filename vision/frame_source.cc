@@ -1,5 +1,7 @@
 #include "vision/frame_source.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <deque>
 #include <filesystem>
@@ -67,12 +69,18 @@ class VideoSource : public FrameSource {
   bool Fill() {
     DecodedFrame d;
     if (!decoder_.Read(&d)) return false;
-    for (int missing = next_index_; missing < d.index; ++missing) {
+    // One entry per gap, however long: a jump in the timestamps is not a million lost frames.
+    if (d.index > next_index_) {
+      const int missing = d.index - next_index_;
       InputFrame bad;
       bad.source = path_;
-      bad.index = missing;
-      bad.time_s = decoder_.fps() > 0 ? missing / decoder_.fps() : -1;
-      bad.error = "cannot decode frame";
+      bad.index = next_index_;
+      bad.time_s = decoder_.fps() > 0 ? next_index_ / decoder_.fps() : -1;
+      bad.error = missing == 1 ? "cannot decode frame"
+                               : fmt::format(
+                                     "{} frames missing ({} to {}): damaged data or a jump of "
+                                     "{:.6g} s in the timestamps",
+                                     missing, next_index_, d.index - 1, d.time_s - bad.time_s);
       pending_.push_back(std::move(bad));
     }
     InputFrame good;

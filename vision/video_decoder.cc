@@ -37,6 +37,7 @@ struct VideoDecoder::Impl {
 };
 
 namespace {
+constexpr int kMaxFrameIndex = 1 << 30;  // frame numbers from timestamps stop here
 
 std::string AvError(int code) {
   char buf[AV_ERROR_MAX_STRING_SIZE] = {0};
@@ -131,8 +132,11 @@ bool VideoDecoder::Read(DecodedFrame* out) {
         sws_scale(d.sws, d.frame->data, d.frame->linesize, 0, h, dst, dst_stride);
       }
       // Index from the timestamp, so frames lost to damage leave a visible gap.
-      out->index =
-          fps_ > 0 ? std::max(next_index_, static_cast<int>(std::lround(t * fps_))) : next_index_;
+      // (Clamped: a timestamp of 1e12 s must not overflow the frame number.)
+      const double from_time = fps_ > 0 && std::isfinite(t) ? std::round(t * fps_) : -1.0;
+      out->index = from_time > next_index_
+                       ? static_cast<int>(std::min(from_time, static_cast<double>(kMaxFrameIndex)))
+                       : next_index_;
       next_index_ = out->index + 1;
       out->time_s = t;
       out->corrupt =
