@@ -16,6 +16,7 @@
 #include "common/plot.h"
 #include "common/provenance.h"
 #include "vision/micrometer.h"
+#include "vision/video_io.h"
 
 namespace clogscope::apps {
 namespace {
@@ -27,8 +28,9 @@ constexpr double kMinScaleUmPerPx = 0.05, kMaxScaleUmPerPx = 100;
 
 cv::Mat ReadImageOrThrow(const std::string& path, const std::string& where) {
   if (!fs::exists(path)) throw std::invalid_argument(where + ": " + path + ": no such file");
-  cv::Mat img = cv::imread(path, cv::IMREAD_UNCHANGED);
-  if (img.empty()) throw std::invalid_argument(where + ": " + path + ": cannot decode image");
+  std::string error;
+  cv::Mat img = vision::ReadImage(path, &error);
+  if (img.empty()) throw std::invalid_argument(where + ": " + path + ": " + error);
   return img;
 }
 

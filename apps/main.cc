@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <opencv2/core.hpp>
+#include <opencv2/core/utils/logger.hpp>
 #include <stdexcept>
 #include <string>
 
@@ -56,6 +58,10 @@ int main(int argc, char** argv) {
   clogscope::SetCommandLine(argc, argv);
   const char* level = std::getenv("CLOGSCOPE_LOG");
   clogscope::apps::SetUpLogging(level ? level : "info");
+  // Libraries speak only when asked (CLOGSCOPE_LOG=debug): the tool says what went wrong itself.
+  const bool debug = level && !std::strcmp(level, "debug");
+  cv::utils::logging::setLogLevel(debug ? cv::utils::logging::LOG_LEVEL_DEBUG
+                                        : cv::utils::logging::LOG_LEVEL_SILENT);
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") ||
       !std::strcmp(argv[1], "help")) {
     PrintUsage();
@@ -71,6 +77,11 @@ int main(int argc, char** argv) {
       return c.run(argc - 1, argv + 1);
     } catch (const std::invalid_argument& e) {
       std::fprintf(stderr, "clogscope %s: error: %s\n", c.name, e.what());
+      return 1;
+    } catch (const cv::Exception& e) {
+      // A bug or an input no check foresaw: one line, not OpenCV's multi-line text.
+      std::fprintf(stderr, "clogscope %s: failed: image library error in %s: %s\n", c.name,
+                   e.func.c_str(), e.err.c_str());
       return 1;
     } catch (const std::exception& e) {
       std::fprintf(stderr, "clogscope %s: failed: %s\n", c.name, e.what());

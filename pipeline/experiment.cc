@@ -80,7 +80,8 @@ class ImageFrames : public StepFrames {
     *t = static_cast<double>(next_);
     *index = static_cast<int>(next_);
     *source = files_[next_];
-    *img = cv::imread(files_[next_], cv::IMREAD_UNCHANGED);
+    std::string error;  // an unreadable image is an unreadable frame
+    *img = vision::ReadImage(files_[next_], &error);
     ++next_;
     return true;
   }

@@ -17,17 +17,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-cv::Mat ReadImage(const std::string& path, std::string* error) {
-  cv::Mat img = cv::imread(path, cv::IMREAD_UNCHANGED);
-  if (img.empty()) {
-    *error = "cannot decode image";
-  } else if (img.depth() != CV_8U && img.depth() != CV_16U) {
-    *error = "unsupported pixel type (need 8- or 16-bit integer)";
-    img.release();
-  }
-  return img;
-}
-
 class ImageListSource : public FrameSource {
  public:
   ImageListSource(std::string path, std::vector<std::string> files)

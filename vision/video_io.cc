@@ -81,12 +81,36 @@ void VideoFileWriter::Commit() {
   committed_ = true;
 }
 
+cv::Mat ReadImage(const std::string& path, std::string* error) {
+  cv::Mat img;
+  try {
+    img = cv::imread(path, cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& e) {
+    // OpenCV asserts on headers it refuses (say, 65535×65535 pixels): say so in our words.
+    *error = e.err.find("CV_IO_MAX_IMAGE_PIXELS") != std::string::npos
+                 ? "image too large to decode (its header claims over 2^30 pixels)"
+                 : "cannot decode image (malformed)";
+    return cv::Mat();
+  }
+  if (img.empty()) {
+    *error = "cannot decode image";
+  } else if (img.depth() != CV_8U && img.depth() != CV_16U) {
+    *error = "unsupported pixel type (need 8- or 16-bit integer)";
+    img.release();
+  }
+  return img;
+}
+
 void WriteImageAtomically(const std::string& path, const cv::Mat& image) {
   std::vector<uchar> bytes;
   const std::string ext = LowerExtension(path);
-  if (!cv::imencode(ext.empty() ? ".png" : ext, image, bytes)) {
-    throw std::invalid_argument(path + ": cannot encode image for this extension");
+  bool encoded = false;
+  try {
+    encoded = cv::imencode(ext.empty() ? ".png" : ext, image, bytes);
+  } catch (const cv::Exception&) {
+    encoded = false;
   }
+  if (!encoded) throw std::invalid_argument(path + ": cannot encode image for this extension");
   WriteFileAtomically(path, std::string(bytes.begin(), bytes.end()));
 }
 

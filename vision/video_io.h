@@ -15,6 +15,11 @@ VideoKind VideoKindForPath(const std::string& path);
 
 // True for the file extensions `measure` reads as images.
 bool IsImagePath(const std::string& path);
+// Reads an image file as stored (8- or 16-bit, grey or colour). An empty image and the reason in
+// `error` when it cannot be decoded, is too large, or holds another pixel type; OpenCV's own
+// errors never escape.
+cv::Mat ReadImage(const std::string& path, std::string* error);
+
 // True for the file extensions `measure` reads as video.
 bool IsVideoPath(const std::string& path);
 

@@ -64,6 +64,15 @@ TEST(FrameSourceTest, BadPathsNameThePathAndTheProblem) {
   const fs::path dir = FreshDir("bad");
   EXPECT_NE(MessageOf((dir / "missing.mp4").string()).find("no such file"), std::string::npos);
   EXPECT_NE(MessageOf(dir.string()).find("holds no images"), std::string::npos);
+  // A valid PNG header claiming 65535×65535 pixels: OpenCV asserts; we say what it is.
+  const char kHuge[] =
+      "\x89\x50\x4e\x47\x0d\x0a\x1a\x0a\x00\x00\x00\x0d\x49\x48\x44\x52\x00\x00\xff\xff\x00"
+      "\x00\xff\xff\x08\x00\x00\x00\x00\x93\x6e\x86\x8c\x00\x00\x00\x0c\x49\x44\x41\x54\x78"
+      "\x9c\x63\x60\xa0\x3d\x00\x00\x00\x64\x00\x01\x86\x64\x3c\x35\x00\x00\x00\x00\x49\x45"
+      "\x4e\x44\xae\x42\x60\x82";
+  WriteFileAtomically((dir / "huge.png").string(), std::string(kHuge, sizeof(kHuge) - 1));
+  const std::string huge = MessageOf((dir / "huge.png").string());
+  EXPECT_NE(huge.find("huge.png: image too large"), std::string::npos) << huge;
   WriteFileAtomically((dir / "corrupt.png").string(), "definitely not a png");
   const std::string msg = MessageOf((dir / "corrupt.png").string());
   EXPECT_NE(msg.find("corrupt.png"), std::string::npos);
