@@ -268,7 +268,8 @@ StepResult MeasureStep(const StepSpec& spec, const ExperimentOptions& o, int dec
       if (!fs::is_directory(spec.images, ec))
         throw std::invalid_argument(spec.images + ": no such directory");
       for (const auto& e : fs::directory_iterator(spec.images, ec)) {
-        if (e.is_regular_file() && vision::IsImagePath(e.path().string()))
+        std::error_code entry_ec;  // a looping or dangling link is skipped, not thrown
+        if (e.is_regular_file(entry_ec) && !entry_ec && vision::IsImagePath(e.path().string()))
           files.push_back(e.path().string());
       }
       if (files.empty()) throw std::invalid_argument(spec.images + ": directory holds no images");

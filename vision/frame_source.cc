@@ -93,11 +93,16 @@ class VideoSource : public FrameSource {
 std::unique_ptr<FrameSource> FrameSource::Open(const std::string& path) {
   std::error_code ec;
   const fs::file_status st = fs::status(path, ec);
-  if (ec || !fs::exists(st)) throw std::invalid_argument(path + ": no such file or directory");
+  // The system's own reason: no such file, a name too long, a loop of symbolic links.
+  if (!fs::exists(st) && (!ec || ec == std::errc::no_such_file_or_directory))
+    throw std::invalid_argument(path + ": no such file or directory");
+  if (ec) throw std::invalid_argument(path + ": " + ec.message());
   if (fs::is_directory(st)) {
     std::vector<std::string> files;
     for (const auto& entry : fs::directory_iterator(path, ec)) {
-      if (entry.is_regular_file() && IsImagePath(entry.path().string()))
+      // An entry that cannot be followed (a link to itself, a dangling link) is not an image.
+      std::error_code entry_ec;
+      if (entry.is_regular_file(entry_ec) && !entry_ec && IsImagePath(entry.path().string()))
         files.push_back(entry.path().string());
     }
     if (ec) throw std::invalid_argument(path + ": cannot list directory");

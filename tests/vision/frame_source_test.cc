@@ -73,6 +73,15 @@ TEST(FrameSourceTest, BadPathsNameThePathAndTheProblem) {
   WriteFileAtomically((dir / "huge.png").string(), std::string(kHuge, sizeof(kHuge) - 1));
   const std::string huge = MessageOf((dir / "huge.png").string());
   EXPECT_NE(huge.find("huge.png: image too large"), std::string::npos) << huge;
+  // A name longer than the system allows; a directory whose one entry is a link to itself.
+  const std::string long_name = (dir / (std::string(300, 'a') + ".png")).string();
+  EXPECT_NE(MessageOf(long_name).find("File name too long"), std::string::npos);
+  const fs::path loop = dir / "loop";
+  fs::create_directories(loop);
+  fs::create_symlink(loop / "self.png", loop / "self.png");
+  cv::imwrite((loop / "good.png").string(), RenderFrame(SmallScene(), 0, nullptr));
+  EXPECT_NO_THROW(FrameSource::Open(loop.string()));
+  EXPECT_NE(MessageOf((loop / "self.png").string()).find("symbolic links"), std::string::npos);
   WriteFileAtomically((dir / "corrupt.png").string(), "definitely not a png");
   const std::string msg = MessageOf((dir / "corrupt.png").string());
   EXPECT_NE(msg.find("corrupt.png"), std::string::npos);
