@@ -1,13 +1,36 @@
 #pragma once
 
-#include <fstream>
+#include <ostream>
+#include <streambuf>
 #include <string>
 
 namespace clogscope {
 
 // A text file that appears under its final name only when complete. Content goes to
 // "<path>.partial"; Commit() flushes and renames it onto <path>. Destroyed without Commit(), the
-// partial file is removed unless keep_partial is set (then it stays, valid up to its last line).
+// partial file is removed unless keep_partial is set (then it stays, valid up to its last line, as
+// after Ctrl-C) — but never kept when destroyed by an exception or after a failed write.
+// A stream buffer on a POSIX file descriptor that keeps the errno of its first failed write, so a
+// full disk is reported as such (std::ofstream forgets why it failed).
+class FdStreamBuf : public std::streambuf {
+ public:
+  FdStreamBuf() { setp(buffer_, buffer_ + sizeof(buffer_)); }
+  ~FdStreamBuf() override;
+  bool Open(const std::string& path);  // false with error() set
+  bool Close();                        // flushes; false with error() set
+  int error() const { return error_; }
+
+ protected:
+  int_type overflow(int_type ch) override;
+  int sync() override;
+
+ private:
+  bool Drain();
+  int fd_ = -1;
+  int error_ = 0;
+  char buffer_[1 << 16];
+};
+
 class AtomicTextFile {
  public:
   // Throws std::invalid_argument naming the path when the file cannot be created.
@@ -25,9 +48,12 @@ class AtomicTextFile {
  private:
   std::string path_;
   std::string partial_path_;
-  std::ofstream out_;
+  FdStreamBuf buf_;
+  std::ostream out_{&buf_};
   bool keep_partial_ = false;
   bool committed_ = false;
+  bool failed_ = false;  // a write failed: the partial file is incomplete and always removed
+  int exceptions_at_start_ = 0;  // unwinding past this count means an error path: remove
 };
 
 // Writes the whole content atomically (temporary name, then rename).

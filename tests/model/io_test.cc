@@ -88,7 +88,9 @@ TEST(ModelIoTest, YamlRoundTripAndErrorsWithLines) {
   const ExtruderParams q = LoadExtruder(path);
   for (const auto& info : AllParams()) {
     EXPECT_EQ(p.Has(info.id), q.Has(info.id)) << info.name;
-    if (p.Has(info.id)) EXPECT_DOUBLE_EQ(p.Get(info.id), q.Get(info.id)) << info.name;
+    if (p.Has(info.id)) {
+      EXPECT_DOUBLE_EQ(p.Get(info.id), q.Get(info.id)) << info.name;
+    }
   }
   EXPECT_EQ(q.load_model, LoadModel::kDifference);
 
