@@ -20,6 +20,19 @@ std::string Quote(const std::string& s) {
   return out + "\"";
 }
 
+bool IsCompletePng(const std::string& path) {
+  std::string bytes;
+  try {
+    bytes = ReadFile(path);
+  } catch (const std::exception&) {
+    return false;
+  }
+  static const char kSignature[] = "\x89PNG\r\n\x1a\n";
+  static const char kIend[] = "\0\0\0\0IEND\xae\x42\x60\x82";
+  return bytes.size() >= 20 && bytes.compare(0, 8, std::string(kSignature, 8)) == 0 &&
+         bytes.compare(bytes.size() - 12, 12, std::string(kIend, 12)) == 0;
+}
+
 }  // namespace
 
 bool PlotToPng(const PlotSpec& spec, const std::string& png_path, std::string* why) {
@@ -57,7 +70,12 @@ bool PlotToPng(const PlotSpec& spec, const std::string& png_path, std::string* w
   }
   script += "\n";
   const std::string script_path = png_path + ".gnuplot";
-  WriteFileAtomically(script_path, script);
+  try {
+    WriteFileAtomically(script_path, script);
+  } catch (const std::exception& e) {
+    *why = e.what();
+    return false;
+  }
   const std::string cmd = "gnuplot " + Quote(script_path) + " 2>" + Quote(script_path + ".err");
   const int rc = std::system(cmd.c_str());
   std::string err;
@@ -70,6 +88,13 @@ bool PlotToPng(const PlotSpec& spec, const std::string& png_path, std::string* w
   if (rc != 0 || !std::filesystem::exists(partial)) {
     std::remove(partial.c_str());
     *why = "gnuplot failed: " + err.substr(0, err.find('\n'));
+    return false;
+  }
+  // gnuplot may exit 0 after a failed write (a full disk): only a PNG that ends in its IEND
+  // chunk is complete.
+  if (!IsCompletePng(partial)) {
+    std::remove(partial.c_str());
+    *why = "gnuplot wrote an incomplete PNG (disk full?)";
     return false;
   }
   if (std::rename(partial.c_str(), png_path.c_str()) != 0) {
