@@ -22,7 +22,11 @@ namespace {
 namespace fs = std::filesystem;
 
 std::atomic<bool> g_cancel{false};
-extern "C" void OnSigint(int) { g_cancel.store(true); }
+// The first Ctrl-C (or SIGTERM) asks to stop after the running steps, keeping them; a second one
+// stops at once with the interrupted status 130 (files being written stay under .partial names).
+extern "C" void OnSigint(int) {
+  if (g_cancel.exchange(true)) _exit(130);
+}
 
 // Progress on stderr: a bar redrawn in place on a terminal, one log line per step otherwise.
 class Progress {
@@ -184,6 +188,8 @@ ExperimentReport RunExperimentCommand(const ExperimentCommandOptions& o,
   rep.files.insert(rep.files.end(), tables.begin(), tables.end());
   if (!o.full_pipeline) return rep;
 
+  // Stopped while the tables were written: no prediction, the summary says so.
+  rep.cancelled = rep.cancelled || (cancel && cancel->load());
   if (!m.extruder.empty() && !rep.cancelled) {
     PredictCommandOptions po;
     po.extruder = m.extruder;
@@ -200,6 +206,7 @@ ExperimentReport RunExperimentCommand(const ExperimentCommandOptions& o,
       rep.prediction = std::move(pr);
     }
   }
+  rep.cancelled = rep.cancelled || (cancel && cancel->load());
   const Provenance prov = CurrentProvenance();
   const std::string md_path = (fs::path(o.out_dir) / "summary.md").string();
   const std::string json_path = (fs::path(o.out_dir) / "summary.json").string();
@@ -248,7 +255,9 @@ int RunExperimentCli(const ExperimentCommandOptions& o) {
   g_cancel.store(false);
   std::signal(SIGINT, OnSigint);
   std::signal(SIGTERM, OnSigint);
-  const ExperimentReport rep = RunExperimentCommand(o, &g_cancel);
+  ExperimentReport rep = RunExperimentCommand(o, &g_cancel);
+  // A Ctrl-C during the prediction or the summary counts too.
+  rep.cancelled = rep.cancelled || g_cancel.load();
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
   for (const auto& w : rep.warnings) spdlog::warn("{}", w);
