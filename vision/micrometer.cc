@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
@@ -114,20 +115,32 @@ MicrometerLines FindMicrometerLines(const cv::Mat& image, const MicrometerOption
   const double max_shift = 0.4 * spacing0;
   const int step =
       std::max(kStripRows, static_cast<int>(max_shift / std::tan(opt.max_tilt_deg / kRadToDeg)));
+  // Each strip's lines are found once (sorted by x) and shared by all the lines followed through
+  // it: the search stays linear in the image size.
+  std::map<int, std::vector<double>> strip_lines;
+  auto lines_at = [&](int y0) -> const std::vector<double>& {
+    auto it = strip_lines.find(y0);
+    if (it == strip_lines.end()) {
+      std::vector<double> found = ProfileLines(StripProfile(grey, y0), dark_lines, min_depth);
+      std::sort(found.begin(), found.end());
+      it = strip_lines.emplace(y0, std::move(found)).first;
+    }
+    return it->second;
+  };
   std::vector<double> slopes;
   for (double x_mid : mid_lines) {
     std::vector<std::pair<double, double>> track = {{mid_y + 0.5 * kStripRows, x_mid}};
     for (int dir : {-1, 1}) {
       double x = x_mid;
       for (int y0 = mid_y + dir * step; y0 >= 0 && y0 + kStripRows <= grey.rows; y0 += dir * step) {
-        const std::vector<double> found =
-            ProfileLines(StripProfile(grey, y0), dark_lines, min_depth);
+        const std::vector<double>& found = lines_at(y0);
+        // The nearest line to x: one of the two around its insertion point.
         double best = 1e30, best_x = 0;
-        for (double fx : found) {
-          if (std::abs(fx - x) < best) {
-            best = std::abs(fx - x);
-            best_x = fx;
-          }
+        const auto at = std::lower_bound(found.begin(), found.end(), x);
+        for (auto it : {at, at == found.begin() ? at : at - 1}) {
+          if (it == found.end() || std::abs(*it - x) >= best) continue;
+          best = std::abs(*it - x);
+          best_x = *it;
         }
         if (best > max_shift) break;
         x = best_x;
