@@ -3,7 +3,7 @@
 BUILD_DIR ?= build
 JOBS ?= $(shell nproc)
 
-.PHONY: all deps build test sanitize demo bench clean format
+.PHONY: all deps build test sanitize fuzz demo bench clean format
 
 all: build
 
@@ -26,6 +26,22 @@ sanitize: deps
 	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	  ctest --output-on-failure -j $(JOBS) $(CTEST_ARGS)
 
+# Each libFuzzer target for FUZZ_SECONDS on its committed seeds (fuzz/corpus/<target>); new
+# inputs go to build-fuzz/corpus/, findings (crash-*, timeout-*, leak-*) to build-fuzz/.
+FUZZ_DIR ?= build-fuzz
+FUZZ_SECONDS ?= 60
+FUZZ_TARGETS = csv manifest calibration extruder frame
+fuzz: deps
+	@CC=clang CXX=clang++ cmake -S . -B $(FUZZ_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	  -DCLOGSCOPE_FUZZ=ON >/dev/null
+	@cmake --build $(FUZZ_DIR) -j $(JOBS) --target $(addsuffix _fuzz,$(FUZZ_TARGETS))
+	@for t in $(FUZZ_TARGETS); do \
+	  mkdir -p $(FUZZ_DIR)/corpus/$$t; \
+	  echo "== $$t: $(FUZZ_SECONDS) s"; \
+	  (cd $(FUZZ_DIR) && ./bin/$${t}_fuzz -max_total_time=$(FUZZ_SECONDS) -timeout=10 \
+	    -rss_limit_mb=2048 -print_final_stats=1 corpus/$$t ../fuzz/corpus/$$t) || exit 1; \
+	done
+
 demo: build
 	@scripts/demo.sh $(BUILD_DIR)/bin/clogscope
 
@@ -36,4 +52,4 @@ format:
 	@clang-format -i $$(git ls-files '*.h' '*.cc')
 
 clean:
-	@rm -rf $(BUILD_DIR) $(SANITIZE_DIR)
+	@rm -rf $(BUILD_DIR) $(SANITIZE_DIR) $(FUZZ_DIR)

@@ -1,5 +1,7 @@
 #include "vision/video_io.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -46,6 +48,13 @@ VideoFileWriter::VideoFileWriter(const std::string& path, VideoKind kind, double
   temp_path_ =
       (p.parent_path() / (p.stem().string() + ".partial" + p.extension().string())).string();
   if (!(fps > 0)) throw std::invalid_argument(path + ": frame rate must be positive");
+  // The encoder cannot tell a missing folder from a codec it lacks: look first.
+  const std::filesystem::path dir = p.has_parent_path() ? p.parent_path() : ".";
+  std::error_code ec;
+  if (!std::filesystem::is_directory(dir, ec))
+    throw std::invalid_argument(path + ": folder " + dir.string() + " does not exist");
+  if (access(dir.c_str(), W_OK) != 0)
+    throw std::invalid_argument(path + ": folder " + dir.string() + " is not writable");
   const int fourcc = kind == VideoKind::kMjpegAvi ? cv::VideoWriter::fourcc('M', 'J', 'P', 'G')
                                                   : cv::VideoWriter::fourcc('a', 'v', 'c', '1');
   // Always a colour stream: grey input is expanded in Write(), which every codec and player

@@ -9,6 +9,7 @@
 #include "common/atomic_file.h"
 #include "vision/batch.h"
 #include "vision/synthetic.h"
+#include "vision/video_io.h"
 
 namespace clogscope::vision {
 namespace {
@@ -82,6 +83,13 @@ TEST(FrameSourceTest, BadPathsNameThePathAndTheProblem) {
   cv::imwrite((loop / "good.png").string(), RenderFrame(SmallScene(), 0, nullptr));
   EXPECT_NO_THROW(FrameSource::Open(loop.string()));
   EXPECT_NE(MessageOf((loop / "self.png").string()).find("symbolic links"), std::string::npos);
+  // Writing a video into a folder that does not exist names the folder, not the encoder.
+  try {
+    VideoFileWriter w((dir / "nowhere" / "v.mp4").string(), VideoKind::kH264Mp4, 25, {64, 48});
+    ADD_FAILURE() << "opened a video in a missing folder";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("does not exist"), std::string::npos) << e.what();
+  }
   WriteFileAtomically((dir / "corrupt.png").string(), "definitely not a png");
   const std::string msg = MessageOf((dir / "corrupt.png").string());
   EXPECT_NE(msg.find("corrupt.png"), std::string::npos);

@@ -1,0 +1,19 @@
+// A frame from bytes: decoding (PNG, JPEG, TIFF, … by content) and, when it decodes to something
+// small, the whole measurement of it.
+#include <stdexcept>
+
+#include "fuzz/fuzz_util.h"
+#include "vision/strand_measure.h"
+#include "vision/video_io.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  const std::string path = clogscope::fuzz::AsFile(data, size, ".img");
+  std::string error;
+  const cv::Mat img = clogscope::vision::ReadImage(path, &error);
+  if (img.empty() || img.total() > 640 * 480) return 0;
+  try {
+    clogscope::vision::MeasureStrand(img, clogscope::vision::StrandMeasureOptions());
+  } catch (const std::invalid_argument&) {
+  }
+  return 0;
+}
