@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages ClogScope builds and runs with. Idempotent: does nothing when every
-# package is present. Runs as root, or through sudo when not root.
+# package is present. Runs as root, or through sudo when not root. `--fuzz` adds clang and its
+# libFuzzer runtime for `make fuzz`.
 set -euo pipefail
 
 packages=(
@@ -17,6 +18,9 @@ packages=(
   ffmpeg                 # codec libraries for OpenCV's FFmpeg backend; ffmpeg CLI for decode benchmarks
   gnuplot-nox            # plots (optional at run time)
 )
+if [ "${1:-}" = "--fuzz" ]; then
+  packages+=(clang-14 libclang-rt-14-dev)  # libFuzzer with ASan/UBSan
+fi
 
 missing=()
 for p in "${packages[@]}"; do
