@@ -51,6 +51,20 @@ class ExperimentTest : public ::testing::Test {
     o.jobs = 2;
     return o;
   }
+  // Steps 1..n at 220, 210, … °C, each a rendered video of 400 − k·narrowing_um µm.
+  Manifest VideoSteps(int n, double narrowing_um, int frames) {
+    Manifest m;
+    m.path = (dir_ / "m.yaml").string();
+    m.name = "t";
+    for (int i = 0; i < n; ++i) {
+      StepSpec s;
+      s.step = i + 1;
+      s.temperature_c = 220 - 10 * i;
+      s.video = Render("s" + std::to_string(i) + ".mp4", 400 - narrowing_um * i, frames, i + 1);
+      m.steps.push_back(s);
+    }
+    return m;
+  }
   fs::path dir_;
   std::map<std::string, std::vector<vision::FrameTruth>> truths_;
 };
@@ -101,16 +115,7 @@ TEST_F(ExperimentTest, ShortStepsAndBadSourcesAreMarkedNotFatal) {
 }
 
 TEST_F(ExperimentTest, RunWritesTablesAndResumes) {
-  Manifest m;
-  m.path = (dir_ / "m.yaml").string();
-  m.name = "t";
-  for (int i = 0; i < 3; ++i) {
-    StepSpec s;
-    s.step = i + 1;
-    s.temperature_c = 220 - 10 * i;
-    s.video = Render("s" + std::to_string(i) + ".mp4", 400 - 5 * i, 50, i + 1);
-    m.steps.push_back(s);
-  }
+  Manifest m = VideoSteps(3, 5.0, 50);
   m.steps.push_back({4, 190, (dir_ / "missing.mp4").string(), "", 0, -1, 0, 0});
   ExperimentOptions o = Options(10);
   const auto results = RunExperiment(m, o);
@@ -146,16 +151,7 @@ TEST_F(ExperimentTest, RunWritesTablesAndResumes) {
 // A step whose files cannot be written (its step file is a directory), and a step whose source
 // makes the measurement throw: each is reported on its own step; the run and its tables go on.
 TEST_F(ExperimentTest, OneStepsErrorDoesNotStopTheRun) {
-  Manifest m;
-  m.path = (dir_ / "m.yaml").string();
-  m.name = "t";
-  for (int i = 0; i < 2; ++i) {
-    StepSpec s;
-    s.step = i + 1;
-    s.temperature_c = 220 - 10 * i;
-    s.video = Render("s" + std::to_string(i) + ".mp4", 400, 30, i + 1);
-    m.steps.push_back(s);
-  }
+  Manifest m = VideoSteps(2, 0.0, 30);
   // A 16x16 image: the options' ROI lies outside it, which throws inside the worker.
   const fs::path tiny = dir_ / "tiny";
   fs::create_directories(tiny);

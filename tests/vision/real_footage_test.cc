@@ -12,15 +12,22 @@ namespace {
 const std::string kGreeff =
     std::string(CLOGSCOPE_TESTDATA_DIR) + "/real/greeff/Test_2017_04_12__10_38_57.avi";
 
+// As `measure --target filament` with no band given: the whole stretch.
+StrandMeasureOptions FilamentOptions() {
+  StrandMeasureOptions o;
+  o.target = MeasureTarget::kFilament;
+  const BandPx band = DefaultBand(o.target, kNominalScaleUmPerPx);
+  o.band_start_px = band.start_px;
+  o.band_height_px = band.height_px;
+  return o;
+}
+
 // White PLA at rest between a knurled drive gear and an idler, no nozzle, no ROI. Their threshold
 // tool: 137.08 px, frame-to-frame σ 0.27 px; the spool: 2.85 ± 0.05 mm = 138.3 ± 2.4 px at their
 // 0.0206 mm/px. Our edges are the silhouette of a shaded cylinder, outside a threshold's level.
 TEST(RealFootageTest, GreeffFilamentWithoutRoi) {
   auto source = FrameSource::Open(kGreeff);
-  StrandMeasureOptions o;
-  o.target = MeasureTarget::kFilament;
-  o.band_start_px = 0;
-  o.band_height_px = 1e6;
+  const StrandMeasureOptions o = FilamentOptions();
   int frames = 0, valid = 0;
   double s1 = 0, s2 = 0;
   MeasureFrames(*source, o, [&](InputFrame&, StrandMeasurement& m) {
@@ -43,10 +50,7 @@ TEST(RealFootageTest, GreeffFilamentWithoutRoi) {
 // and the filament's own shading offer many straight pairs.
 TEST(RealFootageTest, GreeffFramesFoundAfresh) {
   auto source = FrameSource::Open(kGreeff);
-  StrandMeasureOptions o;
-  o.target = MeasureTarget::kFilament;
-  o.band_start_px = 0;
-  o.band_height_px = 1e6;
+  const StrandMeasureOptions o = FilamentOptions();
   InputFrame f;
   int frames = 0, valid = 0, wrong = 0;
   while (source->Next(&f)) {
