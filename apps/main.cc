@@ -11,6 +11,7 @@
 
 #include "apps/cli_util.h"
 #include "apps/commands.h"
+#include "calib/solver_log.h"
 #include "common/provenance.h"
 #include "common/version.h"
 
@@ -62,6 +63,7 @@ int main(int argc, char** argv) {
   const bool debug = level && !std::strcmp(level, "debug");
   cv::utils::logging::setLogLevel(debug ? cv::utils::logging::LOG_LEVEL_DEBUG
                                         : cv::utils::logging::LOG_LEVEL_SILENT);
+  clogscope::calib::SetSolverLogging(debug);
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") ||
       !std::strcmp(argv[1], "help")) {
     PrintUsage();
