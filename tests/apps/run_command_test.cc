@@ -1,8 +1,10 @@
 // End-to-end test of `clogscope run` on a small rendered experiment: calibration from pins in the
 // manifest, sampled steps against the truth, the predictor, the summary; bad manifests; --resume.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -113,6 +115,50 @@ TEST_F(RunCommandTest, BadManifestsAreOneLineErrors) {
   const CsvTable t = ParseCsv(ReadFile((dir_ / "o3" / "diameters.csv").string()), "d");
   EXPECT_EQ(t.rows[0][t.Column("status")], "ok");
   EXPECT_EQ(t.rows[1][t.Column("status")], "failed");
+}
+
+// Starts clogscope with `args`, sends `signals` SIGINTs 30 ms apart once `after_s` has passed,
+// and returns its exit status (128 + the signal when a signal ended it).
+int RunAndInterrupt(const std::string& args, int signals, double after_s, const std::string& log) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const std::string cmd =
+        "exec " + std::string(CLOGSCOPE_BINARY) + " " + args + " >/dev/null 2>>" + log;
+    execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  usleep(static_cast<useconds_t>(after_s * 1e6));
+  for (int i = 0; i < signals; ++i) {
+    kill(pid, SIGINT);
+    usleep(30000);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+// Ctrl-C stops after the running step with status 130 and a summary that says so; a second Ctrl-C
+// stops at once, still with 130 rather than death by the signal.
+TEST_F(RunCommandTest, InterruptedRunsExit130) {
+  // Twenty steps (the three videos again and again), one at a time: long enough to interrupt.
+  std::string manifest = "name: long\nsamples: 12\nsettle_s: 0.4\nsteps:\n";
+  for (int i = 0; i < 20; ++i) {
+    manifest += "  - {step: " + std::to_string(i + 1) +
+                ", temperature_c: " + std::to_string(220 - i) + ", video: s" +
+                std::to_string(i % 3 + 1) + ".mp4}\n";
+  }
+  WriteFileAtomically((dir_ / "long.yaml").string(), manifest);
+  const std::string args =
+      "run " + (dir_ / "long.yaml").string() + " --scale-um-per-px 3 --jobs 1 --out ";
+  const fs::path once = dir_ / "int_once", twice = dir_ / "int_twice";
+  const std::string log = (dir_ / "interrupt.log").string();
+  WriteFileAtomically(log, "");
+  EXPECT_EQ(RunAndInterrupt(args + once.string(), 1, 0.5, log), 130) << ReadFile(log);
+  if (fs::exists(once / "summary.json")) {
+    const auto j = nlohmann::json::parse(ReadFile((once / "summary.json").string()));
+    EXPECT_TRUE(j["cancelled"].get<bool>());
+  }
+  EXPECT_EQ(RunAndInterrupt(args + twice.string(), 2, 0.5, log), 130) << ReadFile(log);
 }
 
 }  // namespace
