@@ -140,13 +140,23 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
     std::vector<Row> rows;
     std::vector<std::pair<size_t, cv::Mat>> keep;  // frames to draw overlays of, by row
     const auto ts = std::chrono::steady_clock::now();
-    vision::MeasureFrames(
-        *source, o.strand, [&](vision::InputFrame& f, vision::StrandMeasurement& m) {
-          if (!o.overlay_dir.empty() && !f.image.empty() && f.index % every == 0) {
-            keep.emplace_back(rows.size(), f.image);
-          }
-          rows.push_back({f.source, f.index, f.time_s, std::move(m)});
-        });
+    try {
+      vision::MeasureFrames(
+          *source, o.strand, [&](vision::InputFrame& f, vision::StrandMeasurement& m) {
+            if (!o.overlay_dir.empty() && !f.image.empty() && f.index % every == 0) {
+              keep.emplace_back(rows.size(), f.image);
+            }
+            rows.push_back({f.source, f.index, f.time_s, std::move(m)});
+          });
+    } catch (const std::exception& e) {
+      // One input that cannot be measured (its frames smaller than the ROI, a library error) is
+      // reported and skipped; the others and the table go on.
+      const std::string why = fmt::format("{}: {}", input, e.what());
+      spdlog::error("{}", why);
+      summary.errors.push_back(why);
+      ++summary.inputs_failed;
+      continue;
+    }
     const double secs =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - ts).count();
     if (o.flag_outliers) {
@@ -166,10 +176,17 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
     for (const auto& [row, image] : keep) {
       const std::string name =
           (fs::path(o.overlay_dir) / OverlayName(rows[row], from_video, &overlay_names)).string();
-      vision::WriteImageAtomically(
-          name, vision::DrawOverlay(image, rows[row].m, conv ? conv->scale_um_per_px : 0.0,
-                                    conv ? conv->edge_bias_px : 0.0));
-      ++summary.overlays_written;
+      try {
+        vision::WriteImageAtomically(
+            name, vision::DrawOverlay(image, rows[row].m, conv ? conv->scale_um_per_px : 0.0,
+                                      conv ? conv->edge_bias_px : 0.0));
+        ++summary.overlays_written;
+      } catch (const std::exception& e) {
+        // Overlays are a view of the table: without them the measurement still stands.
+        spdlog::warn("overlays stopped: {}", e.what());
+        summary.errors.push_back(e.what());
+        break;
+      }
     }
     ++summary.inputs_ok;
     summary.frames += static_cast<int>(rows.size());

@@ -96,6 +96,23 @@ TEST(MeasureCommandTest, BadInputsGiveOneLineErrorsAndExitCodes) {
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("missing: no such file"), std::string::npos);
 
+  // An input whose frames are smaller than the ROI is reported and skipped; the good one is
+  // measured and the table written (once the whole run ended with no table at all).
+  ASSERT_EQ(RunCli("render --out " + (d / "tiny").string() +
+                       " --size 160x120 --tip-x-px 80 --tip-y-px 30 --strand-width-um 60",
+                   d)
+                .exit_code,
+            0);
+  r = RunCli("measure " + (d / "good").string() + " " + (d / "tiny").string() +
+                 " --roi 100,50,440,300" + out,
+             d);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("tiny"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("outside"), std::string::npos) << r.err;
+  const CsvTable both = ParseCsv(ReadFile((d / "f.csv").string()), "f.csv");
+  ASSERT_EQ(both.rows.size(), 1u);
+  EXPECT_EQ(both.rows[0][both.Column("valid")], "1");
+
   r = RunCli("frobnicate", d);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("unknown command"), std::string::npos);
