@@ -246,7 +246,8 @@ ExperimentReport RunExperimentCommand(const ExperimentCommandOptions& o,
     j["prediction"] = pred;
   }
   j["files"] = rep.files;
-  WriteFileAtomically(json_path, j.dump(2) + "\n");
+  WriteFileAtomically(json_path,
+                      j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
   return rep;
 }
 

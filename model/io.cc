@@ -251,7 +251,7 @@ std::string PredictionsJson(const Prediction& pr, const ExtruderParams& params,
     fj["residuals"] = res;
     j["fit"] = fj;
   }
-  return j.dump(2) + "\n";
+  return j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
 }
 
 }  // namespace clogscope::model

@@ -16,6 +16,7 @@
 #include "common/plot.h"
 #include "common/provenance.h"
 #include "pipeline/statistics.h"
+#include "pipeline/step_file.h"
 #include "vision/overlay.h"
 #include "vision/track.h"
 #include "vision/video_decoder.h"
@@ -31,16 +32,6 @@ using nlohmann::json;
 constexpr double kSeekAheadS = 2.0;
 // Floor on the MAD of a step's widths: identical widths must not make 0.01 px an outlier.
 constexpr double kMinMadPx = 0.02;
-
-std::string StepFileName(int step) { return fmt::format("step_{:04d}.json", step); }
-
-// What must match for a step file from an earlier run to stand for this one.
-json SpecKey(const StepSpec& s, int samples) {
-  return {{"step", s.step},         {"temperature_c", s.temperature_c},
-          {"video", s.video},       {"images", s.images},
-          {"start_s", s.start_s},   {"end_s", s.end_s},
-          {"settle_s", s.settle_s}, {"samples", samples}};
-}
 
 // A frame source for a step: video frames by time, or a directory's images by index.
 class StepFrames {
@@ -93,55 +84,6 @@ class ImageFrames : public StepFrames {
   std::vector<std::string> files_;
   size_t next_ = 0;
 };
-
-json ResultToJson(const StepResult& r, int samples) {
-  json frames = json::array();
-  for (const auto& f : r.frames) frames.push_back({{"fields", f.fields}, {"used", f.used}});
-  return {{"spec", SpecKey(r.spec, samples)},
-          {"line", r.spec.line},
-          {"status", r.status},
-          {"detail", r.detail},
-          {"n_examined", r.n_examined},
-          {"n_valid", r.n_valid},
-          {"n_used", r.n_used},
-          {"n_rejected", r.n_rejected},
-          {"mean_px", r.mean_px},
-          {"std_px", r.std_px},
-          {"has_um", r.has_um},
-          {"mean_um", r.mean_um},
-          {"std_um", r.std_um},
-          {"sem_um", r.sem_um},
-          {"cal_sigma_um", r.cal_sigma_um},
-          {"ci95_um", r.ci95_um},
-          {"frames", frames}};
-}
-
-bool ResultFromJson(const json& j, const StepSpec& spec, int samples, StepResult* r) {
-  if (j.at("spec") != SpecKey(spec, samples)) return false;
-  r->spec = spec;
-  r->status = j.at("status");
-  r->detail = j.at("detail");
-  r->n_examined = j.at("n_examined");
-  r->n_valid = j.at("n_valid");
-  r->n_used = j.at("n_used");
-  r->n_rejected = j.at("n_rejected");
-  r->mean_px = j.at("mean_px");
-  r->std_px = j.at("std_px");
-  r->has_um = j.at("has_um");
-  r->mean_um = j.at("mean_um");
-  r->std_um = j.at("std_um");
-  r->sem_um = j.at("sem_um");
-  r->cal_sigma_um = j.at("cal_sigma_um");
-  r->ci95_um = j.at("ci95_um");
-  for (const auto& f : j.at("frames")) {
-    FrameRecord fr;
-    fr.fields = f.at("fields").get<std::vector<std::string>>();
-    fr.used = f.at("used");
-    r->frames.push_back(std::move(fr));
-  }
-  r->resumed = true;
-  return true;
-}
 
 void Summarise(StepResult* r, const ExperimentOptions& o) {
   std::vector<double> widths;
@@ -357,16 +299,18 @@ std::vector<StepResult> RunExperiment(const Manifest& m, const ExperimentOptions
   for (int i = 0; i < total; ++i) {
     const std::string file = (steps_dir / StepFileName(m.steps[i].step)).string();
     if (o.resume && fs::exists(file)) {
+      // A step that failed last time (say, its video was missing), was measured another way or
+      // whose file does not add up is measured again.
+      StepResult r;
+      std::string why;
+      std::string text;
       try {
-        StepResult r;
-        // A step that failed (say, its video was missing) is tried again.
-        if (ResultFromJson(json::parse(ReadFile(file)), m.steps[i], o.samples, &r) &&
-            r.status != "failed") {
-          results[i] = std::move(r);
-          continue;
-        }
+        text = ReadFile(file);
       } catch (const std::exception&) {
-        // An unreadable step file is measured again.
+      }
+      if (ReadStepFile(text, m.steps[i], o, &r, &why)) {
+        results[i] = std::move(r);
+        continue;
       }
     }
     todo.push_back(i);
@@ -418,8 +362,7 @@ std::vector<StepResult> RunExperiment(const Manifest& m, const ExperimentOptions
         unsaved.push_back(fmt::format("overlay not written: {}", e.what()));
       }
       try {
-        WriteFileAtomically((steps_dir / StepFileName(r.spec.step)).string(),
-                            ResultToJson(r, o.samples).dump() + "\n");
+        WriteFileAtomically((steps_dir / StepFileName(r.spec.step)).string(), StepFileText(r, o));
       } catch (const std::exception& e) {
         unsaved.push_back(
             fmt::format("step file not written (--resume will measure it again): {}", e.what()));
@@ -526,7 +469,8 @@ std::vector<std::string> WriteExperimentTables(const Manifest& m,
                        {"edge_bias_px", o.conversion->edge_bias_px},
                        {"edge_bias_sigma_px", o.conversion->edge_bias_sigma_px}};
   }
-  WriteFileAtomically((out / "diameters.json").string(), j.dump(2) + "\n");
+  WriteFileAtomically((out / "diameters.json").string(),
+                      j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
   written.push_back((out / "diameters.json").string());
 
   // Diameter against temperature with 95 % error bars.
