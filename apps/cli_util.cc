@@ -1,16 +1,19 @@
 #include "apps/cli_util.h"
 
 #include <fmt/format.h>
-#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/sinks/ansicolor_sink.h>
 #include <spdlog/spdlog.h>
 
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
+
+#include "common/library_text.h"
 
 namespace clogscope::apps {
 
@@ -47,7 +50,11 @@ cv::Rect ParseRoi(const std::string& text) {
 }
 
 void SetUpLogging(const std::string& level) {
-  auto logger = spdlog::stderr_color_mt("clogscope");
+  // To the tool's own copy of stderr: library text diverted around a decoder never takes a
+  // message of the tool's with it (common/library_text.h).
+  using Sink = spdlog::sinks::ansicolor_sink<spdlog::details::console_mutex>;
+  auto logger = std::make_shared<spdlog::logger>(
+      "clogscope", std::make_shared<Sink>(ToolStderr(), spdlog::color_mode::automatic));
   logger->set_pattern("%^[%l]%$ %v");
   logger->set_level(spdlog::level::from_str(level));
   spdlog::set_default_logger(logger);

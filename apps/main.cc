@@ -12,6 +12,7 @@
 #include "apps/cli_util.h"
 #include "apps/commands.h"
 #include "calib/solver_log.h"
+#include "common/library_text.h"
 #include "common/provenance.h"
 #include "common/version.h"
 
@@ -78,18 +79,19 @@ int main(int argc, char** argv) {
     try {
       return c.run(argc - 1, argv + 1);
     } catch (const std::invalid_argument& e) {
-      std::fprintf(stderr, "clogscope %s: error: %s\n", c.name, e.what());
+      std::fprintf(clogscope::ToolStderr(), "clogscope %s: error: %s\n", c.name, e.what());
       return 1;
     } catch (const cv::Exception& e) {
       // A bug or an input no check foresaw: one line, not OpenCV's multi-line text.
-      std::fprintf(stderr, "clogscope %s: failed: image library error in %s: %s\n", c.name,
-                   e.func.c_str(), e.err.c_str());
+      std::fprintf(clogscope::ToolStderr(), "clogscope %s: failed: image library error in %s: %s\n",
+                   c.name, e.func.c_str(), e.err.c_str());
       return 1;
     } catch (const std::exception& e) {
-      std::fprintf(stderr, "clogscope %s: failed: %s\n", c.name, e.what());
+      std::fprintf(clogscope::ToolStderr(), "clogscope %s: failed: %s\n", c.name, e.what());
       return 1;
     }
   }
-  std::fprintf(stderr, "clogscope: unknown command '%s' (try clogscope --help)\n", argv[1]);
+  std::fprintf(clogscope::ToolStderr(), "clogscope: unknown command '%s' (try clogscope --help)\n",
+               argv[1]);
   return 2;
 }

@@ -14,6 +14,7 @@
 #include "apps/commands.h"
 #include "calib/calibration_file.h"
 #include "common/atomic_file.h"
+#include "common/library_text.h"
 #include "common/provenance.h"
 
 namespace clogscope::apps {
@@ -39,15 +40,16 @@ class Progress {
         r.status, r.n_valid, r.n_examined, r.resumed ? " (kept from the earlier run)" : "");
     if (tty_) {
       const int width = 30, filled = total_ ? width * done / total_ : width;
-      std::fprintf(stderr, "\r[%s%s] %d/%d  %-60.60s", std::string(filled, '#').c_str(),
-                   std::string(width - filled, '.').c_str(), done, total_, what.c_str());
-      if (done == total_) std::fprintf(stderr, "\n");
-      std::fflush(stderr);
+      std::fprintf(clogscope::ToolStderr(), "\r[%s%s] %d/%d  %-60.60s",
+                   std::string(filled, '#').c_str(), std::string(width - filled, '.').c_str(), done,
+                   total_, what.c_str());
+      if (done == total_) std::fprintf(clogscope::ToolStderr(), "\n");
+      std::fflush(clogscope::ToolStderr());
     } else {
       spdlog::info("[{}/{}] {}", done, total_, what);
     }
     if (r.status != "ok" && !r.detail.empty()) {
-      if (tty_) std::fprintf(stderr, "\n");
+      if (tty_) std::fprintf(clogscope::ToolStderr(), "\n");
       spdlog::warn("step {}: {}", r.spec.step, r.detail);
     }
   }

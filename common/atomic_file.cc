@@ -109,7 +109,27 @@ void WriteFileAtomically(const std::string& path, const std::string& content) {
   file.Commit();
 }
 
+bool IsRegularFile(const std::string& path, std::string* why) {
+  std::error_code ec;
+  const auto st = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(st)) {
+    *why = ec && ec != std::errc::no_such_file_or_directory ? ec.message() : "no such file";
+  } else if (std::filesystem::is_directory(st)) {
+    *why = "is a directory";
+  } else if (!std::filesystem::is_regular_file(st)) {
+    *why = "not a regular file (a FIFO, socket or device)";
+  } else {
+    return true;
+  }
+  return false;
+}
+
 std::string ReadFile(const std::string& path) {
+  std::string why;
+  if (!IsRegularFile(path, &why)) throw std::invalid_argument(path + ": " + why);
+  std::error_code ec;
+  if (std::filesystem::file_size(path, ec) > kMaxReadFileBytes && !ec)
+    throw std::invalid_argument(path + ": too large (over 256 MiB)");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::invalid_argument(path + ": cannot open (" + std::strerror(errno) + ")");
   std::ostringstream ss;

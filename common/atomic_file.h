@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <ostream>
 #include <streambuf>
 #include <string>
@@ -59,7 +60,13 @@ class AtomicTextFile {
 // Writes the whole content atomically (temporary name, then rename).
 void WriteFileAtomically(const std::string& path, const std::string& content);
 
-// Reads a whole file; throws std::invalid_argument naming the path when it cannot be read.
+// Reads a whole file; throws std::invalid_argument naming the path when it cannot be read, is not
+// a regular file (a FIFO or device would block or never end) or is over kMaxReadFileBytes.
 std::string ReadFile(const std::string& path);
+inline constexpr std::uintmax_t kMaxReadFileBytes = std::uintmax_t{256} << 20;
+
+// True when `path` is a regular file (after links) that can be opened without blocking; else
+// false with the reason ("no such file", "is a directory", "not a regular file (FIFO, device …)").
+bool IsRegularFile(const std::string& path, std::string* why);
 
 }  // namespace clogscope

@@ -110,6 +110,9 @@ std::unique_ptr<FrameSource> FrameSource::Open(const std::string& path) {
     std::sort(files.begin(), files.end());
     return std::make_unique<ImageListSource>(path, std::move(files));
   }
+  // A FIFO or device would block or never end (a camera is `watch`'s, not a file's).
+  if (!fs::is_regular_file(st))
+    throw std::invalid_argument(path + ": not a regular file (a FIFO, socket or device)");
   if (IsVideoPath(path)) return std::make_unique<VideoSource>(path);
   if (IsImagePath(path)) {
     std::string error;

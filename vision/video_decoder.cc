@@ -5,6 +5,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "common/atomic_file.h"
+
 extern "C" {
 #include <libavcodec/avcodec.h>
 #include <libavformat/avformat.h>
@@ -60,6 +62,9 @@ bool HasLumaPlane(AVPixelFormat fmt) {
 VideoDecoder::VideoDecoder(const std::string& path, int threads)
     : impl_(std::make_unique<Impl>()), path_(path) {
   av_log_set_level(AV_LOG_QUIET);
+  std::string why;
+  if (path.find("://") == std::string::npos && !IsRegularFile(path, &why))
+    throw std::invalid_argument(path + ": " + why);  // a FIFO would block FFmpeg's open
   Impl& d = *impl_;
   int err = avformat_open_input(&d.format, path.c_str(), nullptr, nullptr);
   if (err < 0) throw std::invalid_argument(path + ": cannot open as video (" + AvError(err) + ")");

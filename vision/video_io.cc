@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "common/atomic_file.h"
+#include "common/library_text.h"
 
 namespace clogscope::vision {
 namespace {
@@ -90,19 +91,67 @@ void VideoFileWriter::Commit() {
   committed_ = true;
 }
 
+namespace {
+
+// The decoder's complaint in a few words: "libpng: IDAT: CRC error", "OpenCV TIFF: failed".
+std::string DecoderReason(const std::string& library_text) {
+  std::string line = FirstLine(library_text);
+  if (line.rfind("libpng error: ", 0) == 0) line = "libpng: " + line.substr(14);
+  const size_t opencv = line.find("error: (");
+  if (opencv != std::string::npos) {  // "imread_('…'): can't read data: OpenCV(4.6.0) …"
+    const size_t close = line.find(") ", opencv);
+    line = close == std::string::npos ? "decoder error" : line.substr(close + 2);
+    const size_t failed = line.find("failed ");  // "OpenCV TIFF: failed (int)TIFFRead…(…)"
+    if (failed != std::string::npos) line.resize(failed + 6);
+  }
+  return line.size() > 120 ? line.substr(0, 117) + "..." : line;
+}
+
+// Text a decoder prints for an image it decoded whole: warnings, not damage.
+bool HarmlessDecoderText(const std::string& text) {
+  size_t pos = 0;
+  while (pos < text.size()) {
+    const size_t end = std::min(text.find('\n', pos), text.size());
+    const std::string line = text.substr(pos, end - pos);
+    const bool harmless = line.find_first_not_of(" \t\r") == std::string::npos ||
+                          line.rfind("libpng warning: ", 0) == 0 ||
+                          line.find("extraneous bytes before marker") != std::string::npos;
+    if (!harmless) return false;
+    pos = end + 1;
+  }
+  return true;
+}
+
+}  // namespace
+
 cv::Mat ReadImage(const std::string& path, std::string* error) {
+  // A FIFO or device would block or never end; a directory is not an image.
+  if (!IsRegularFile(path, error)) return cv::Mat();
   cv::Mat img;
-  try {
-    img = cv::imread(path, cv::IMREAD_UNCHANGED);
-  } catch (const cv::Exception& e) {
-    // OpenCV asserts on headers it refuses (say, 65535×65535 pixels): say so in our words.
-    *error = e.err.find("CV_IO_MAX_IMAGE_PIXELS") != std::string::npos
-                 ? "image too large to decode (its header claims over 2^30 pixels)"
-                 : "cannot decode image (malformed)";
-    return cv::Mat();
+  std::string library_text;
+  {
+    // libpng and libjpeg print their errors, and imread prints the exceptions it catches: keep
+    // that text off the terminal and make it this frame's reason.
+    LibraryTextCapture capture;
+    try {
+      img = cv::imread(path, cv::IMREAD_UNCHANGED);
+    } catch (const cv::Exception& e) {
+      // OpenCV asserts on headers it refuses (say, 65535×65535 pixels): say so in our words.
+      *error = e.err.find("CV_IO_MAX_IMAGE_PIXELS") != std::string::npos
+                   ? "image too large to decode (its header claims over 2^30 pixels)"
+                   : "cannot decode image (malformed)";
+      return cv::Mat();
+    }
+    library_text = capture.Text();
   }
   if (img.empty()) {
-    *error = "cannot decode image";
+    const std::string reason = DecoderReason(library_text);
+    *error = reason.empty() ? "cannot decode image" : "cannot decode image (" + reason + ")";
+  } else if (!HarmlessDecoderText(library_text)) {
+    // A decoder that complained but returned pixels filled in what it could not read (libjpeg
+    // paints missing blocks grey): such a frame would be measured wrong.
+    *error = "damaged image (" + DecoderReason(library_text) + ")";
+    img.release();
   } else if (img.depth() != CV_8U && img.depth() != CV_16U) {
     *error = "unsupported pixel type (need 8- or 16-bit integer)";
     img.release();

@@ -1,11 +1,14 @@
 // End-to-end tests of `clogscope render` and `clogscope measure`: the binary on a small rendered
 // video, its exit codes and one-line errors, and the typed MeasureInputs() behind it.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
 
 #include "apps/commands.h"
 #include "common/atomic_file.h"
@@ -116,6 +119,64 @@ TEST(MeasureCommandTest, BadInputsGiveOneLineErrorsAndExitCodes) {
   r = RunCli("frobnicate", d);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("unknown command"), std::string::npos);
+}
+
+// Every line of stderr is the tool's own: "clogscope …: …" or "[level] …".
+void ExpectOnlyToolLines(const std::string& err) {
+  std::istringstream lines(err);
+  for (std::string line; std::getline(lines, line);) {
+    EXPECT_TRUE(line.empty() || line.rfind("clogscope ", 0) == 0 || line.rfind("[", 0) == 0)
+        << "library text: " << line;
+  }
+}
+
+// Damaged images (libpng, libjpeg and OpenCV print their complaints) and files that would block
+// (a FIFO): the decoder's reason inside the tool's one line, nothing else on the terminal.
+TEST(MeasureCommandTest, DamagedImagesAndFifosGiveTheToolsOwnLine) {
+  const fs::path d = FreshDir("damaged");
+  ASSERT_EQ(RunCli("render --out " + (d / "f").string() + " " + kSmall, d).exit_code, 0);
+  const std::string png = ReadFile((d / "f" / "frame_000000.png").string());
+  const size_t idat = png.find("IDAT");
+  ASSERT_NE(idat, std::string::npos);
+  std::string crc = png;
+  crc[idat + 40] ^= 0x5a;  // inside the compressed data
+  WriteFileAtomically((d / "crc.png").string(), crc);
+  RunResult r = RunCli("measure " + (d / "crc.png").string() + " --out-frames x.csv", d);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("crc.png: cannot decode image (libpng: IDAT: "), std::string::npos) << r.err;
+  ExpectOnlyToolLines(r.err);
+
+  // A JPEG cut short decodes with grey where data is missing: refused, not measured.
+  std::vector<uchar> jpg;
+  ASSERT_TRUE(cv::imencode(".jpg", cv::imread((d / "f" / "frame_000000.png").string()), jpg));
+  WriteFileAtomically((d / "cut.jpg").string(),
+                      std::string(jpg.begin(), jpg.begin() + jpg.size() * 6 / 10));
+  r = RunCli("measure " + (d / "cut.jpg").string() + " --out-frames x.csv", d);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("cut.jpg: damaged image (Premature end of JPEG file)"), std::string::npos)
+      << r.err;
+  ExpectOnlyToolLines(r.err);
+
+  // Inspect and calibrate read images the same way.
+  r = RunCli("inspect " + (d / "crc.png").string() + " --out i.png", d);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("cannot decode image (libpng: IDAT: "), std::string::npos) << r.err;
+  ExpectOnlyToolLines(r.err);
+  r = RunCli("calibrate --micrometer " + (d / "crc.png").string() + " --pitch-um 100 --out c.yaml",
+             d);
+  EXPECT_EQ(r.exit_code, 1);
+  ExpectOnlyToolLines(r.err);
+
+  ASSERT_EQ(::mkfifo((d / "fifo").c_str(), 0600), 0);
+  const std::string fifo = (d / "fifo").string();
+  for (const std::string& cmd :
+       std::vector<std::string>{"measure " + fifo + " --out-frames x.csv", "inspect " + fifo,
+                                "measure " + (d / "f").string() + " --calib " + fifo,
+                                "calibrate --pins " + fifo + " --out c.yaml"}) {
+    r = RunCli(cmd, d);
+    EXPECT_EQ(r.exit_code, 1) << cmd;
+    EXPECT_NE(r.err.find("fifo: not a regular file"), std::string::npos) << cmd << ": " << r.err;
+  }
 }
 
 TEST(MeasureCommandTest, BandOptionsResolveFromMicronsOrPixels) {

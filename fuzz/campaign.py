@@ -1,0 +1,496 @@
+#!/usr/bin/env python3
+"""A mutation campaign over the whole `clogscope` command line (issue 12's acceptance check).
+
+libFuzzer (`make fuzz`) drives each parser in-process; this drives the real binary, as a user's
+files reach it: every input kind (manifests YAML/CSV, pins CSV, calibration YAML, diameter tables,
+fit CSVs, temperature logs, extruder YAML, step JSON under --resume, images, micrometer images,
+videos, command-line numbers, file-system paths) is mutated from seeds the tool made itself, and
+each run is classified:
+  crash     killed by a signal, or exit 134/136/139, or a sanitizer report in the output
+  hang      still running after --timeout seconds (default 10)
+  library   a line of library text (OpenCV, libpng, FFmpeg, glog, C++ runtime, ...) in the output
+  clean     anything else (a result, or the tool's own one-line error)
+Use the sanitizer build (build-asan/bin/clogscope) to catch memory errors. Findings are kept in
+OUT/findings/<class>/<n>/ with the input, the command line and the output.
+
+Usage: fuzz/campaign.py --bin build-asan/bin/clogscope --runs 10000 --out build-campaign
+"""
+import argparse
+import collections
+import json
+import os
+import random
+import re
+import shutil
+import signal
+import struct
+import subprocess
+import sys
+import time
+import zlib
+
+# Text that only a library (never the tool's own messages) prints.
+LIBRARY_TEXT = re.compile(
+    r"OpenCV\(|cv::|\(-\d+:|terminate called|what\(\): |libpng|Corrupt JPEG|Premature end of JPEG"
+    r"|JPEG datastream|TIFFRead|TIFFFetch|TIFF directory|\[[\w/.-]+ @ 0x|^ERROR \d+: "
+    r"|basic_string|std::|filesystem error|Assertion .* failed|^[IWEF]\d{4} \d\d:"
+    r"|WARNING: Logging before|yaml-cpp|\[json\.exception|moov atom"
+    r"|^gnuplot|line \d+: |^\s*\^\s*$|GStreamer|gst_|VIDEOIO|Segmentation fault",
+    re.M)
+SANITIZER = re.compile(r"AddressSanitizer|LeakSanitizer|UndefinedBehaviorSanitizer|runtime error: ")
+
+INTERESTING_TOKENS = [
+    b"inf", b"-inf", b"nan", b"NaN", b"1e309", b"-1e309", b"4.9e-324", b"1e308", b"-1", b"0",
+    b"-0", b"2147483648", b"-2147483649", b"99999999999999999999", b"0x10", b"1,5", b"", b"\x00",
+    b"\xff\xfe", b"\n", b",", b",,,,,,", b'"', b"'", b":", b"- ", b"[", b"{", b"[" * 2000,
+    b"{a: " * 500, b"&a", b"*a", b"!!binary", b"~", b"null", b"true", b"A" * 5000,
+]
+
+
+def mutate(data: bytes, rng: random.Random, others: list) -> bytes:
+    """One to four stacked mutations of the kinds libFuzzer uses, plus tokens and splices."""
+    b = bytearray(data)
+    for _ in range(rng.randint(1, 4)):
+        op = rng.randrange(9)
+        pos = rng.randrange(len(b) + 1)
+        if op == 0 and b:  # flip bits
+            for _ in range(rng.randint(1, 8)):
+                i = rng.randrange(len(b))
+                b[i] ^= 1 << rng.randrange(8)
+        elif op == 1 and b:  # random bytes
+            for _ in range(rng.randint(1, 16)):
+                b[rng.randrange(len(b))] = rng.randrange(256)
+        elif op == 2:  # a token in place of a word or number
+            tok = rng.choice(INTERESTING_TOKENS)
+            m = list(re.finditer(rb"[-+]?[0-9][0-9.eE+-]*|[A-Za-z_]+", bytes(b)))
+            if m and rng.random() < 0.7:
+                w = rng.choice(m)
+                b[w.start():w.end()] = tok
+            else:
+                b[pos:pos] = tok
+        elif op == 3 and b:  # delete a range
+            n = rng.randint(1, max(1, len(b) // rng.choice([2, 8, 64])))
+            del b[pos:pos + n]
+        elif op == 4 and b:  # duplicate a range
+            a = rng.randrange(len(b))
+            n = rng.randint(1, max(1, min(len(b) - a, 4096)))
+            b[pos:pos] = b[a:a + n] * rng.randint(1, 8)
+        elif op == 5:  # truncate
+            del b[pos:]
+        elif op == 6 and others:  # splice another seed of the same kind
+            o = rng.choice(others)
+            if o:
+                a = rng.randrange(len(o))
+                b[pos:] = o[a:]
+        elif op == 7 and len(b) >= 4:  # a binary integer field
+            i = rng.randrange(len(b) - 3)
+            b[i:i + 4] = struct.pack("<I", rng.choice([0, 1, 0x7FFFFFFF, 0xFFFFFFFF, 0x10000,
+                                                        rng.randrange(1 << 32)]))
+        elif op == 8 and b:  # swap lines
+            lines = bytes(b).split(b"\n")
+            if len(lines) > 2:
+                i, j = rng.randrange(len(lines)), rng.randrange(len(lines))
+                lines[i], lines[j] = lines[j], lines[i]
+                b = bytearray(b"\n".join(lines))
+    return bytes(b)
+
+
+# The tool's own lines: "clogscope CMD: error: …", "[level] …", progress bars. A library's reason
+# quoted inside one of them ("cannot decode image (libpng: …)") is the tool's message.
+TOOL_LINE = re.compile(r"^(clogscope[ :]|\[(trace|debug|info|warning|error|critical)\] |\r?\[#*-*\] )")
+
+
+def library_lines(text):
+    return [l for l in text.splitlines() if LIBRARY_TEXT.search(l) and not TOOL_LINE.match(l)]
+
+
+def run(cmd, cwd, timeout_s):
+    """Runs a command in its own process group; returns (status, rc, output, seconds)."""
+    env = dict(os.environ)
+    env["ASAN_OPTIONS"] = "detect_leaks=1:abort_on_error=0:allocator_may_return_null=1"
+    env["UBSAN_OPTIONS"] = "print_stacktrace=1:halt_on_error=1"
+    env.pop("CLOGSCOPE_LOG", None)
+    t0 = time.monotonic()
+    p = subprocess.Popen(cmd, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                         stdin=subprocess.DEVNULL, env=env, start_new_session=True)
+    try:
+        out, _ = p.communicate(timeout=timeout_s)
+    except subprocess.TimeoutExpired:
+        os.killpg(p.pid, signal.SIGKILL)
+        out, _ = p.communicate()
+        return "hang", None, out.decode("utf-8", "replace"), time.monotonic() - t0
+    text = out.decode("utf-8", "replace")
+    rc = p.returncode
+    if rc < 0 or rc in (134, 136, 139) or SANITIZER.search(text):
+        status = "crash"
+    elif library_lines(text):
+        status = "library"
+    else:
+        status = "clean"
+    return status, rc, text, time.monotonic() - t0
+
+
+class Seeds:
+    """Inputs of every kind, made by the tool itself (and a few written here) under OUT/seeds."""
+
+    def __init__(self, binary, root):
+        self.bin = os.path.abspath(binary)
+        self.root = os.path.abspath(root)
+        self.files = {}
+
+    def sh(self, *args):
+        r = subprocess.run([self.bin, *args], cwd=self.root, capture_output=True, text=True)
+        if r.returncode not in (0, 2):
+            sys.exit(f"seed command failed: clogscope {' '.join(args)}\n{r.stdout}{r.stderr}")
+
+    def write(self, name, data):
+        path = os.path.join(self.root, name)
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        with open(path, "wb") as f:
+            f.write(data if isinstance(data, bytes) else data.encode())
+        return path
+
+    def make(self):
+        shutil.rmtree(self.root, ignore_errors=True)
+        os.makedirs(self.root)
+        small = ["--size", "320x240", "--tip-x-px", "160", "--tip-y-px", "60",
+                 "--scale-um-per-px", "10"]
+        self.sh("render", "--out", "frames", "--frames", "2", *small)
+        self.sh("render", "--out", "frames16", "--bit-depth", "16", *small)
+        self.sh("render", "--out", "colour", "--colour", "--no-nozzle", *small)
+        self.sh("render", "--out", "step1.mp4", "--frames", "12", "--fps", "10", *small)
+        self.sh("render", "--out", "step2.avi", "--frames", "12", "--fps", "10",
+                "--strand-width-um", "380", *small)
+        self.sh("render", "--out", "micro", "--target", "micrometer", "--size", "640x120",
+                "--scale-um-per-px", "5")
+        for d in (300, 400, 500):
+            self.sh("render", "--out", f"pin{d}", "--target", "pin", "--strand-width-um", str(d),
+                    "--size", "320x240", "--tip-x-px", "160", "--tip-y-px", "120",
+                    "--scale-um-per-px", "5")
+        self.write("pins.csv", "image,diameter_um,tolerance_um\n" + "".join(
+            f"{self.root}/pin{d}/frame_000000.png,{d},0.5\n" for d in (300, 400, 500)))
+        self.sh("calibrate", "--pins", "pins.csv", "--out", "calib.yaml", "--plot", "calib.png")
+        # A JPEG: the first frame of the MJPEG video. A TIFF: 16-bit, 12-bit data, written here.
+        avi = open(os.path.join(self.root, "step2.avi"), "rb").read()
+        a = avi.find(b"\xff\xd8\xff")
+        self.write("frame.jpg", avi[a:avi.find(b"\xff\xd9", a) + 2])
+        self.write("frame.tif", tiff16(160, 120))
+        self.write("temps.csv", "time_s,temperature_c\n" + "".join(
+            f"{t * 0.2:.1f},{220 if t < 6 else 210}\n" for t in range(12)))
+        self.write("experiment.yaml", f"""name: campaign
+samples: 3
+settle_s: 0.1
+scale_um_per_px: 10
+calibration: {self.root}/calib.yaml
+extruder: direct-pla
+steps:
+  - {{step: 1, temperature_c: 220, video: {self.root}/step1.mp4}}
+  - {{step: 2, temperature_c: 210, video: {self.root}/step2.avi, start_s: 0.2}}
+  - {{step: 3, temperature_c: 200, images: {self.root}/frames}}
+""")
+        self.write("logged.yaml", f"""name: logged
+samples: 2
+scale_um_per_px: 10
+temperature_log: {self.root}/temps.csv
+hold_tolerance_c: 1
+min_step_s: 0.5
+video: {self.root}/step1.mp4
+""")
+        self.write("steps.csv", "step,temperature_c,source,start_s,end_s\n"
+                   f"1,220,{self.root}/step1.mp4,0,\n2,210,{self.root}/step2.avi,0.1,1.0\n"
+                   f"3,200,{self.root}/frames\n")
+        self.write("extruder.yaml", "base: direct-pla\nconsistency_pa_sn: 5000\nflow_index: 0.4\n"
+                   "damping_ratio: 0.04\nload_model: sum\n")
+        self.sh("run", "experiment.yaml", "--out", "runout")
+        self.write("fit.csv", "step,amplitude_m_s2,current_ma\n1,0.5,600\n2,0.6,620\n3,0.7,650\n")
+        steps = sorted(os.listdir(os.path.join(self.root, "runout", "steps")))
+        kinds = {
+            "manifest_yaml": ["experiment.yaml", "logged.yaml"],
+            "manifest_csv": ["steps.csv"],
+            "temperature_log": ["temps.csv"],
+            "pins_csv": ["pins.csv"],
+            "calibration_yaml": ["calib.yaml"],
+            "diameters_csv": ["runout/diameters.csv"],
+            "fit_csv": ["fit.csv"],
+            "extruder_yaml": ["extruder.yaml"],
+            "step_json": [f"runout/steps/{s}" for s in steps],
+            "image": ["frames/frame_000000.png", "frames16/frame_000000.png",
+                      "colour/frame_000000.png", "frame.jpg", "frame.tif"],
+            "micrometer_image": ["micro/frame_000000.png"],
+            "video": ["step1.mp4", "step2.avi"],
+        }
+        for k, names in kinds.items():
+            self.files[k] = [os.path.join(self.root, n) for n in names]
+        json.dump(self.files, open(os.path.join(self.root, "seeds.json"), "w"), indent=1)
+
+
+def tiff16(w, h):
+    """A little-endian 16-bit grey TIFF holding 12-bit data: a bright vertical strand."""
+    pix = bytearray()
+    for y in range(h):
+        for x in range(w):
+            v = 3800 if 60 <= x < 100 else 600
+            pix += struct.pack("<H", v + (x * 7 + y * 13) % 50)
+    entries = [(256, 3, 1, w), (257, 3, 1, h), (258, 3, 1, 16), (259, 3, 1, 1), (262, 3, 1, 1),
+               (273, 4, 1, 0), (277, 3, 1, 1), (278, 3, 1, h), (279, 4, 1, len(pix))]
+    ifd_size = 2 + 12 * len(entries) + 4
+    data_off = 8 + ifd_size
+    out = bytearray(b"II*\x00" + struct.pack("<I", 8) + struct.pack("<H", len(entries)))
+    for tag, typ, cnt, val in entries:
+        if tag == 273:
+            val = data_off
+        out += struct.pack("<HHI", tag, typ, cnt)
+        out += struct.pack("<HH", val, 0) if typ == 3 else struct.pack("<I", val)
+    out += struct.pack("<I", 0) + pix
+    return bytes(out)
+
+
+def build_case(kind, seeds, rng, work):
+    """Writes the mutated input into `work` and returns the command that reads it."""
+    b = seeds.bin
+    r = seeds.root
+    files = seeds.files.get(kind, [])
+
+    def mutated(ext):
+        src = rng.choice(files)
+        data = open(src, "rb").read()
+        others = [open(f, "rb").read() for f in files if f != src]
+        path = os.path.join(work, "input" + ext)
+        with open(path, "wb") as f:
+            f.write(mutate(data, rng, others))
+        return path, src
+
+    if kind == "manifest_yaml":
+        p, _ = mutated(".yaml")
+        return [b, "run", p, "--out", "out", "--jobs", "1"]
+    if kind == "manifest_csv":
+        p, _ = mutated(".csv")
+        return [b, "run", p, "--out", "out", "--scale-um-per-px", "10", "--samples", "3"]
+    if kind == "temperature_log":
+        p, _ = mutated(".csv")
+        m = open(os.path.join(r, "logged.yaml")).read().replace(f"{r}/temps.csv", p)
+        open(os.path.join(work, "m.yaml"), "w").write(m)
+        return [b, "run", "m.yaml", "--out", "out"]
+    if kind == "pins_csv":
+        p, _ = mutated(".csv")
+        return [b, "calibrate", "--pins", p, "--out", "c.yaml"]
+    if kind == "calibration_yaml":
+        p, _ = mutated(".yaml")
+        if rng.random() < 0.5:
+            return [b, "measure", f"{r}/frames", "--calib", p, "--out-frames", "f.csv"]
+        m = open(os.path.join(r, "experiment.yaml")).read().replace(f"{r}/calib.yaml", p)
+        open(os.path.join(work, "m.yaml"), "w").write(m)
+        return [b, "run", "m.yaml", "--out", "out", "--jobs", "1"]
+    if kind == "diameters_csv":
+        p, _ = mutated(".csv")
+        return [b, "predict", "--diameters", p, "--out", "p"] + (
+            ["--no-plots"] if rng.random() < 0.8 else [])
+    if kind == "fit_csv":
+        p, _ = mutated(".csv")
+        params = rng.choice(["gain_m_s2_per_n", "activation_temperature_k,gain_m_s2_per_n",
+                             "current_gain_ma_per_n,current_offset_ma"])
+        return [b, "predict", "--diameters", f"{r}/runout/diameters.csv", "--fit", p,
+                "--fit-params", params, "--out", "p", "--no-plots"]
+    if kind == "extruder_yaml":
+        p, _ = mutated(".yaml")
+        return [b, "predict", "--extruder", p, "--diameters", f"{r}/runout/diameters.csv",
+                "--out", "p", "--no-plots"]
+    if kind == "step_json":
+        shutil.copytree(os.path.join(r, "runout"), os.path.join(work, "out"))
+        src = rng.choice(files)
+        dst = os.path.join(work, "out", "steps", os.path.basename(src))
+        data = open(src, "rb").read()
+        open(dst, "wb").write(mutate(data, rng, [open(f, "rb").read() for f in files]))
+        return [b, "run", f"{r}/experiment.yaml", "--out", "out", "--resume", "--jobs", "1"]
+    if kind == "image":
+        src = rng.choice(files)
+        p, _ = mutated(os.path.splitext(src)[1] if rng.random() < 0.9 else ".png")
+        if rng.random() < 0.3:
+            return [b, "inspect", p, "--out", "i.png"]
+        return [b, "measure", p, "--out-frames", "f.csv", "--overlay", "ov"]
+    if kind == "micrometer_image":
+        p, _ = mutated(".png")
+        return [b, "calibrate", "--micrometer", p, "--pitch-um", "100", "--out", "c.yaml"]
+    if kind == "video":
+        src = rng.choice(files)
+        p, _ = mutated(os.path.splitext(src)[1])
+        if rng.random() < 0.2:
+            return [b, "inspect", p, "--frame", str(rng.choice([0, 5, 11, 1000])), "--out", "i.png"]
+        return [b, "measure", p, "--out-frames", "f.csv"]
+    if kind == "numbers":
+        return numbers_case(b, r, rng)
+    if kind == "paths":
+        return paths_case(b, r, rng, work)
+    raise ValueError(kind)
+
+
+WEIRD_NUMBERS = ["inf", "-inf", "nan", "1e309", "-1e309", "4.9e-324", "1e308", "-1", "0", "-0",
+                 "1e-300", "2147483648", "-2147483649", "99999999999999999999", "0x10", "1,5",
+                 "", " ", "abc", "1e", "--", "3.0.0", "1e5", "65535", "-65536", "0.0001"]
+
+
+def numbers_case(b, r, rng):
+    """A command with one (or two) of its numeric options set to something odd."""
+    cmds = [
+        ([b, "render", "--out", "r", "--size", "160x120", "--tip-x-px", "80", "--tip-y-px", "30"],
+         ["--frames", "--fps", "--scale-um-per-px", "--strand-width-um", "--tip-x-px",
+          "--tip-y-px", "--tilt-deg", "--blur-px", "--noise", "--background", "--strand-level",
+          "--gradient", "--sway-deg", "--width-jitter-um", "--edge-bias-px", "--pitch-um",
+          "--line-width-um", "--bit-depth", "--seed", "--nozzle-level", "--texture", "--discs",
+          "--gears", "--shading-ambient", "--vignetting", "--bed-gap-um", "--size",
+          "--strand-tint", "--background-tint"]),
+        ([b, "measure", f"{r}/frames", "--out-frames", "f.csv"],
+         ["--scale-um-per-px", "--overlay-every", "--roi", "--band-start-um", "--band-height-um",
+          "--band-start-px", "--band-height-px", "--caliper-px", "--max-blur-px",
+          "--min-contrast"]),
+        ([b, "measure", "--manifest", f"{r}/experiment.yaml", "--out", "out"],
+         ["--samples", "--jobs", "--scale-um-per-px", "--band-start-px", "--roi"]),
+        ([b, "calibrate", "--micrometer", f"{r}/micro/frame_000000.png", "--out", "c.yaml",
+          "--pitch-um", "100"],
+         ["--pitch-um", "--expect-scale-um-per-px", "--roi"]),
+        ([b, "calibrate", "--pins", f"{r}/pins.csv", "--out", "c.yaml"], ["--roi"]),
+        ([b, "predict", "--diameters", f"{r}/runout/diameters.csv", "--out", "p", "--no-plots"],
+         ["--set"]),
+        ([b, "run", f"{r}/experiment.yaml", "--out", "out"],
+         ["--samples", "--jobs", "--scale-um-per-px"]),
+        ([b, "inspect", f"{r}/step1.mp4", "--out", "i.png"],
+         ["--frame", "--roi", "--band-start-px", "--band-height-px"]),
+    ]
+    base, opts = rng.choice(cmds)
+    cmd = list(base)
+    for _ in range(rng.randint(1, 2)):
+        opt = rng.choice(opts)
+        v = rng.choice(WEIRD_NUMBERS)
+        if opt in ("--roi", "--size", "--strand-tint", "--background-tint"):
+            parts = [rng.choice(WEIRD_NUMBERS + ["10", "100", "5000"]) for _ in range(
+                rng.choice([2, 3, 4, 5]))]
+            v = rng.choice([",", "x"]).join(parts)
+        elif opt == "--set":
+            name = rng.choice(["damping_ratio", "flow_index", "consistency_pa_sn",
+                               "nozzle_diameter_m", "natural_frequency_hz", "load_model",
+                               "activation_temperature_k", "nonsense"])
+            v = f"{name}={v}"
+        if opt in cmd:
+            cmd[cmd.index(opt) + 1] = v
+        else:
+            cmd += [opt, v]
+    return cmd
+
+
+def paths_case(b, r, rng, work):
+    """A command with one path argument replaced by an awkward file-system object."""
+    os.makedirs(os.path.join(work, "adir"), exist_ok=True)
+    loop = os.path.join(work, "loop")
+    os.symlink(loop, loop)
+    os.symlink("/nonexistent/target", os.path.join(work, "dangling"))
+    os.mkfifo(os.path.join(work, "fifo"))
+    open(os.path.join(work, "empty"), "wb").close()
+    open(os.path.join(work, "afile"), "w").write("x\n")
+    weird = [os.path.join(work, "adir"), loop, os.path.join(work, "dangling"),
+             os.path.join(work, "fifo"), os.path.join(work, "empty"), "/dev/null", "/dev/zero",
+             "/dev/full", "/proc/self/mem", "/", "", ".", "..", "-", "--help", "x" * 300,
+             "/" + "d/" * 2100 + "f", "nl\nname.png", "sp ace.png", "\u00e9t\u00e9.png",
+             os.path.join(work, "afile", "below.png"), "/nonexistent/dir/out.csv",
+             os.path.join(work, "adir") + "/", "/proc", "/sys/kernel"]
+    cmds = [
+        [b, "measure", "@IN", "--out-frames", "@OUT"],
+        [b, "measure", f"{r}/frames", "--out-frames", "@OUT", "--overlay", "@OUT"],
+        [b, "measure", "--manifest", "@IN", "--out", "@OUT"],
+        [b, "measure", f"{r}/frames", "--calib", "@IN", "--out-frames", "f.csv"],
+        [b, "calibrate", "--pins", "@IN", "--out", "@OUT"],
+        [b, "calibrate", "--micrometer", "@IN", "--pitch-um", "100", "--out", "@OUT"],
+        [b, "calibrate", "--pins", f"{r}/pins.csv", "--out", "@OUT", "--plot", "@OUT"],
+        [b, "predict", "--diameters", "@IN", "--out", "@OUT"],
+        [b, "predict", "--extruder", "@IN", "--diameters", f"{r}/runout/diameters.csv",
+         "--out", "@OUT", "--no-plots"],
+        [b, "predict", "--diameters", f"{r}/runout/diameters.csv", "--fit", "@IN",
+         "--out", "p", "--no-plots"],
+        [b, "run", "@IN", "--out", "@OUT"],
+        [b, "run", f"{r}/experiment.yaml", "--out", "@OUT", "--calib", "@IN"],
+        [b, "render", "--out", "@OUT", "--size", "160x120", "--tip-x-px", "80"],
+        [b, "render", "--out", "@OUT", "--truth", "@OUT", "--size", "160x120"],
+        [b, "inspect", "@IN", "--out", "@OUT"],
+    ]
+    cmd = list(rng.choice(cmds))
+    defaults = {"@IN": f"{r}/frames/frame_000000.png", "@OUT": "o"}
+    slots = [i for i, a in enumerate(cmd) if a in defaults]
+    pick = rng.choice(slots)
+    for i in slots:
+        cmd[i] = rng.choice(weird) if i == pick else defaults[cmd[i]]
+    return cmd
+
+
+KINDS = ["manifest_yaml", "manifest_csv", "temperature_log", "pins_csv", "calibration_yaml",
+         "diameters_csv", "fit_csv", "extruder_yaml", "step_json", "image", "micrometer_image",
+         "video", "numbers", "paths"]
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--bin", required=True, help="clogscope binary (the sanitizer build)")
+    ap.add_argument("--runs", type=int, default=10000)
+    ap.add_argument("--out", default="build-campaign")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--timeout", type=float, default=10.0)
+    args = ap.parse_args()
+    seeds = Seeds(args.bin, os.path.join(args.out, "seeds"))
+    print("making seeds with", args.bin, flush=True)
+    seeds.make()
+    rng = random.Random(args.seed)
+    counts = collections.defaultdict(collections.Counter)
+    lib_lines = collections.Counter()
+    findings = os.path.join(os.path.abspath(args.out), "findings")
+    shutil.rmtree(findings, ignore_errors=True)
+    work = os.path.join(os.path.abspath(args.out), "work")
+    t_start = time.monotonic()
+    slowest = (0.0, None)
+    for n in range(args.runs):
+        kind = KINDS[n % len(KINDS)]
+        shutil.rmtree(work, ignore_errors=True)
+        os.makedirs(work)
+        cmd = build_case(kind, seeds, rng, work)
+        status, rc, out, secs = run(cmd, work, args.timeout)
+        if secs > slowest[0]:
+            slowest = (secs, cmd)
+        counts[kind][status] += 1
+        if status == "library":
+            for line in library_lines(out):
+                lib_lines[re.sub(r"0x[0-9a-f]+|\d+", "N", line.strip())[:160]] += 1
+        if status != "clean":
+            d = os.path.join(findings, status, f"{n:05d}_{kind}")
+            os.makedirs(d)
+            for f in os.listdir(work):
+                p = os.path.join(work, f)
+                if f.startswith("input") and os.path.isfile(p):
+                    shutil.copy(p, d)
+            open(os.path.join(d, "command"), "w").write(
+                " ".join(repr(a) if not re.fullmatch(r"[\w./,=:@-]+", a) else a for a in cmd)
+                + f"\nexit {rc}\n")
+            open(os.path.join(d, "output"), "w").write(out)
+        if (n + 1) % 250 == 0:
+            total = collections.Counter()
+            for c in counts.values():
+                total.update(c)
+            print(f"{n + 1} runs, {time.monotonic() - t_start:.0f} s: {dict(total)}", flush=True)
+    total = collections.Counter()
+    for c in counts.values():
+        total.update(c)
+    report = {
+        "runs": args.runs,
+        "seconds": round(time.monotonic() - t_start),
+        "binary": args.bin,
+        "totals": dict(total),
+        "library_text_pct": round(100.0 * total["library"] / max(1, args.runs), 3),
+        "by_kind": {k: dict(v) for k, v in counts.items()},
+        "library_lines": lib_lines.most_common(40),
+        "slowest_s": round(slowest[0], 2),
+        "slowest_command": slowest[1],
+    }
+    json.dump(report, open(os.path.join(args.out, "report.json"), "w"), indent=1)
+    print(json.dumps(report, indent=1))
+    return 1 if total["crash"] or total["hang"] else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
