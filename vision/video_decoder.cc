@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "common/atomic_file.h"
+#include "vision/video_io.h"
 
 extern "C" {
 #include <libavcodec/avcodec.h>
@@ -74,6 +75,8 @@ VideoDecoder::VideoDecoder(const std::string& path, int threads)
   d.stream = av_find_best_stream(d.format, AVMEDIA_TYPE_VIDEO, -1, -1, &codec, 0);
   if (d.stream < 0 || !codec) throw std::invalid_argument(path + ": no decodable video stream");
   AVStream* st = d.format->streams[d.stream];
+  const std::string too_large = FrameSizeProblem(st->codecpar->width, st->codecpar->height);
+  if (!too_large.empty()) throw std::invalid_argument(path + ": " + too_large);
   d.codec = avcodec_alloc_context3(codec);
   avcodec_parameters_to_context(d.codec, st->codecpar);
   d.codec->thread_count = threads;
@@ -118,7 +121,10 @@ bool VideoDecoder::Read(DecodedFrame* out) {
       skip_before_s_ = -1;
       const AVPixelFormat fmt = static_cast<AVPixelFormat>(d.frame->format);
       const int w = d.frame->width, h = d.frame->height;
-      if (HasLumaPlane(fmt)) {
+      if (!FrameSizeProblem(w, h).empty()) {
+        // A stream that grows mid-way: that frame is unreadable, never converted.
+        out->grey.release();
+      } else if (HasLumaPlane(fmt)) {
         const AVPixFmtDescriptor* desc = av_pix_fmt_desc_get(fmt);
         const bool deep = desc->comp[0].depth > 8;
         const cv::Mat view(h, w, deep ? CV_16UC1 : CV_8UC1, d.frame->data[0], d.frame->linesize[0]);
@@ -144,8 +150,8 @@ bool VideoDecoder::Read(DecodedFrame* out) {
                        : next_index_;
       next_index_ = out->index + 1;
       out->time_s = t;
-      out->corrupt =
-          (d.frame->flags & AV_FRAME_FLAG_CORRUPT) != 0 || d.frame->decode_error_flags != 0;
+      out->corrupt = (d.frame->flags & AV_FRAME_FLAG_CORRUPT) != 0 ||
+                     d.frame->decode_error_flags != 0 || out->grey.empty();
       av_frame_unref(d.frame);
       return true;
     }

@@ -1,10 +1,13 @@
 #include "vision/video_io.h"
 
+#include <fmt/format.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
@@ -107,6 +110,33 @@ std::string DecoderReason(const std::string& library_text) {
   return line.size() > 120 ? line.substr(0, 117) + "..." : line;
 }
 
+// Width and height from a PNG's or JPEG's header (0, 0 for other formats or when unreadable;
+// OpenCV then decodes under its own 2^30-pixel limit).
+std::pair<long long, long long> HeaderSize(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::vector<unsigned char> b(64 * 1024);
+  in.read(reinterpret_cast<char*>(b.data()), static_cast<std::streamsize>(b.size()));
+  b.resize(static_cast<size_t>(in.gcount()));
+  auto be16 = [&](size_t i) { return (long long)b[i] << 8 | b[i + 1]; };
+  auto be32 = [&](size_t i) { return be16(i) << 16 | be16(i + 2); };
+  if (b.size() >= 24 && !std::memcmp(b.data(), "\x89PNG\r\n\x1a\n", 8) &&
+      !std::memcmp(&b[12], "IHDR", 4)) {
+    return {be32(16), be32(20)};
+  }
+  if (b.size() >= 4 && b[0] == 0xFF && b[1] == 0xD8) {
+    // Walk the markers to the frame header (SOF0..SOF15 but DHT, JPG and DAC).
+    size_t i = 2;
+    while (i + 9 < b.size() && b[i] == 0xFF) {
+      const int marker = b[i + 1];
+      if (marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC) {
+        return {be16(i + 7), be16(i + 5)};
+      }
+      i += 2 + static_cast<size_t>(be16(i + 2));
+    }
+  }
+  return {0, 0};
+}
+
 // Text a decoder prints for an image it decoded whole: warnings, not damage.
 bool HarmlessDecoderText(const std::string& text) {
   size_t pos = 0;
@@ -124,9 +154,20 @@ bool HarmlessDecoderText(const std::string& text) {
 
 }  // namespace
 
+std::string FrameSizeProblem(long long width_px, long long height_px) {
+  if (width_px * height_px <= kMaxFramePixels) return std::string();
+  return fmt::format(
+      "frames are {}x{} ({:.1f} Mpx), over the {:.1f} Mpx (4096x4096) measured: "
+      "crop or scale it first",
+      width_px, height_px, width_px * height_px / 1e6, kMaxFramePixels / 1e6);
+}
+
 cv::Mat ReadImage(const std::string& path, std::string* error) {
   // A FIFO or device would block or never end; a directory is not an image.
   if (!IsRegularFile(path, error)) return cv::Mat();
+  // A small file may claim a huge image: refuse it from its header before decoding allocates.
+  const auto [header_width, header_height] = HeaderSize(path);
+  if (!(*error = FrameSizeProblem(header_width, header_height)).empty()) return cv::Mat();
   cv::Mat img;
   std::string library_text;
   {

@@ -13,6 +13,12 @@ enum class VideoKind { kNone, kMjpegAvi, kH264Mp4 };
 // (case-insensitive).
 VideoKind VideoKindForPath(const std::string& path);
 
+// The largest frame the tool measures (4096×4096): memory stays bounded by this, not by what a
+// file's header claims (measuring a 4096×4096 H.264 video peaks near 330 MB).
+inline constexpr long long kMaxFramePixels = 4096LL * 4096;
+// Empty when w×h is measurable, else why not: "frames are 8192×8192 (67.1 Mpx), over …".
+std::string FrameSizeProblem(long long width_px, long long height_px);
+
 // True for the file extensions `measure` reads as images.
 bool IsImagePath(const std::string& path);
 // Reads an image file as stored (8- or 16-bit, grey or colour). An empty image and the reason in

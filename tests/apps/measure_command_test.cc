@@ -1,7 +1,10 @@
 // End-to-end tests of `clogscope render` and `clogscope measure`: the binary on a small rendered
 // video, its exit codes and one-line errors, and the typed MeasureInputs() behind it.
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -177,6 +180,69 @@ TEST(MeasureCommandTest, DamagedImagesAndFifosGiveTheToolsOwnLine) {
     EXPECT_EQ(r.exit_code, 1) << cmd;
     EXPECT_NE(r.err.find("fifo: not a regular file"), std::string::npos) << cmd << ": " << r.err;
   }
+}
+
+// Peak resident memory of one command (run through the shell in a child of a child, so that
+// earlier commands of this test do not count), in MB.
+double PeakMemoryMb(const std::string& command) {
+  int fds[2];
+  EXPECT_EQ(::pipe(fds), 0);
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::close(fds[0]);
+    const int rc = std::system(command.c_str());
+    struct rusage ru {};
+    ::getrusage(RUSAGE_CHILDREN, &ru);
+    const long kb = rc == 0 ? ru.ru_maxrss : -1;
+    (void)!::write(fds[1], &kb, sizeof kb);
+    ::_exit(0);
+  }
+  ::close(fds[1]);
+  long kb = -1;
+  (void)!::read(fds[0], &kb, sizeof kb);
+  ::close(fds[0]);
+  ::waitpid(pid, nullptr, 0);
+  return kb / 1024.0;
+}
+
+// Memory is bounded by the frame size the tool accepts, not by what a small file claims.
+TEST(MeasureCommandTest, LargeFramesAreBoundedOrRefused) {
+  const fs::path d = FreshDir("large");
+  const std::string bin = CLOGSCOPE_BINARY;
+  // The largest frames measured: a 4096x4096 H.264 video (under 0.2 MB) stays under 500 MB.
+  ASSERT_EQ(RunCli("render --out " + (d / "big.mp4").string() +
+                       " --size 4096x4096 --frames 2 --tip-x-px 2048 --tip-y-px 1000",
+                   d)
+                .exit_code,
+            0);
+  ASSERT_LT(fs::file_size(d / "big.mp4"), 1u << 20);
+  const double mb = PeakMemoryMb(bin + " measure " + (d / "big.mp4").string() + " --out-frames " +
+                                 (d / "f.csv").string() + " 2>/dev/null");
+  EXPECT_GT(mb, 0) << "measure failed";
+#if !defined(__SANITIZE_ADDRESS__)  // ASan's shadow memory and quarantine are not the tool's
+  EXPECT_LT(mb, 500) << "peak memory measuring 4096x4096 frames";
+#endif
+  std::printf("peak memory measuring 4096x4096 H.264: %.0f MB\n", mb);
+  // One row more each way is refused before decoding.
+  ASSERT_EQ(RunCli("render --out " + (d / "over.mp4").string() +
+                       " --size 4112x4096 --frames 1 --tip-x-px 2048 --tip-y-px 1000",
+                   d)
+                .exit_code,
+            0);
+  RunResult r = RunCli("measure " + (d / "over.mp4").string() + " --out-frames x.csv", d);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("over.mp4: frames are 4112x4096 (16.8 Mpx), over the 16.8 Mpx"),
+            std::string::npos)
+      << r.err;
+  // A PNG whose header claims 40000x40000 (what follows does not matter): refused, not allocated.
+  ASSERT_EQ(RunCli("render --out " + (d / "small").string() + " " + kSmall, d).exit_code, 0);
+  std::string png = ReadFile((d / "small" / "frame_000000.png").string());
+  const unsigned char claim[8] = {0, 0, 0x9c, 0x40, 0, 0, 0x9c, 0x40};  // 40000, 40000
+  png.replace(16, 8, reinterpret_cast<const char*>(claim), 8);
+  WriteFileAtomically((d / "claims.png").string(), png);
+  r = RunCli("inspect " + (d / "claims.png").string() + " --out i.png", d);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("claims.png: frames are 40000x40000"), std::string::npos) << r.err;
 }
 
 TEST(MeasureCommandTest, BandOptionsResolveFromMicronsOrPixels) {
