@@ -17,6 +17,7 @@ Usage: fuzz/campaign.py --bin build-asan/bin/clogscope --runs 10000 --out build-
 """
 import argparse
 import collections
+import concurrent.futures
 import json
 import os
 import random
@@ -433,46 +434,55 @@ def main():
     ap.add_argument("--out", default="build-campaign")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--timeout", type=float, default=10.0)
+    ap.add_argument("--jobs", type=int, default=os.cpu_count())
     args = ap.parse_args()
     seeds = Seeds(args.bin, os.path.join(args.out, "seeds"))
     print("making seeds with", args.bin, flush=True)
     seeds.make()
-    rng = random.Random(args.seed)
     counts = collections.defaultdict(collections.Counter)
     lib_lines = collections.Counter()
     findings = os.path.join(os.path.abspath(args.out), "findings")
     shutil.rmtree(findings, ignore_errors=True)
-    work = os.path.join(os.path.abspath(args.out), "work")
     t_start = time.monotonic()
     slowest = (0.0, None)
-    for n in range(args.runs):
+
+    def one(n):
+        # Each case from its own generator: the same seed gives the same cases at any --jobs.
+        rng = random.Random(f"{args.seed}-{n}")
         kind = KINDS[n % len(KINDS)]
+        work = os.path.join(os.path.abspath(args.out), "work", str(n))
         shutil.rmtree(work, ignore_errors=True)
         os.makedirs(work)
         cmd = build_case(kind, seeds, rng, work)
         status, rc, out, secs = run(cmd, work, args.timeout)
-        if secs > slowest[0]:
-            slowest = (secs, cmd)
-        counts[kind][status] += 1
-        if status == "library":
-            for line in library_lines(out):
-                lib_lines[re.sub(r"0x[0-9a-f]+|\d+", "N", line.strip())[:160]] += 1
+        kept = None
         if status != "clean":
-            d = os.path.join(findings, status, f"{n:05d}_{kind}")
-            os.makedirs(d)
+            kept = os.path.join(findings, status, f"{n:05d}_{kind}")
+            os.makedirs(kept)
             for f in os.listdir(work):
                 p = os.path.join(work, f)
                 if f.startswith("input") and os.path.isfile(p):
-                    shutil.copy(p, d)
-            open(os.path.join(d, "command"), "w").write(
-                " ".join(repr(a) if not re.fullmatch(r"[\w./,=:@-]+", a) else a for a in cmd)
+                    shutil.copy(p, kept)
+            open(os.path.join(kept, "command"), "w").write(
+                " ".join(a if re.fullmatch(r"[\w./,=:@-]+", a) else repr(a) for a in cmd)
                 + f"\nexit {rc}\n")
-            open(os.path.join(d, "output"), "w").write(out)
-        if (n + 1) % 250 == 0:
-            total = collections.Counter()
-            for c in counts.values():
-                total.update(c)
-            print(f"{n + 1} runs, {time.monotonic() - t_start:.0f} s: {dict(total)}", flush=True)
+            open(os.path.join(kept, "output"), "w").write(out)
+        shutil.rmtree(work, ignore_errors=True)
+        return kind, status, out, secs, cmd
+
+    with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
+        for n, (kind, status, out, secs, cmd) in enumerate(pool.map(one, range(args.runs))):
+            if secs > slowest[0]:
+                slowest = (secs, cmd)
+            counts[kind][status] += 1
+            for line in library_lines(out) if status == "library" else []:
+                lib_lines[re.sub(r"0x[0-9a-f]+|\d+", "N", line.strip())[:160]] += 1
+            if (n + 1) % 250 == 0:
+                total = collections.Counter()
+                for c in counts.values():
+                    total.update(c)
+                print(f"{n + 1} runs, {time.monotonic() - t_start:.0f} s: {dict(total)}",
+                      flush=True)
     total = collections.Counter()
     for c in counts.values():
         total.update(c)
