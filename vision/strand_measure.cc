@@ -158,6 +158,21 @@ StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOption
       break;
     }
   }
+  // A colour channel clipped at the strand's edges flattens their profile and biases the fit:
+  // the same edges are measured in another channel that holds up unclipped. Single colour
+  // channels first: luma mixes the clipped one in.
+  if (m.status == FrameStatus::kSaturated && channels.size() > 1 && scene.chosen >= 0) {
+    for (size_t k = 1; k <= channels.size(); ++k) {
+      const size_t c = k % channels.size();  // 1, 2, 3, then 0 (luma)
+      if (static_cast<int>(c) == scene.channel) continue;
+      StrandMeasurement alt =
+          MeasureInScene(channels[c], data_max, FrameStatus::kValid, "", scene.geometry, roi, opt);
+      if (!alt.valid()) continue;
+      scene.channel = static_cast<int>(c);
+      m = std::move(alt);
+      break;
+    }
+  }
   if (scene_out) *scene_out = std::move(scene);
   return m;
 }

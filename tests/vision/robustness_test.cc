@@ -43,12 +43,19 @@ TEST(RobustnessTest, RandomisedScenesAgainstTruth) {
     const SceneParams p = RandomRealisticScene(seed);
     FrameTruth t;
     const StrandMeasurement m = MeasureStrand(RenderFrame(p, 0, &t), OptionsFor(p));
-    if (!m.valid()) continue;
+    if (!m.valid()) {
+      std::printf("seed %d: %s: %s\n", seed, FrameStatusName(m.status), m.detail.c_str());
+      continue;
+    }
     ++valid;
     (p.shading_ambient < 1.0 ? shaded : plain).Add(m.width_px - t.width_px);
+    if (std::abs(m.width_px - t.width_px) > 0.3)
+      std::printf("seed %d: error %+.2f px\n", seed, m.width_px - t.width_px);
   }
-  // Measured on this suite: 196 of 200 valid; unshaded −0.008 ± 0.048 px; shaded −0.10 ± 0.17 px.
-  EXPECT_GE(valid, 0.97 * kFrames);
+  std::printf("%d of %d valid; unshaded %+.4f ± %.4f px (%d); shaded %+.4f ± %.4f px (%d)\n", valid,
+              kFrames, plain.mean(), plain.sd(), plain.n, shaded.mean(), shaded.sd(), shaded.n);
+  // Measured on this suite: 197 of 200 valid; unshaded −0.009 ± 0.050 px; shaded −0.10 ± 0.17 px.
+  EXPECT_GE(valid, 0.98 * kFrames);
   EXPECT_LE(std::abs(plain.mean()), 0.05);
   EXPECT_LE(plain.sd(), 0.06);
   EXPECT_LE(std::abs(shaded.mean()), 0.12);

@@ -123,6 +123,30 @@ TEST(StrandMeasureTest, ColourAnd16BitAgreeWithGrey) {
   EXPECT_NEAR(deep.contrast, 160 * 257, 160 * 257 * 0.02);
 }
 
+// A colour frame whose strongest channel is clipped at the strand's edges (a bright blue-tinted
+// background beyond 255 in blue): the same edges are measured in a channel that is not clipped.
+TEST(StrandMeasureTest, ClippedColourChannelFallsBackToAnUnclippedOne) {
+  SceneParams p;
+  p.colour = true;
+  p.background_level = 230;
+  p.strand_level = 50;
+  p.nozzle_level = 120;
+  const double background_tint[3] = {1.3, 1.0, 0.8};  // blue clips at 255 around the strand
+  const double strand_tint[3] = {1.2, 1.0, 0.9};
+  for (int c = 0; c < 3; ++c) {
+    p.background_tint[c] = background_tint[c];
+    p.strand_tint[c] = strand_tint[c];
+  }
+  FrameTruth t;
+  const cv::Mat img = RenderFrame(p, 0, &t);
+  std::vector<cv::Mat> bgr;
+  cv::split(img, bgr);
+  ASSERT_GT(cv::countNonZero(bgr[0] == 255), img.total() / 2) << "blue is not clipped";
+  const StrandMeasurement m = MeasureStrand(img, {});
+  ASSERT_TRUE(m.valid()) << FrameStatusName(m.status) << ": " << m.detail;
+  EXPECT_NEAR(m.width_px, t.width_px, 0.1);
+}
+
 TEST(StrandMeasureTest, RoiGivesFullFrameCoordinates) {
   SceneParams p;
   p.tilt_deg = 6;
