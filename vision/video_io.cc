@@ -15,6 +15,7 @@
 
 #include "common/atomic_file.h"
 #include "common/library_text.h"
+#include "vision/image_header.h"
 
 namespace clogscope::vision {
 namespace {
@@ -110,33 +111,6 @@ std::string DecoderReason(const std::string& library_text) {
   return line.size() > 120 ? line.substr(0, 117) + "..." : line;
 }
 
-// Width and height from a PNG's or JPEG's header (0, 0 for other formats or when unreadable;
-// OpenCV then decodes under its own 2^30-pixel limit).
-std::pair<long long, long long> HeaderSize(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::vector<unsigned char> b(64 * 1024);
-  in.read(reinterpret_cast<char*>(b.data()), static_cast<std::streamsize>(b.size()));
-  b.resize(static_cast<size_t>(in.gcount()));
-  auto be16 = [&](size_t i) { return (long long)b[i] << 8 | b[i + 1]; };
-  auto be32 = [&](size_t i) { return be16(i) << 16 | be16(i + 2); };
-  if (b.size() >= 24 && !std::memcmp(b.data(), "\x89PNG\r\n\x1a\n", 8) &&
-      !std::memcmp(&b[12], "IHDR", 4)) {
-    return {be32(16), be32(20)};
-  }
-  if (b.size() >= 4 && b[0] == 0xFF && b[1] == 0xD8) {
-    // Walk the markers to the frame header (SOF0..SOF15 but DHT, JPG and DAC).
-    size_t i = 2;
-    while (i + 9 < b.size() && b[i] == 0xFF) {
-      const int marker = b[i + 1];
-      if (marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC) {
-        return {be16(i + 7), be16(i + 5)};
-      }
-      i += 2 + static_cast<size_t>(be16(i + 2));
-    }
-  }
-  return {0, 0};
-}
-
 // Text a decoder prints for an image it decoded whole: warnings, not damage.
 bool HarmlessDecoderText(const std::string& text) {
   size_t pos = 0;
@@ -165,9 +139,18 @@ std::string FrameSizeProblem(long long width_px, long long height_px) {
 cv::Mat ReadImage(const std::string& path, std::string* error) {
   // A FIFO or device would block or never end; a directory is not an image.
   if (!IsRegularFile(path, error)) return cv::Mat();
-  // A small file may claim a huge image: refuse it from its header before decoding allocates.
-  const auto [header_width, header_height] = HeaderSize(path);
-  if (!(*error = FrameSizeProblem(header_width, header_height)).empty()) return cv::Mat();
+  // Only the formats cameras write are decoded (each other decoder is more surface for a bad
+  // file), and a small file may claim a huge image: refuse it from its header before decoding.
+  const ImageHeader header = ReadImageHeader(path);
+  if (header.format.empty()) {
+    *error = "not an image format the tool reads (PNG, JPEG, TIFF, BMP, PGM/PPM)";
+    return cv::Mat();
+  }
+  if (header.width_px <= 0 || header.height_px <= 0) {
+    *error = "cannot decode image (its " + header.format + " header gives no size)";
+    return cv::Mat();
+  }
+  if (!(*error = FrameSizeProblem(header.width_px, header.height_px)).empty()) return cv::Mat();
   cv::Mat img;
   std::string library_text;
   {

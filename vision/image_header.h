@@ -1,0 +1,23 @@
+#pragma once
+
+// What an image file's first bytes say it is, read without decoding it: the tool decodes only the
+// formats cameras write, and refuses a frame too large to measure before a decoder allocates it
+// (a 32-byte WebP bitstream may claim 16384×12164 pixels).
+#include <string>
+
+namespace clogscope::vision {
+
+struct ImageHeader {
+  std::string format;      // "png", "jpeg", "tiff", "bmp", "pnm"; empty: none of these
+  long long width_px = 0;  // 0 when the header does not say (cut short or damaged)
+  long long height_px = 0;
+};
+
+// Reads the header of the file at `path` (a regular file).
+ImageHeader ReadImageHeader(const std::string& path);
+
+// The same from bytes in memory (the file's start: 64 KiB is enough for every format above but a
+// TIFF whose first directory lies further in).
+ImageHeader ParseImageHeader(const std::string& bytes);
+
+}  // namespace clogscope::vision
