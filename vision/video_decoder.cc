@@ -1,8 +1,12 @@
 #include "vision/video_decoder.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <stdexcept>
 
 #include "common/atomic_file.h"
@@ -18,7 +22,17 @@ extern "C" {
 
 namespace clogscope::vision {
 
+// Counts the bytes of the frame buffers the decoder holds (every buffer it asks for is wrapped so
+// that its release is seen) and refuses a buffer past kMaxDecoderBytes. Shared with the buffers,
+// which may outlive the decoder's context.
+struct FrameMemory {
+  std::atomic<size_t> held_bytes{0};
+  std::atomic<size_t> peak_bytes{0};
+  std::atomic<bool> over{false};
+};
+
 struct VideoDecoder::Impl {
+  std::shared_ptr<FrameMemory> memory;  // the decoder's frame buffers (video_decoder.cc)
   AVFormatContext* format = nullptr;
   AVCodecContext* codec = nullptr;
   AVPacket* packet = nullptr;
@@ -58,6 +72,56 @@ bool HasLumaPlane(AVPixelFormat fmt) {
   return d->comp[0].plane == 0 && d->comp[0].step <= 2;
 }
 
+// Frame memory the decoder may hold at once: reference frames, frames delayed for reordering,
+// frames in flight on its threads (their per-picture tables come on top, about as much again).
+// A 4096×4096 H.264 video from x264's defaults holds 72 MB; a 0.4 MB one with 16 reference frames
+// took 800 MB before this cap and now stops near 400 MB.
+constexpr size_t kMaxDecoderBytes = size_t{128} << 20;
+constexpr long long kLargeFramePixels = 2560LL * 1440;
+
+struct HeldBuffer {
+  std::shared_ptr<FrameMemory> memory;
+  AVBufferRef* original = nullptr;
+};
+
+void ReleaseBuffer(void* opaque, uint8_t*) {
+  auto* h = static_cast<HeldBuffer*>(opaque);
+  h->memory->held_bytes -= h->original->size;
+  av_buffer_unref(&h->original);
+  delete h;
+}
+
+int CountedGetBuffer(AVCodecContext* codec, AVFrame* frame, int flags) {
+  auto& memory = *static_cast<std::shared_ptr<FrameMemory>*>(codec->opaque);
+  const int err = avcodec_default_get_buffer2(codec, frame, flags);
+  if (err < 0) return err;
+  size_t bytes = 0;
+  for (AVBufferRef* buf : frame->buf) bytes += buf ? buf->size : 0;
+  for (size_t i = 0; i < frame->nb_extended_buf; ++i) bytes += frame->extended_buf[i]->size;
+  if (memory->held_bytes + bytes > kMaxDecoderBytes || frame->nb_extended_buf > 0) {
+    memory->over = true;
+    av_frame_unref(frame);
+    return AVERROR(ENOMEM);
+  }
+  for (AVBufferRef*& buf : frame->buf) {
+    if (!buf) continue;
+    auto* h = new HeldBuffer{memory, buf};
+    AVBufferRef* wrapped = av_buffer_create(buf->data, buf->size, ReleaseBuffer, h, 0);
+    if (!wrapped) {
+      delete h;
+      av_frame_unref(frame);
+      return AVERROR(ENOMEM);
+    }
+    memory->held_bytes += buf->size;
+    buf = wrapped;
+  }
+  size_t peak = memory->peak_bytes;
+  while (memory->held_bytes > peak &&
+         !memory->peak_bytes.compare_exchange_weak(peak, memory->held_bytes)) {
+  }
+  return 0;
+}
+
 }  // namespace
 
 VideoDecoder::VideoDecoder(const std::string& path, int threads)
@@ -79,8 +143,14 @@ VideoDecoder::VideoDecoder(const std::string& path, int threads)
   if (!too_large.empty()) throw std::invalid_argument(path + ": " + too_large);
   d.codec = avcodec_alloc_context3(codec);
   avcodec_parameters_to_context(d.codec, st->codecpar);
-  d.codec->thread_count = threads;
+  // Frame threads each keep their own pool of frame buffers: large frames decode on one thread.
+  const bool large =
+      static_cast<long long>(st->codecpar->width) * st->codecpar->height > kLargeFramePixels;
+  d.codec->thread_count = large ? 1 : threads;
   d.codec->thread_type = FF_THREAD_FRAME | FF_THREAD_SLICE;
+  d.memory = std::make_shared<FrameMemory>();
+  d.codec->opaque = &d.memory;
+  d.codec->get_buffer2 = CountedGetBuffer;
   err = avcodec_open2(d.codec, codec, nullptr);
   if (err < 0) throw std::invalid_argument(path + ": cannot open decoder (" + AvError(err) + ")");
   d.packet = av_packet_alloc();
@@ -107,6 +177,13 @@ int VideoDecoder::height() const { return impl_->codec->height; }
 bool VideoDecoder::Read(DecodedFrame* out) {
   Impl& d = *impl_;
   while (!d.finished) {
+    if (d.memory->over) {
+      throw std::invalid_argument(fmt::format(
+          "decoding would hold over {} MB of frames ({}x{}, held {:.0f} MB): re-encode with "
+          "fewer reference frames or smaller frames",
+          kMaxDecoderBytes >> 20, d.codec->width, d.codec->height,
+          d.memory->peak_bytes / double(1 << 20)));
+    }
     int err = avcodec_receive_frame(d.codec, d.frame);
     if (err == 0) {
       const int64_t pts = d.frame->best_effort_timestamp != AV_NOPTS_VALUE

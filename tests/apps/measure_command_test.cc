@@ -223,13 +223,28 @@ TEST(MeasureCommandTest, LargeFramesAreBoundedOrRefused) {
   EXPECT_LT(mb, 500) << "peak memory measuring 4096x4096 frames";
 #endif
   std::printf("peak memory measuring 4096x4096 H.264: %.0f MB\n", mb);
+  // A 0.3 MB stream of such frames with 16 reference frames (testdata/video/refs16_4096.mp4):
+  // refused once the decoder's frames pass 128 MB, still under 500 MB in all (800 MB before).
+  const std::string refs16 = std::string(CLOGSCOPE_TESTDATA_DIR) + "/video/refs16_4096.mp4";
+  const std::string x_csv = " --out-frames " + (d / "x.csv").string();
+  RunResult r = RunCli("measure " + refs16 + x_csv, d);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("refs16_4096.mp4: decoding would hold over 128 MB of frames"),
+            std::string::npos)
+      << r.err;
+  const double refs16_mb =
+      PeakMemoryMb(bin + " measure " + refs16 + x_csv + " 2>/dev/null || true");
+#if !defined(__SANITIZE_ADDRESS__)
+  EXPECT_LT(refs16_mb, 500) << "peak memory refusing a 16-reference-frame 4096x4096 stream";
+#endif
+  std::printf("peak memory refusing 16 reference frames of 4096x4096: %.0f MB\n", refs16_mb);
   // One row more each way is refused before decoding.
   ASSERT_EQ(RunCli("render --out " + (d / "over.mp4").string() +
                        " --size 4112x4096 --frames 1 --tip-x-px 2048 --tip-y-px 1000",
                    d)
                 .exit_code,
             0);
-  RunResult r = RunCli("measure " + (d / "over.mp4").string() + " --out-frames x.csv", d);
+  r = RunCli("measure " + (d / "over.mp4").string() + x_csv, d);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("over.mp4: frames are 4112x4096 (16.8 Mpx), over the 16.8 Mpx"),
             std::string::npos)
