@@ -445,6 +445,7 @@ def main():
     shutil.rmtree(findings, ignore_errors=True)
     t_start = time.monotonic()
     slowest = (0.0, None)
+    exits = collections.Counter()  # 0 done, 1 refused with a message, 2 partly done, …
 
     def one(n):
         # Each case from its own generator: the same seed gives the same cases at any --jobs.
@@ -468,10 +469,11 @@ def main():
                 + f"\nexit {rc}\n")
             open(os.path.join(kept, "output"), "w").write(out)
         shutil.rmtree(work, ignore_errors=True)
-        return kind, status, out, secs, cmd
+        return kind, status, out, secs, cmd, rc
 
     with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
-        for n, (kind, status, out, secs, cmd) in enumerate(pool.map(one, range(args.runs))):
+        for n, (kind, status, out, secs, cmd, rc) in enumerate(pool.map(one, range(args.runs))):
+            exits[str(rc)] += 1
             if secs > slowest[0]:
                 slowest = (secs, cmd)
             counts[kind][status] += 1
@@ -492,6 +494,7 @@ def main():
         "binary": args.bin,
         "totals": dict(total),
         "library_text_pct": round(100.0 * total["library"] / max(1, args.runs), 3),
+        "exit_codes": dict(exits.most_common()),
         "by_kind": {k: dict(v) for k, v in counts.items()},
         "library_lines": lib_lines.most_common(40),
         "slowest_s": round(slowest[0], 2),
