@@ -198,8 +198,7 @@ int RunCalibrate(int argc, char** argv) {
       "  clogscope measure step1.mp4 --calib calib.yaml --out-frames frames.csv\n"
       "Pins give the scale and the edge bias b (width_um = (width_px - b) * scale); a micrometer\n"
       "gives the scale only.");
-  CLI11_PARSE(app, argc, argv);
-  CheckNumbers(app);
+  if (!ParseCommandLine(app, argc, argv)) return 0;  // --help printed
   if (!roi.empty()) o.pin_measure.roi = ParseRoi(roi);
   o.pin_measure.polarity = vision::ParsePolarity(polarity);
   if (app.count("--expect-scale-um-per-px")) o.expect_scale_um_per_px = expect;

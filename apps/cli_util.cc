@@ -60,6 +60,22 @@ void SetUpLogging(const std::string& level) {
   spdlog::set_default_logger(logger);
 }
 
+bool ParseCommandLine(CLI::App& app, int argc, char** argv) {
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    app.exit(e);
+    return false;
+  } catch (const CLI::CallForAllHelp& e) {
+    app.exit(e);
+    return false;
+  } catch (const CLI::ParseError& e) {
+    throw std::invalid_argument(std::string(e.what()) + " (see --help)");
+  }
+  CheckNumbers(app);
+  return true;
+}
+
 void CheckNumbers(const CLI::App& app) {
   for (const CLI::Option* opt : app.get_options()) {
     for (const std::string& text : opt->results()) {

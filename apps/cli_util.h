@@ -12,6 +12,11 @@ bool ParseSize(const std::string& text, int* width, int* height);
 // "x,y,w,h" -> rectangle; throws std::invalid_argument naming --roi on a malformed value.
 cv::Rect ParseRoi(const std::string& text);
 
+// Parses the command line into `app`'s options, then CheckNumbers. Returns false when --help was
+// asked for (and printed). A usage error (unknown option, missing or unconvertible value) throws
+// std::invalid_argument with CLI11's one-line reason, so it reads like every other error.
+bool ParseCommandLine(CLI::App& app, int argc, char** argv);
+
 // After parsing: every option value that reads as a number must be a finite one of normal size
 // ("inf", "nan", 1e309 or 4.9e-324 reach no physical quantity). Throws std::invalid_argument
 // naming the option. Each quantity's own range is checked where its options are validated.

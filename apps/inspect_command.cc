@@ -195,8 +195,7 @@ int RunInspect(int argc, char** argv) {
       "The picture numbers every candidate edge pair (green: chosen, orange: lost on score, grey:\n"
       "ruled out), with the band, calipers and tip of the measurement and the suggested ROI "
       "(white).");
-  CLI11_PARSE(app, argc, argv);
-  CheckNumbers(app);
+  if (!ParseCommandLine(app, argc, argv)) return 0;  // --help printed
   if (!roi.empty()) o.strand.roi = ParseRoi(roi);
   o.strand.polarity = vision::ParsePolarity(polarity);
   if (!target.empty()) {

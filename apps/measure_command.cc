@@ -269,8 +269,7 @@ int RunMeasure(int argc, char** argv) {
       "  clogscope measure a.png b.png --roi 400,150,480,400 --polarity dark --out-frames f.csv\n"
       "  clogscope measure feed.avi --target filament --out-frames filament.csv\n"
       "Exit status: 0 all inputs read, 2 some inputs unreadable, 1 nothing measured.");
-  CLI11_PARSE(app, argc, argv);
-  CheckNumbers(app);
+  if (!ParseCommandLine(app, argc, argv)) return 0;  // --help printed
   if (!exp.manifest.empty()) {
     if (!o.inputs.empty())
       throw std::invalid_argument("give either inputs or --manifest, not both");

@@ -235,8 +235,7 @@ int RunPredict(int argc, char** argv) {
           names += std::string(names.empty() ? "" : ", ") + i.name;
         return names + ", load_model (sum|difference)";
       }());
-  CLI11_PARSE(app, argc, argv);
-  CheckNumbers(app);
+  if (!ParseCommandLine(app, argc, argv)) return 0;  // --help printed
   if (!fit_params.empty()) {
     std::string item;
     std::stringstream ss(fit_params);

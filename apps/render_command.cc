@@ -126,8 +126,7 @@ int RunRender(int argc, char** argv) {
       "  clogscope render --target pin --strand-width-um 300 --edge-bias-px 0.4 --out pin300/\n"
       "  clogscope render --target micrometer --pitch-um 100 --tilt-deg 2 --silhouette --out "
       "micro/");
-  CLI11_PARSE(app, argc, argv);
-  CheckNumbers(app);
+  if (!ParseCommandLine(app, argc, argv)) return 0;  // --help printed
   s.target = vision::ParseTarget(target);
   s.nozzle = !no_nozzle;
   s.strand = !no_strand;

@@ -313,8 +313,7 @@ int RunRun(int argc, char** argv) {
       "Outputs: calibration.yaml, frames.csv, diameters.csv/.json, diameter_vs_temperature.png,\n"
       "overlays/, steps/ (per-step results for --resume), predict/, summary.md, summary.json.\n"
       "Exit status: 0 all steps ok, 2 some steps short or failed, 1 all failed, 130 interrupted.");
-  CLI11_PARSE(app, argc, argv);
-  CheckNumbers(app);
+  if (!ParseCommandLine(app, argc, argv)) return 0;  // --help printed
   if (samples) o.samples = samples;
   return RunExperimentCli(o);
 }

@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -118,6 +119,15 @@ TEST(MeasureCommandTest, BadInputsGiveOneLineErrorsAndExitCodes) {
   const CsvTable both = ParseCsv(ReadFile((d / "f.csv").string()), "f.csv");
   ASSERT_EQ(both.rows.size(), 1u);
   EXPECT_EQ(both.rows[0][both.Column("valid")], "1");
+
+  // Usage errors read like every other error: one line, exit 1 (CLI11 exited 104–114 with two).
+  for (const std::string& bad : std::vector<std::string>{"measure --bogus", "measure x.png --roi",
+                                                         "render --out r --frames abc"}) {
+    r = RunCli(bad, d);
+    EXPECT_EQ(r.exit_code, 1) << bad;
+    EXPECT_EQ(r.err.rfind("clogscope ", 0), 0u) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
 
   r = RunCli("frobnicate", d);
   EXPECT_NE(r.exit_code, 0);
