@@ -154,7 +154,9 @@ TEST(MeasureCommandTest, DamagedImagesAndFifosGiveTheToolsOwnLine) {
   std::string crc = png;
   crc[idat + 40] ^= 0x5a;  // inside the compressed data
   WriteFileAtomically((d / "crc.png").string(), crc);
-  RunResult r = RunCli("measure " + (d / "crc.png").string() + " --out-frames x.csv", d);
+  // Every output inside the test's folder (a bare name would land in the working directory).
+  const std::string x_csv = " --out-frames " + (d / "x.csv").string();
+  RunResult r = RunCli("measure " + (d / "crc.png").string() + x_csv, d);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("crc.png: cannot decode image (libpng: IDAT: "), std::string::npos) << r.err;
   ExpectOnlyToolLines(r.err);
@@ -164,18 +166,19 @@ TEST(MeasureCommandTest, DamagedImagesAndFifosGiveTheToolsOwnLine) {
   ASSERT_TRUE(cv::imencode(".jpg", cv::imread((d / "f" / "frame_000000.png").string()), jpg));
   WriteFileAtomically((d / "cut.jpg").string(),
                       std::string(jpg.begin(), jpg.begin() + jpg.size() * 6 / 10));
-  r = RunCli("measure " + (d / "cut.jpg").string() + " --out-frames x.csv", d);
+  r = RunCli("measure " + (d / "cut.jpg").string() + x_csv, d);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("cut.jpg: damaged image (Premature end of JPEG file)"), std::string::npos)
       << r.err;
   ExpectOnlyToolLines(r.err);
 
   // Inspect and calibrate read images the same way.
-  r = RunCli("inspect " + (d / "crc.png").string() + " --out i.png", d);
+  r = RunCli("inspect " + (d / "crc.png").string() + " --out " + (d / "i.png").string(), d);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("cannot decode image (libpng: IDAT: "), std::string::npos) << r.err;
   ExpectOnlyToolLines(r.err);
-  r = RunCli("calibrate --micrometer " + (d / "crc.png").string() + " --pitch-um 100 --out c.yaml",
+  r = RunCli("calibrate --micrometer " + (d / "crc.png").string() + " --pitch-um 100 --out " +
+                 (d / "c.yaml").string(),
              d);
   EXPECT_EQ(r.exit_code, 1);
   ExpectOnlyToolLines(r.err);
@@ -183,9 +186,9 @@ TEST(MeasureCommandTest, DamagedImagesAndFifosGiveTheToolsOwnLine) {
   ASSERT_EQ(::mkfifo((d / "fifo").c_str(), 0600), 0);
   const std::string fifo = (d / "fifo").string();
   for (const std::string& cmd :
-       std::vector<std::string>{"measure " + fifo + " --out-frames x.csv", "inspect " + fifo,
+       std::vector<std::string>{"measure " + fifo + x_csv, "inspect " + fifo,
                                 "measure " + (d / "f").string() + " --calib " + fifo,
-                                "calibrate --pins " + fifo + " --out c.yaml"}) {
+                                "calibrate --pins " + fifo + " --out " + (d / "c.yaml").string()}) {
     r = RunCli(cmd, d);
     EXPECT_EQ(r.exit_code, 1) << cmd;
     EXPECT_NE(r.err.find("fifo: not a regular file"), std::string::npos) << cmd << ": " << r.err;
@@ -265,7 +268,7 @@ TEST(MeasureCommandTest, LargeFramesAreBoundedOrRefused) {
   const unsigned char claim[8] = {0, 0, 0x9c, 0x40, 0, 0, 0x9c, 0x40};  // 40000, 40000
   png.replace(16, 8, reinterpret_cast<const char*>(claim), 8);
   WriteFileAtomically((d / "claims.png").string(), png);
-  r = RunCli("inspect " + (d / "claims.png").string() + " --out i.png", d);
+  r = RunCli("inspect " + (d / "claims.png").string() + " --out " + (d / "i.png").string(), d);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("claims.png: frames are 40000x40000"), std::string::npos) << r.err;
 }
