@@ -63,10 +63,7 @@ void SetUpLogging(const std::string& level) {
 bool ParseCommandLine(CLI::App& app, int argc, char** argv) {
   try {
     app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    app.exit(e);
-    return false;
-  } catch (const CLI::CallForAllHelp& e) {
+  } catch (const CLI::Success& e) {  // --help, --help-all: printed, nothing more to do
     app.exit(e);
     return false;
   } catch (const CLI::ParseError& e) {

@@ -124,17 +124,28 @@ bool IsRegularFile(const std::string& path, std::string* why) {
   return false;
 }
 
-std::string ReadFile(const std::string& path) {
-  std::string why;
-  if (!IsRegularFile(path, &why)) throw std::invalid_argument(path + ": " + why);
+bool TryReadFile(const std::string& path, std::string* content, std::string* why) {
+  if (!IsRegularFile(path, why)) return false;
   std::error_code ec;
-  if (std::filesystem::file_size(path, ec) > kMaxReadFileBytes && !ec)
-    throw std::invalid_argument(path + ": too large (over 256 MiB)");
+  if (std::filesystem::file_size(path, ec) > kMaxReadFileBytes && !ec) {
+    *why = "too large (over " + std::to_string(kMaxReadFileBytes >> 20) + " MiB)";
+    return false;
+  }
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::invalid_argument(path + ": cannot open (" + std::strerror(errno) + ")");
+  if (!in) {
+    *why = std::string("cannot open (") + std::strerror(errno) + ")";
+    return false;
+  }
   std::ostringstream ss;
   ss << in.rdbuf();
-  return ss.str();
+  *content = std::move(ss).str();
+  return true;
+}
+
+std::string ReadFile(const std::string& path) {
+  std::string content, why;
+  if (!TryReadFile(path, &content, &why)) throw std::invalid_argument(path + ": " + why);
+  return content;
 }
 
 }  // namespace clogscope

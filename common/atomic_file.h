@@ -60,10 +60,13 @@ class AtomicTextFile {
 // Writes the whole content atomically (temporary name, then rename).
 void WriteFileAtomically(const std::string& path, const std::string& content);
 
-// Reads a whole file; throws std::invalid_argument naming the path when it cannot be read, is not
+// Reads a whole file into `content`; false with the reason in `why` when it cannot be read, is not
 // a regular file (a FIFO or device would block or never end) or is over kMaxReadFileBytes.
-std::string ReadFile(const std::string& path);
+bool TryReadFile(const std::string& path, std::string* content, std::string* why);
 inline constexpr std::uintmax_t kMaxReadFileBytes = std::uintmax_t{256} << 20;
+
+// The same, throwing std::invalid_argument "<path>: <why>".
+std::string ReadFile(const std::string& path);
 
 // True when `path` is a regular file (after links) that can be opened without blocking; else
 // false with the reason ("no such file", "is a directory", "not a regular file (FIFO, device …)").

@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "common/atomic_file.h"
 #include "vision/video_decoder.h"
 #include "vision/video_io.h"
 
@@ -111,8 +112,8 @@ std::unique_ptr<FrameSource> FrameSource::Open(const std::string& path) {
     return std::make_unique<ImageListSource>(path, std::move(files));
   }
   // A FIFO or device would block or never end (a camera is `watch`'s, not a file's).
-  if (!fs::is_regular_file(st))
-    throw std::invalid_argument(path + ": not a regular file (a FIFO, socket or device)");
+  std::string why;
+  if (!IsRegularFile(path, &why)) throw std::invalid_argument(path + ": " + why);
   if (IsVideoPath(path)) return std::make_unique<VideoSource>(path);
   if (IsImagePath(path)) {
     std::string error;

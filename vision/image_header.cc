@@ -4,14 +4,9 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
 
 namespace clogscope::vision {
 namespace {
-
-// Enough for PNG, JPEG (markers before the frame header), BMP, PNM, and a TIFF's first directory
-// when it follows its header, as cameras and OpenCV write it.
-constexpr size_t kHeaderBytes = 256 * 1024;
 
 class Bytes {
  public:
@@ -142,33 +137,6 @@ ImageHeader ParseImageHeader(const std::string& bytes) {
       std::isspace(static_cast<unsigned char>(bytes[2])))
     return Pnm(bytes);
   return ImageHeader();
-}
-
-ImageHeader ReadImageHeader(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::string bytes(kHeaderBytes, '\0');
-  in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  bytes.resize(static_cast<size_t>(in.gcount()));
-  ImageHeader h = ParseImageHeader(bytes);
-  if (h.format != "tiff" || h.width_px > 0 || bytes.size() < 16) return h;
-  // libtiff writes the first directory after the image data: read it where it lies, then parse
-  // a header whose directory offset points just past it.
-  const Bytes b(bytes);
-  const bool little = b.At(0) == 'I', big_tiff = b.Get(2, 2, little) == 43;
-  const int offset_size = big_tiff ? 8 : 4;
-  const unsigned long long ifd = b.Get(big_tiff ? 8 : 4, offset_size, little);
-  std::string directory(64 * 1024, '\0');
-  in.clear();
-  in.seekg(static_cast<std::streamoff>(ifd));
-  if (!in) return h;
-  in.read(directory.data(), static_cast<std::streamsize>(directory.size()));
-  directory.resize(static_cast<size_t>(in.gcount()));
-  std::string moved = bytes.substr(0, 16) + directory;
-  for (int k = 0; k < offset_size; ++k) {  // the offset field now says 16
-    const int shift = 8 * (little ? k : offset_size - 1 - k);
-    moved[(big_tiff ? 8 : 4) + k] = static_cast<char>((16ull >> shift) & 0xFF);
-  }
-  return ParseImageHeader(moved);
 }
 
 }  // namespace clogscope::vision

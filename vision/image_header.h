@@ -13,11 +13,8 @@ struct ImageHeader {
   long long height_px = 0;
 };
 
-// Reads the header of the file at `path` (a regular file).
-ImageHeader ReadImageHeader(const std::string& path);
-
-// The same from bytes in memory (the file's start: 64 KiB is enough for every format above but a
-// TIFF whose first directory lies further in).
+// The header of an image file's bytes (the whole file: a TIFF's first directory may lie after
+// the pixels).
 ImageHeader ParseImageHeader(const std::string& bytes);
 
 }  // namespace clogscope::vision

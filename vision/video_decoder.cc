@@ -97,7 +97,7 @@ int CountedGetBuffer(AVCodecContext* codec, AVFrame* frame, int flags) {
   if (err < 0) return err;
   size_t bytes = 0;
   for (AVBufferRef* buf : frame->buf) bytes += buf ? buf->size : 0;
-  for (size_t i = 0; i < frame->nb_extended_buf; ++i) bytes += frame->extended_buf[i]->size;
+  for (int i = 0; i < frame->nb_extended_buf; ++i) bytes += frame->extended_buf[i]->size;
   if (memory->held_bytes + bytes > kMaxDecoderBytes || frame->nb_extended_buf > 0) {
     memory->over = true;
     av_frame_unref(frame);

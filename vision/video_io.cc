@@ -5,9 +5,7 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
@@ -137,11 +135,13 @@ std::string FrameSizeProblem(long long width_px, long long height_px) {
 }
 
 cv::Mat ReadImage(const std::string& path, std::string* error) {
-  // A FIFO or device would block or never end; a directory is not an image.
-  if (!IsRegularFile(path, error)) return cv::Mat();
+  // A FIFO or device would block or never end; a directory is not an image. The whole file is
+  // read for its header: a TIFF's first directory may follow the pixels.
+  std::string bytes;
+  if (!TryReadFile(path, &bytes, error)) return cv::Mat();
   // Only the formats cameras write are decoded (each other decoder is more surface for a bad
   // file), and a small file may claim a huge image: refuse it from its header before decoding.
-  const ImageHeader header = ReadImageHeader(path);
+  const ImageHeader header = ParseImageHeader(bytes);
   if (header.format.empty()) {
     *error = "not an image format the tool reads (PNG, JPEG, TIFF, BMP, PGM/PPM)";
     return cv::Mat();
@@ -155,15 +155,14 @@ cv::Mat ReadImage(const std::string& path, std::string* error) {
   std::string library_text;
   {
     // libpng and libjpeg print their errors, and imread prints the exceptions it catches: keep
-    // that text off the terminal and make it this frame's reason.
+    // that text off the terminal and make it this frame's reason. Decoded from the file, not from
+    // `bytes`: imdecode's JPEG source returns a cut-off file without a word, the file source says
+    // "Premature end of JPEG file".
     LibraryTextCapture capture;
     try {
       img = cv::imread(path, cv::IMREAD_UNCHANGED);
-    } catch (const cv::Exception& e) {
-      // OpenCV asserts on headers it refuses (say, 65535×65535 pixels): say so in our words.
-      *error = e.err.find("CV_IO_MAX_IMAGE_PIXELS") != std::string::npos
-                   ? "image too large to decode (its header claims over 2^30 pixels)"
-                   : "cannot decode image (malformed)";
+    } catch (const cv::Exception&) {
+      *error = "cannot decode image (malformed)";
       return cv::Mat();
     }
     library_text = capture.Text();

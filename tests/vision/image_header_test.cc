@@ -31,7 +31,7 @@ TEST(ImageHeaderTest, SizesOfEveryFormatTheToolReads) {
     cv::randu(img, 0, 200);
     const std::string path = (dir / (std::string("i") + c.ext)).string();
     ASSERT_TRUE(cv::imwrite(path, img)) << c.ext;
-    const ImageHeader h = ReadImageHeader(path);
+    const ImageHeader h = ParseImageHeader(ReadFile(path));
     EXPECT_EQ(h.format, c.format) << c.ext;
     EXPECT_EQ(h.width_px, 1037) << c.ext << " " << c.type;
     EXPECT_EQ(h.height_px, 523) << c.ext << " " << c.type;
