@@ -8,6 +8,8 @@
 #include <cmath>
 
 #include "common/robust.h"
+#include "vision/caliper_samples.h"
+#include "vision/cylinder_fit.h"
 #include "vision/edge_fit.h"
 
 namespace clogscope::vision {
@@ -31,79 +33,14 @@ bool ShadingEvident(const std::vector<double>& f) {
   return sum / n > 1.0 + 6.0 * std::sqrt(2.0 / n) + 10.0 / n;
 }
 
-// Sub-pixel start for an edge fit: along the normal at s, from u_guess - half to u_guess + half in
-// half-pixel steps, the crossing of the local mid-level (between the profile's extremes) nearest to
-// u_guess. Returns u_guess when the profile has no clear step.
-double RefineEdgeGuess(const GreyImage& img, const AxisFrame& f, double s, double u_guess,
-                       double half, double min_step) {
-  constexpr double kStep = 0.5;
-  const int n = static_cast<int>(2 * half / kStep) + 1;
-  std::array<float, 128> v;
-  if (n > static_cast<int>(v.size())) return u_guess;
-  float lo = 1e30f, hi = -1e30f;
-  for (int i = 0; i < n; ++i) {
-    const double u = u_guess - half + i * kStep;
-    const double x = f.ImageX(s, u), y = f.ImageY(s, u);
-    if (!img.InsideForBilinear(x, y)) return u_guess;
-    v[i] = img.Bilinear(x, y);
-    lo = std::min(lo, v[i]);
-    hi = std::max(hi, v[i]);
-  }
-  if (hi - lo < min_step) return u_guess;
-  const float mid = 0.5f * (lo + hi);
-  double best = u_guess, best_dist = 1e30;
-  for (int i = 0; i + 1 < n; ++i) {
-    if ((v[i] < mid) == (v[i + 1] < mid)) continue;
-    const double u = u_guess - half + (i + (mid - v[i]) / (v[i + 1] - v[i])) * kStep;
-    if (std::abs(u - u_guess) < best_dist) {
-      best_dist = std::abs(u - u_guess);
-      best = u;
-    }
-  }
-  return best;
-}
-
 struct CaliperFit {
   EdgeFit left, right;
   EdgeFit left_shaded, right_shaded;  // while the model is undecided
+  double width_sigma_px = -1;         // set by a joint fit of both edges (their errors correlate)
   bool inside_roi = true;
   int saturated = 0;
   int samples = 0;
 };
-
-// Gathers the pixels of one caliper slab near one edge, in (u, value) form. Returns false when
-// the window leaves the image.
-bool GatherEdgeSamples(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
-                       double u1, double data_max, std::vector<EdgeSample>* out, int* saturated) {
-  out->clear();
-  double xmin = 1e30, xmax = -1e30, ymin = 1e30, ymax = -1e30;
-  for (double s : {s0, s1}) {
-    for (double u : {u0, u1}) {
-      xmin = std::min(xmin, f.ImageX(s, u));
-      xmax = std::max(xmax, f.ImageX(s, u));
-      ymin = std::min(ymin, f.ImageY(s, u));
-      ymax = std::max(ymax, f.ImageY(s, u));
-    }
-  }
-  const int x_lo = static_cast<int>(std::ceil(xmin)), x_hi = static_cast<int>(std::floor(xmax));
-  const int y_lo = static_cast<int>(std::ceil(ymin)), y_hi = static_cast<int>(std::floor(ymax));
-  if (x_lo < 0 || y_lo < 0 || x_hi >= img.m.cols || y_hi >= img.m.rows) return false;
-  const float top = static_cast<float>(data_max);
-  for (int y = y_lo; y <= y_hi; ++y) {
-    const double ry = y - f.oy;
-    for (int x = x_lo; x <= x_hi; ++x) {
-      const double rx = x - f.ox;
-      const double s = rx * f.dx + ry * f.dy;
-      if (s < s0 || s >= s1) continue;
-      const double u = rx * f.dy - ry * f.dx;
-      if (u < u0 || u > u1) continue;
-      const float v = img.At(x, y);
-      if (v <= 0.0f || v >= top) ++*saturated;
-      out->push_back({static_cast<float>(u), v});
-    }
-  }
-  return true;
-}
 
 // A fit counts when it converged inside its window [u0, u1] (not within 1 px of its ends) with
 // the edge's expected sign of contrast.
@@ -153,6 +90,50 @@ EdgeLines FitEdgeLines(const std::vector<CaliperFit>& fits, double band_s0, doub
   return out;
 }
 
+// Replaces each caliper's two per-edge fits by one lit cylinder across its whole profile (see
+// cylinder_fit.h): shared centre, radius, blur and shading, so the interior's curvature fixes the
+// shading that a per-edge fit trades against its edge. A caliper whose cylinder does not fit, or
+// whose silhouettes leave their windows, is dropped rather than mixed with per-edge widths.
+void RefitAsCylinders(const GreyImage& img, const AxisFrame& f, double data_max, double band_s0,
+                      double spacing, const EdgeLines& lines, double sigma_px,
+                      std::vector<CaliperFit>* fits) {
+  const double outer = std::max(10.0, 3.0 * sigma_px + 2.5);
+  std::vector<EdgeSample> samples;
+  // Each caliper starts from its neighbour's blur: the fit then mostly has only the edges to move.
+  double sigma_start = sigma_px;
+  for (size_t k = 0; k < fits->size(); ++k) {
+    CaliperFit& cf = (*fits)[k];
+    const double s0 = band_s0 + k * spacing, sc = s0 + 0.5 * spacing;
+    const double l = lines.left_u0 + lines.slope * sc, r = lines.right_u0 + lines.slope * sc;
+    int clipped = 0;
+    CylinderFit cyl;
+    if (GatherEdgeSamples(img, f, s0, s0 + spacing, l - outer, r + outer, data_max, &samples,
+                          &clipped)) {
+      // Deep inside, the profile only tells the shading's amplitudes, which vary slowly: every
+      // fourth sample there does, and the fit costs a third.
+      const double keep = std::max(10.0, 3.0 * sigma_px + 4.0);
+      size_t n = 0;
+      for (size_t i = 0; i < samples.size(); ++i) {
+        const double u = samples[i].u_px;
+        if (u < l + keep || u > r - keep || i % 4 == 0) samples[n++] = samples[i];
+      }
+      samples.resize(n);
+      cyl = FitLitCylinder(samples, l, r, sigma_start);
+    }
+    const bool ok = cyl.converged && std::abs(cyl.left_px - l) < outer - 1.0 &&
+                    std::abs(cyl.right_px - r) < outer - 1.0;
+    cf.left.converged = cf.right.converged = ok;
+    if (ok) sigma_start = cyl.sigma_px;
+    if (!ok) continue;
+    cf.left.edge_px = cyl.left_px;
+    cf.right.edge_px = cyl.right_px;
+    cf.left.edge_sigma_px = cyl.left_sigma_px;
+    cf.right.edge_sigma_px = cyl.right_sigma_px;
+    cf.left.sigma_px = cf.right.sigma_px = cyl.sigma_px;
+    cf.width_sigma_px = cyl.width_sigma_px;
+  }
+}
+
 }  // namespace
 
 void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry& g, double band_s0,
@@ -196,8 +177,13 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     left_guess = 0.5 * (la + lb) - slope_guess * 0.5 * (sa + sb);
     right_guess = 0.5 * (ra + rb) - slope_guess * 0.5 * (sa + sb);
   }
-  int total_samples = 0, total_saturated = 0;
+  int total_samples = 0, total_saturated = 0, per_edge_consistent = 0;
   bool border = false;
+  // A filament's band is its whole visible stretch, parts of which a drive gear or a guide may
+  // hide: a quarter of it (at least 8 calipers) will do. A strand's short band must be clean.
+  const bool filament = opt.target == MeasureTarget::kFilament;
+  const double min_used = filament ? std::max(8.0, 0.5 * opt.min_caliper_fraction * n_cal)
+                                   : opt.min_caliper_fraction * n_cal;
   // Usually one pass. Another re-centres the windows on the fitted edge lines, or widens them to
   // the fitted blur; a badly blurred frame needs a few widenings before its fit sees the whole
   // edge.
@@ -276,6 +262,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
         (side == 0 ? cf.left : cf.right) = side == 0 ? cf.left_shaded : cf.right_shaded;
     }
     const EdgeLines lines = FitEdgeLines(fits, band_s0, opt.caliper_spacing_px);
+    per_edge_consistent = lines.calipers;
     if (lines.calipers < 2) {
       // No edge fitted: perhaps blur far wider than the window. Widen and look again.
       sigma_guess = std::max(2.5 * sigma_guess, 0.6 * outer);
@@ -306,6 +293,25 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     return fail(FrameStatus::kSaturated,
                 fmt::format("{} of {} edge pixels clipped", total_saturated, total_samples));
   }
+  // A lit object on both sides (a front-lit strand or filament): one cylinder per caliper.
+  // Only on an object the per-edge fits already saw as one (enough consistent calipers): a wrong
+  // pair (an edge and a shading step, filament and idler) must not become one by a richer model.
+  // Then on every caliper: a knurl or gear tooth that spoils one edge's window spoils the
+  // cylinder's less, which uses both edges and the interior.
+  if (shade[0] == 1 && shade[1] == 1 && g.left_sign == -g.right_sign &&
+      per_edge_consistent >= min_used) {
+    EdgeLines lines;
+    lines.left_u0 = left_guess;
+    lines.right_u0 = right_guess;
+    lines.slope = slope_guess;
+    RefitAsCylinders(img, f, data_max, band_s0, opt.caliper_spacing_px, lines, sigma_guess, &fits);
+    lines = FitEdgeLines(fits, band_s0, opt.caliper_spacing_px);
+    if (lines.calipers >= 2) {
+      left_guess = lines.left_u0;
+      right_guess = lines.right_u0;
+      slope_guess = lines.slope;
+    }
+  }
 
   // Per-caliper widths, robust combination.
   const double cos_d = 1.0 / std::sqrt(1.0 + slope_guess * slope_guess);
@@ -319,7 +325,10 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     c.left_u_px = fits[k].left.edge_px;
     c.right_u_px = fits[k].right.edge_px;
     c.width_px = (c.right_u_px - c.left_u_px) * cos_d;
-    c.width_sigma_px = std::hypot(fits[k].left.edge_sigma_px, fits[k].right.edge_sigma_px) * cos_d;
+    c.width_sigma_px = (fits[k].width_sigma_px >= 0
+                            ? fits[k].width_sigma_px
+                            : std::hypot(fits[k].left.edge_sigma_px, fits[k].right.edge_sigma_px)) *
+                       cos_d;
     cal_widths.push_back(c.width_px);
     steps.push_back(std::abs(fits[k].left.contrast));
     steps.push_back(std::abs(fits[k].right.contrast));
@@ -438,11 +447,6 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   if (m->blur_px > opt.max_blur_px)
     return fail(FrameStatus::kOutOfFocus,
                 fmt::format("edge blur {:.2f} px above {:.2f} px", m->blur_px, opt.max_blur_px));
-  // A filament's band is its whole visible stretch, parts of which a drive gear or a guide may
-  // hide: a quarter of it (at least 8 calipers) will do. A strand's short band must be clean.
-  const bool filament = opt.target == MeasureTarget::kFilament;
-  const double min_used = filament ? std::max(8.0, 0.5 * opt.min_caliper_fraction * n_cal)
-                                   : opt.min_caliper_fraction * n_cal;
   if (used < min_used)
     return fail(FrameStatus::kOccluded, fmt::format("{} of {} calipers consistent", used, n_cal));
   m->status = FrameStatus::kValid;

@@ -15,7 +15,6 @@ using fitcore::Vec;
 constexpr double kMinSigmaPx = 0.15;
 // Cauchy weights 1/(1 + (r/(c·s))²) with c = 2.385: 95 % efficiency on Gaussian noise.
 constexpr double kCauchyC = 2.385;
-constexpr int kRobustRounds = 3;
 
 // Parameters: background b₀, b₁; object a, k, l; centre, radius, blur.
 enum { kB0, kB1, kA, kK, kL, kC, kR, kS, kN };
@@ -112,57 +111,92 @@ CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_g
   p[kR] = 0.5 * (right_guess_px - left_guess_px);
   p[kS] = std::max(sigma_guess_px, 0.5);
   std::vector<double> w(samples.size(), 1.0), residuals(samples.size());
+  const auto residuals_at = [&](const Vec<kN>& q) {
+    for (size_t i = 0; i < samples.size(); ++i) {
+      double j[kN];
+      residuals[i] = Model(samples[i], q, u_ref, root, j) - samples[i].value;
+    }
+  };
+  // The residuals' robust scale (1.4826·MAD), and Cauchy weights from the residuals at a scale.
+  const auto robust_scale = [&]() {
+    std::vector<double> abs_r(residuals.size());
+    std::transform(residuals.begin(), residuals.end(), abs_r.begin(),
+                   [](double r) { return std::abs(r); });
+    return std::max(1.4826 * Median(abs_r), 1e-6);
+  };
+  const auto reweight = [&](double scale) {
+    for (size_t i = 0; i < samples.size(); ++i) {
+      const double z = residuals[i] / (kCauchyC * scale);
+      w[i] = 1.0 / (1.0 + z * z);
+    }
+  };
+  // Robust amplitudes at the guessed geometry before any of it moves: a specular stripe is then
+  // already down-weighted when the nonlinear fit starts, instead of dragging blur and radius to
+  // wherever it fits best (a stripe 40 levels high once pulled the blur to 14 px).
   SolveAmplitudes(samples, w, u_ref, &p);
+  for (int round = 0; round < 2; ++round) {
+    residuals_at(p);
+    reweight(robust_scale());
+    SolveAmplitudes(samples, w, u_ref, &p);
+  }
 
+  // Weighted least squares with the weights w while cauchy_scale is 0; else the Cauchy loss
+  // (c·s)²·log(1 + (r/(c·s))²) at that scale, whose Gauss–Newton system carries the weights
+  // 1/(1 + (r/(c·s))²) at the trial's own residuals (iteratively reweighted inside one LM run).
+  double cauchy_scale = 0;
   const auto evaluate = [&](const Vec<kN>& q, Mat<kN>* jtj, Vec<kN>* jtr) {
     double h[kN][kN] = {}, g[kN] = {};
     double cost = 0;
+    const double cs = kCauchyC * cauchy_scale, inv_cs2 = cs > 0 ? 1.0 / (cs * cs) : 0.0;
     for (size_t i = 0; i < samples.size(); ++i) {
       double j[kN];
       const double r = Model(samples[i], q, u_ref, root, j) - samples[i].value;
-      cost += w[i] * r * r;
-      fitcore::Accumulate<kN>(j, r, w[i], h, g);
+      double wi = w[i];
+      if (cs > 0) {
+        const double z2 = r * r * inv_cs2;
+        wi = 1.0 / (1.0 + z2);
+        cost += cs * cs * std::log1p(z2);
+      } else {
+        cost += wi * r * r;
+      }
+      fitcore::Accumulate<kN>(j, r, wi, h, g);
     }
     fitcore::Symmetric<kN>(h, g, jtj, jtr);
     return cost;
   };
-  const auto bound = [](Vec<kN>* q) {
-    (*q)[kS] = std::max((*q)[kS], kMinSigmaPx);
-    (*q)[kR] = std::max((*q)[kR], 1.0);
+  // The geometry stays near its guess: a silhouette cannot be further than the blur's reach
+  // outside the samples, nor the blur wider than a third of the object.
+  const double r0 = p[kR];
+  const double max_sigma_px = std::max(3.0 * p[kS], std::min(8.0, r0 / 3.0));
+  const auto bound = [&](Vec<kN>* q) {
+    (*q)[kS] = std::clamp((*q)[kS], kMinSigmaPx, max_sigma_px);
+    (*q)[kR] = std::clamp((*q)[kR], std::max(1.0, 0.5 * r0), 1.5 * r0 + 2.0);
   };
   const auto small_step = [](const Vec<kN>& d) {
-    return std::abs(d[kC]) < 2e-4 && std::abs(d[kR]) < 2e-4 && std::abs(d[kS]) < 2e-3;
+    return std::abs(d[kC]) < 1e-3 && std::abs(d[kR]) < 1e-3 && std::abs(d[kS]) < 1e-2;
   };
 
-  // Plain least squares first, then Cauchy weights from its residuals, refitted until the edges
-  // hold still: a highlight or an internal line becomes a few down-weighted samples.
-  fitcore::LmResult<kN> lm;
-  double noise = 0;
-  for (int round = 0; round <= kRobustRounds; ++round) {
-    const Vec<kN> before = p;
-    lm = fitcore::MinimiseLm<kN>(p, evaluate, bound, small_step);
-    out.iterations += lm.iterations;
-    if (!lm.converged) return out;
-    p = lm.p;
-    for (size_t i = 0; i < samples.size(); ++i) {
-      double j[kN];
-      residuals[i] = Model(samples[i], p, u_ref, root, j) - samples[i].value;
-    }
-    std::vector<double> abs_r(residuals.size());
-    std::transform(residuals.begin(), residuals.end(), abs_r.begin(),
-                   [](double r) { return std::abs(r); });
-    noise = std::max(1.4826 * Median(abs_r), 1e-6);
-    const bool settled =
-        round > 0 && std::abs(p[kC] - before[kC]) < 2e-3 && std::abs(p[kR] - before[kR]) < 2e-3;
-    if (settled || round == kRobustRounds) break;
-    for (size_t i = 0; i < samples.size(); ++i) {
-      const double z = residuals[i] / (kCauchyC * noise);
-      w[i] = 1.0 / (1.0 + z * z);
-    }
-  }
-  double wsum = 0;
+  // Then the whole model: first with the start's weights, which gives the residuals' scale; then
+  // with the Cauchy loss at that scale, so a highlight or an internal line becomes a few
+  // down-weighted samples. The scale is taken once: renewed with the weights it shrinks with the
+  // down-weighted residuals and the edges never settle (on real footage they drifted 0.1 px per
+  // renewal).
+  fitcore::LmResult<kN> lm = fitcore::MinimiseLm<kN>(p, evaluate, bound, small_step);
+  out.iterations = lm.iterations;
+  if (!lm.converged) return out;
+  residuals_at(lm.p);
+  const double noise = robust_scale();
+  cauchy_scale = noise;
+  lm = fitcore::MinimiseLm<kN>(lm.p, evaluate, bound, small_step);
+  out.iterations += lm.iterations;
+  if (!lm.converged) return out;
+  p = lm.p;
+  residuals_at(p);
+  reweight(noise);
+  double wsum = 0, wrss = 0;
   for (size_t i = 0; i < samples.size(); ++i) {
     wsum += w[i];
+    wrss += w[i] * residuals[i] * residuals[i];
     if (std::abs(residuals[i]) > 4.0 * noise) ++out.outliers;
   }
   out.centre_px = p[kC];
@@ -176,16 +210,19 @@ CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_g
   out.shading = p[kK];
   out.tilt = p[kL];
   out.noise = noise;
-  out.rms = std::sqrt(lm.cost / std::max(wsum, 1.0));
+  out.rms = std::sqrt(wrss / std::max(wsum, 1.0));
   // Covariance from the weighted normal matrix, scaled by the weighted residual variance.
   const double dof = wsum * (1.0 - static_cast<double>(kN) / samples.size());
-  const double var = dof > 0 ? lm.cost / dof : 0.0;
+  const double var = dof > 0 ? wrss / dof : 0.0;
   const Mat<kN> cov = lm.jtj.ldlt().solve(Mat<kN>::Identity()) * var;
   out.left_sigma_px = std::sqrt(std::max(0.0, cov(kC, kC) + cov(kR, kR) - 2 * cov(kC, kR)));
   out.right_sigma_px = std::sqrt(std::max(0.0, cov(kC, kC) + cov(kR, kR) + 2 * cov(kC, kR)));
   out.width_sigma_px = 2.0 * std::sqrt(std::max(0.0, cov(kR, kR)));
-  out.converged =
-      std::isfinite(out.left_px) && std::isfinite(out.right_px) && std::isfinite(out.sigma_px);
+  // A fit that ends on a bound found no optimum inside the model's domain.
+  const bool on_bound = p[kS] >= max_sigma_px - 1e-6 || p[kR] <= std::max(1.0, 0.5 * r0) + 1e-6 ||
+                        p[kR] >= 1.5 * r0 + 2.0 - 1e-6;
+  out.converged = !on_bound && std::isfinite(out.left_px) && std::isfinite(out.right_px) &&
+                  std::isfinite(out.sigma_px);
   return out;
 }
 

@@ -111,10 +111,11 @@ TEST(CylinderFitTest, HighlightAndInternalLinesDoNotMoveTheEdges) {
       right += f.right_px / kRepeats;
       sigma += f.left_sigma_px / kRepeats;
     }
-    // Measured: the stripe within 0.01 px, the lines 0.04–0.05 px inward (their blurred
-    // shoulders keep some weight); plain least squares puts the edges 0.3–0.5 px off.
-    EXPECT_NEAR(left, 40, 0.06) << sigma;
-    EXPECT_NEAR(right, 120, 0.06) << sigma;
+    // Measured: the stripe within 0.03 px, the lines 0.05–0.07 px inward (their blurred
+    // shoulders keep some weight at the Cauchy scale of the first fit); plain least squares puts
+    // the edges 0.3–0.5 px off.
+    EXPECT_NEAR(left, 40, 0.08) << sigma;
+    EXPECT_NEAR(right, 120, 0.08) << sigma;
   }
 }
 

@@ -264,6 +264,23 @@ TEST(StrandMeasureTest, ShadedStrandMeasuredAtItsSilhouette) {
   EXPECT_LT(biased.mean, -0.4);  // the issue saw −0.75 px at ambient 0.5
 }
 
+// Shaded so deeply that the silhouette is barely brighter than the background (ambient 0.4 of a
+// strand at 180: 72 over 60) while the middle is three times brighter: the edge is mostly the
+// start of the √d ramp, which a per-edge fit trades against its step. The calipers' lit-cylinder
+// fits place it from both edges and the interior's curvature together. Measured: mean +0.04 px,
+// σ 0.07 px per frame (12 calipers of a weak edge); with background texture of ±10 levels
+// +0.08 px, σ 0.09 px.
+TEST(StrandMeasureTest, DeeplyShadedStrandMeasuredFromItsWholeProfile) {
+  SceneParams p;
+  p.shading_ambient = 0.4;
+  p.strand_level = 180;
+  p.background_level = 60;
+  const ErrorStats st = Measure(p, 8);
+  ASSERT_EQ(st.valid, 8);
+  EXPECT_LE(std::abs(st.mean), 0.1);
+  EXPECT_LE(st.sd, 0.12);
+}
+
 // 16-bit frames holding 12-bit data: limits follow the data's range, not 65535.
 TEST(StrandMeasureTest, TwelveBitDataInSixteenBitFrames) {
   SceneParams p;
