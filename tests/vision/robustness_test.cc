@@ -54,11 +54,11 @@ TEST(RobustnessTest, RandomisedScenesAgainstTruth) {
   }
   std::printf("%d of %d valid; unshaded %+.4f ± %.4f px (%d); shaded %+.4f ± %.4f px (%d)\n", valid,
               kFrames, plain.mean(), plain.sd(), plain.n, shaded.mean(), shaded.sd(), shaded.n);
-  // Measured on this suite: 197 of 200 valid; unshaded −0.009 ± 0.050 px; shaded −0.10 ± 0.17 px.
+  // Measured on this suite: 198 of 200 valid; unshaded −0.009 ± 0.050 px; shaded −0.03 ± 0.19 px.
   EXPECT_GE(valid, 0.98 * kFrames);
   EXPECT_LE(std::abs(plain.mean()), 0.05);
   EXPECT_LE(plain.sd(), 0.06);
-  EXPECT_LE(std::abs(shaded.mean()), 0.12);
+  EXPECT_LE(std::abs(shaded.mean()), 0.1);
   EXPECT_LE(shaded.sd(), 0.25);
 }
 
