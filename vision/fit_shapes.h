@@ -37,52 +37,54 @@ class BlurredSqrt {
   static const BlurredSqrt& Get();
   // G(z) and G'(z).
   void operator()(double z, double* g, double* dg) const {
-    if (z <= kZMin) {
-      *g = *dg = 0;
-      return;
-    }
-    if (z >= kZMax) {
-      const double r = std::sqrt(z);
-      *g = r - 1.0 / (8 * z * r);
-      *dg = 0.5 / r + 3.0 / (16 * z * z * r);
-      return;
-    }
-    const double x = (z - kZMin) / kH;
-    const int i = static_cast<int>(x);
-    const double t = x - i;
-    const double g0 = g_[i], g1 = g_[i + 1], d0 = dg_[i] * kH, d1 = dg_[i + 1] * kH;
-    const double t2 = t * t, t3 = t2 * t;
-    *g = (2 * t3 - 3 * t2 + 1) * g0 + (t3 - 2 * t2 + t) * d0 + (-2 * t3 + 3 * t2) * g1 +
-         (t3 - t2) * d1;
+    if (OffTable(z, g, dg, nullptr)) return;
+    int i;
+    double t;
+    Locate(z, &i, &t);
+    *g = Hermite(g_, dg_, i, t);
     *dg = dg_[i] + t * (dg_[i + 1] - dg_[i]);
   }
   // G, G' and G'' (G' then interpolated with its own derivative, for fits whose Jacobian needs
   // G''), past the table from the same expansion.
   void WithCurvature(double z, double* g, double* dg, double* d2g) const {
-    if (z <= kZMin) {
-      *g = *dg = *d2g = 0;
-      return;
-    }
-    if (z >= kZMax) {
-      const double r = std::sqrt(z);
-      *g = r - 1.0 / (8 * z * r);
-      *dg = 0.5 / r + 3.0 / (16 * z * z * r);
-      *d2g = -0.25 / (z * r) - 15.0 / (32 * z * z * z * r);
-      return;
-    }
-    const double x = (z - kZMin) / kH;
-    const int i = static_cast<int>(x);
-    const double t = x - i, t2 = t * t, t3 = t2 * t;
-    const double h00 = 2 * t3 - 3 * t2 + 1, h10 = t3 - 2 * t2 + t, h01 = -2 * t3 + 3 * t2,
-                 h11 = t3 - t2;
-    *g = h00 * g_[i] + h10 * dg_[i] * kH + h01 * g_[i + 1] + h11 * dg_[i + 1] * kH;
-    *dg = h00 * dg_[i] + h10 * d2g_[i] * kH + h01 * dg_[i + 1] + h11 * d2g_[i + 1] * kH;
+    if (OffTable(z, g, dg, d2g)) return;
+    int i;
+    double t;
+    Locate(z, &i, &t);
+    *g = Hermite(g_, dg_, i, t);
+    *dg = Hermite(dg_, d2g_, i, t);
     *d2g = d2g_[i] + t * (d2g_[i + 1] - d2g_[i]);
   }
 
  private:
   static constexpr double kZMin = -8.0, kZMax = 60.0, kH = 0.02;
   BlurredSqrt();
+  // Before the table G is 0; past it, from the expansion. Returns false inside the table.
+  static bool OffTable(double z, double* g, double* dg, double* d2g) {
+    if (z <= kZMin) {
+      *g = *dg = 0;
+      if (d2g) *d2g = 0;
+      return true;
+    }
+    if (z < kZMax) return false;
+    const double r = std::sqrt(z);
+    *g = r - 1.0 / (8 * z * r);
+    *dg = 0.5 / r + 3.0 / (16 * z * z * r);
+    if (d2g) *d2g = -0.25 / (z * r) - 15.0 / (32 * z * z * z * r);
+    return true;
+  }
+  static void Locate(double z, int* i, double* t) {
+    const double x = (z - kZMin) / kH;
+    *i = static_cast<int>(x);
+    *t = x - *i;
+  }
+  // Cubic Hermite interpolation of table f with derivative table df between nodes i and i + 1.
+  static double Hermite(const std::vector<double>& f, const std::vector<double>& df, int i,
+                        double t) {
+    const double t2 = t * t, t3 = t2 * t;
+    return (2 * t3 - 3 * t2 + 1) * f[i] + (t3 - 2 * t2 + t) * df[i] * kH +
+           (-2 * t3 + 3 * t2) * f[i + 1] + (t3 - t2) * df[i + 1] * kH;
+  }
   std::vector<double> g_, dg_, d2g_;
 };
 
