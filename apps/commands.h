@@ -45,9 +45,9 @@ struct MeasureCommandOptions {
   std::optional<double> band_start_um, band_height_um;  // need a scale
   std::optional<double> band_start_px, band_height_px;  // defaults: the µm values at 3 µm/px
   vision::StrandMeasureOptions strand;                  // band fields are filled from the above
-  std::string out_frames;                               // per-frame CSV
-  std::string overlay_dir;                              // empty: no overlays
-  int overlay_every = 0;                                // 0: every image, every 25th video frame
+  std::string out_frames;   // per-frame CSV; empty or "-": standard output
+  std::string overlay_dir;  // empty: no overlays
+  int overlay_every = 0;    // 0: every image, every 25th video frame
   bool flag_outliers = true;
   bool Validate(std::string* why) const;
   // The band in px from the µm or px options (throws std::invalid_argument on a conflict).

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <iostream>
 #include <map>
 #include <set>
 #include <stdexcept>
@@ -15,6 +16,7 @@
 #include "common/atomic_file.h"
 #include "common/csv.h"
 #include "common/provenance.h"
+#include "pipeline/statistics.h"
 #include "vision/batch.h"
 #include "vision/overlay.h"
 #include "vision/video_io.h"
@@ -44,6 +46,24 @@ std::string OverlayName(const Row& r, bool from_video, std::set<std::string>* us
   return name;
 }
 
+// "; width 139.570 ± 0.104 px per frame (mean ± 0.012 px, 95 %)[ = … µm]", from the valid
+// frames after the steps' own outlier rejection; empty without valid frames.
+std::string WidthSummary(const std::vector<double>& widths_px,
+                         const std::optional<calib::ScaleCalibration>& conv) {
+  if (widths_px.empty()) return "";
+  const pipeline::SampleStats st = pipeline::RobustStats(widths_px);
+  std::string out = fmt::format("; width {:.3f} ± {:.3f} px per frame (mean ± {:.3f} px, 95 %)",
+                                st.mean, st.std, st.ci95_half_width);
+  if (conv) out += fmt::format(" = {:.2f} µm", conv->ToMicrons(st.mean));
+  if (st.n_rejected > 0)
+    out += fmt::format(", {} of {} frames rejected", st.n_rejected, widths_px.size());
+  return out;
+}
+
+bool WritesToStdout(const MeasureCommandOptions& o) {
+  return o.out_frames.empty() || o.out_frames == "-";
+}
+
 }  // namespace
 
 const std::vector<std::string>& FrameCsvColumns() { return pipeline::FrameColumns(); }
@@ -53,8 +73,6 @@ bool MeasureCommandOptions::Validate(std::string* why) const {
     *why = "no input given";
   else if (scale_um_per_px && !(*scale_um_per_px > 0 && std::isfinite(*scale_um_per_px)))
     *why = fmt::format("--scale-um-per-px {}: must be a positive number", *scale_um_per_px);
-  else if (out_frames.empty())
-    *why = "--out-frames is required";
   else if (overlay_every < 0)
     *why = "--overlay-every must not be negative";
   else if (!strand.Validate(why))
@@ -109,21 +127,24 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
   MeasureSummary summary;
   std::set<std::string> overlay_names;
   const auto t0 = std::chrono::steady_clock::now();
-  // Rows go to "<out>.partial" as each input completes, so an interrupted run keeps what it did.
-  AtomicTextFile csv(o.out_frames, /*keep_partial=*/true);
+  // Rows go to "<out>.partial" as each input completes, so an interrupted run keeps what it did;
+  // without a file, to standard output (the log goes to standard error).
+  std::optional<AtomicTextFile> file;
+  if (!WritesToStdout(o)) file.emplace(o.out_frames, /*keep_partial=*/true);
+  std::ostream& table = file ? file->stream() : std::cout;
   // Widths to µm: the calibration's (w − b)·s with its σ, or a plain scale, or none.
   const std::optional<calib::ScaleCalibration> conv =
       o.calibration ? o.calibration
                     : (o.scale_um_per_px ? std::optional(pipeline::PlainScale(*o.scale_um_per_px))
                                          : std::nullopt);
-  csv.stream() << ProvenanceCsvComment(CurrentProvenance());
+  table << ProvenanceCsvComment(CurrentProvenance());
   if (o.calibration) {
-    csv.stream() << fmt::format(
+    table << fmt::format(
         "# calibration {}: scale {:.6f} ± {:.6f} µm/px, edge bias {:+.4f} ± {:.4f} px\n",
         o.calibration->method, o.calibration->scale_um_per_px, o.calibration->scale_sigma_um_per_px,
         o.calibration->edge_bias_px, o.calibration->edge_bias_sigma_px);
   }
-  csv.stream() << CsvLine(FrameCsvColumns()) << "\n";
+  table << CsvLine(FrameCsvColumns()) << "\n";
 
   for (const std::string& input : o.inputs) {
     std::unique_ptr<vision::FrameSource> source;
@@ -166,13 +187,13 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
       vision::FlagWidthOutliers(ms);
       for (size_t i = 0; i < rows.size(); ++i) rows[i].m = std::move(ms[i]);
     }
-    int valid = 0;
+    std::vector<double> widths_px;
     for (const Row& r : rows) {
-      csv.stream() << CsvLine(pipeline::FrameFields(r.source, r.frame, r.time_s, r.m, conv))
-                   << "\n";
-      valid += r.m.valid();
+      if (r.m.valid()) widths_px.push_back(r.m.width_px);
+      table << CsvLine(pipeline::FrameFields(r.source, r.frame, r.time_s, r.m, conv)) << "\n";
     }
-    csv.stream().flush();
+    const int valid = static_cast<int>(widths_px.size());
+    table.flush();
     for (const auto& [row, image] : keep) {
       const std::string name =
           (fs::path(o.overlay_dir) / OverlayName(rows[row], from_video, &overlay_names)).string();
@@ -191,8 +212,8 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
     ++summary.inputs_ok;
     summary.frames += static_cast<int>(rows.size());
     summary.valid_frames += valid;
-    spdlog::info("{}: {} of {} frames valid ({:.0f} frames/s)", input, valid, rows.size(),
-                 rows.size() / std::max(secs, 1e-9));
+    spdlog::info("{}: {} of {} frames valid ({:.0f} frames/s){}", input, valid, rows.size(),
+                 rows.size() / std::max(secs, 1e-9), WidthSummary(widths_px, conv));
     if (valid < static_cast<int>(rows.size())) {
       // Say why, once per reason, so a user sees the cause without opening the CSV.
       std::map<std::string, std::pair<int, std::string>> reasons;  // count, first detail
@@ -206,7 +227,7 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
       }
     }
   }
-  csv.Commit();
+  if (file) file->Commit();
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return summary;
 }
@@ -233,7 +254,8 @@ int RunMeasure(int argc, char** argv) {
                  "Pixel scale; widths in µm need it or --calib");
   app.add_option("--calib", calib_path,
                  "Calibration file from clogscope calibrate (scale and edge bias)");
-  app.add_option("--out-frames", o.out_frames, "Per-frame CSV to write (inputs mode)");
+  app.add_option("--out-frames", o.out_frames,
+                 "Per-frame CSV to write (inputs mode; default or '-': standard output)");
   app.add_option("--overlay", o.overlay_dir, "Directory for annotated PNGs");
   app.add_option("--overlay-every", o.overlay_every,
                  "Overlay every Nth frame (default: every image, every 25th video frame)");
@@ -268,6 +290,7 @@ int RunMeasure(int argc, char** argv) {
       "  clogscope measure --manifest steps.yaml --calib calib.yaml --out results/\n"
       "  clogscope measure a.png b.png --roi 400,150,480,400 --polarity dark --out-frames f.csv\n"
       "  clogscope measure feed.avi --target filament --out-frames filament.csv\n"
+      "  clogscope measure feed.avi --target filament > filament.csv\n"
       "Exit status: 0 all inputs read, 2 some inputs unreadable, 1 nothing measured.");
   if (!ParseCommandLine(app, argc, argv)) return 0;  // --help printed
   if (!exp.manifest.empty()) {
@@ -293,7 +316,8 @@ int RunMeasure(int argc, char** argv) {
   o.strand.shading = !no_shading;
   const MeasureSummary s = MeasureInputs(o);
   spdlog::info("{} of {} frames valid from {} input(s) in {:.2f} s; wrote {}", s.valid_frames,
-               s.frames, s.inputs_ok, s.seconds, o.out_frames);
+               s.frames, s.inputs_ok, s.seconds,
+               WritesToStdout(o) ? "the table to standard output" : o.out_frames);
   if (s.valid_frames == 0) {
     spdlog::error("nothing could be measured{}", s.frames ? " (see the reason column)" : "");
     return 1;

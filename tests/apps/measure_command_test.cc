@@ -66,6 +66,32 @@ TEST(MeasureCommandTest, VideoEndToEndAgainstTruth) {
   EXPECT_NE(text.find("# command "), std::string::npos);
 }
 
+// `measure VIDEO` alone, as a new user first types it: the table on standard output (pipeable),
+// the log with each input's width summary on standard error.
+TEST(MeasureCommandTest, WithoutOutFramesTheTableGoesToStandardOutput) {
+  const fs::path d = FreshDir("stdout");
+  ASSERT_EQ(RunCli("render --out " + (d / "v.mp4").string() + " --frames 6 " + kSmall, d).exit_code,
+            0);
+  std::ifstream in(d / "v.truth.json");
+  const double truth_px = nlohmann::json::parse(in)["frames"][0]["width_px"].get<double>();
+  const RunResult r = RunCli("measure " + (d / "v.mp4").string(), d);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const CsvTable t = ParseCsv(r.out, "stdout");
+  ASSERT_EQ(t.rows.size(), 6u);
+  for (const auto& row : t.rows) {
+    EXPECT_EQ(row[t.Column("valid")], "1");
+    EXPECT_NEAR(std::stod(row[t.Column("width_px")]), truth_px, 0.15);
+  }
+  EXPECT_EQ(r.out.find("[info]"), std::string::npos);  // no log lines in the table
+  const size_t at = r.err.find("; width ");
+  ASSERT_NE(at, std::string::npos) << r.err;
+  EXPECT_NEAR(std::stod(r.err.substr(at + 8)), truth_px, 0.15) << r.err;
+  EXPECT_NE(r.err.find("wrote the table to standard output"), std::string::npos) << r.err;
+  // "-" says the same explicitly.
+  const RunResult dash = RunCli("measure " + (d / "v.mp4").string() + " --out-frames -", d);
+  EXPECT_EQ(ParseCsv(dash.out, "stdout").rows, t.rows);
+}
+
 TEST(MeasureCommandTest, BadInputsGiveOneLineErrorsAndExitCodes) {
   const fs::path d = FreshDir("bad");
   const std::string out = " --out-frames " + (d / "f.csv").string();
