@@ -56,7 +56,7 @@ std::string WidthSummary(const std::vector<double>& widths_px,
                                 st.mean, st.std, st.ci95_half_width);
   if (conv) out += fmt::format(" = {:.2f} µm", conv->ToMicrons(st.mean));
   if (st.n_rejected > 0)
-    out += fmt::format(", {} of {} frames rejected", st.n_rejected, widths_px.size());
+    out += fmt::format(", {} of {} widths left out as outliers", st.n_rejected, widths_px.size());
   return out;
 }
 
