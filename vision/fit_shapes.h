@@ -16,6 +16,13 @@ constexpr double kInvSqrt2Pi = 0.39894228040143267794;
 // levels on a 160-level step, far below the noise; glibc's erfc costs about as much as the rest of
 // a fit.
 inline void StepShape(double z, double* f, double* df) {
+  // Beyond 10: φ < 1e-22 and 1 − Φ < 1e-23, nothing at double precision on 1. Most of a whole
+  // profile's samples lie there, and exp's underflow path (errno, ~100 ns) was 12 % of the time.
+  if (std::abs(z) > 10.0) {
+    *f = z > 0 ? 1.0 : 0.0;
+    *df = 0.0;
+    return;
+  }
   const double g = std::exp(-0.5 * z * z);
   *df = kInvSqrt2Pi * g;
   const double x = std::abs(z) * kInvSqrt2;
