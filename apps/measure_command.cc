@@ -315,9 +315,12 @@ int RunMeasure(int argc, char** argv) {
   o.flag_outliers = !no_outliers;
   o.strand.shading = !no_shading;
   const MeasureSummary s = MeasureInputs(o);
-  spdlog::info("{} of {} frames valid from {} input(s) in {:.2f} s; wrote {}", s.valid_frames,
-               s.frames, s.inputs_ok, s.seconds,
-               WritesToStdout(o) ? "the table to standard output" : o.out_frames);
+  // No input read: its error said it all; a line about an empty table would only add noise.
+  if (s.inputs_ok > 0) {
+    spdlog::info("{} of {} frames valid from {} input(s) in {:.2f} s; wrote {}", s.valid_frames,
+                 s.frames, s.inputs_ok, s.seconds,
+                 WritesToStdout(o) ? "the table to standard output" : o.out_frames);
+  }
   if (s.valid_frames == 0) {
     spdlog::error("nothing could be measured{}", s.frames ? " (see the reason column)" : "");
     return 1;
