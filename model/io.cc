@@ -55,6 +55,26 @@ std::vector<StepInput> ReadDiameterTable(const std::string& path, double default
   return steps;
 }
 
+std::vector<std::optional<double>> ReadStepColumn(const std::string& path,
+                                                  const std::vector<StepInput>& steps,
+                                                  const std::string& column) {
+  const CsvTable t = ParseCsv(ReadFile(path), path);
+  const int c = t.Column(column), c_step = t.Column("step");
+  if (c < 0) return {};
+  std::map<int, size_t> index;
+  for (size_t i = 0; i < steps.size(); ++i) index[steps[i].step] = i;
+  std::vector<std::optional<double>> out(steps.size());
+  for (size_t i = 0; i < t.rows.size(); ++i) {
+    const auto& row = t.rows[i];
+    const std::string where = fmt::format("{}:{}", path, t.row_line_numbers[i]);
+    const int step = c_step >= 0 ? ParseStep(row[c_step], where) : static_cast<int>(i) + 1;
+    const auto it = index.find(step);
+    if (it == index.end() || row[c].empty()) continue;
+    out[it->second] = ParseNumberField(row[c], where, column);
+  }
+  return out;
+}
+
 std::vector<Measurement> ReadMeasurements(const std::string& path,
                                           const std::vector<StepInput>& steps) {
   const CsvTable t = ParseCsv(ReadFile(path), path);

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -15,6 +16,13 @@ namespace clogscope::model {
 // naming the file and line for a missing column, an empty or non-numeric value, or a duplicate
 // step.
 std::vector<StepInput> ReadDiameterTable(const std::string& path, double default_temperature_c);
+
+// An optional per-step column of the diameter table (e.g. slip_pct), matched to `steps` by step
+// number: empty when the column is absent, else one value per step (none where the cell is empty).
+// Throws std::invalid_argument naming the file and line of a value that is not a number.
+std::vector<std::optional<double>> ReadStepColumn(const std::string& path,
+                                                  const std::vector<StepInput>& steps,
+                                                  const std::string& column);
 
 // Measured values (CSV): amplitude_m_s2 and/or current_ma, with step or temperature_c to match the
 // rows of `steps`. Throws std::invalid_argument naming the file and line on a problem.
