@@ -6,8 +6,11 @@
 
 #include "calib/pixel_scale.h"
 #include "model/fit.h"
+#include "model/lag_io.h"
 #include "model/parameters.h"
 #include "model/predictor.h"
+#include "model/roller_drive.h"
+#include "model/thermal.h"
 #include "pipeline/experiment.h"
 #include "vision/scene.h"
 #include "vision/strand_measure.h"
@@ -24,6 +27,9 @@ int RunPredict(int argc, char** argv);
 int RunCalibrate(int argc, char** argv);
 int RunRun(int argc, char** argv);
 int RunInspect(int argc, char** argv);
+int RunThermal(int argc, char** argv);
+int RunDrive(int argc, char** argv);
+int RunLag(int argc, char** argv);
 
 // --- render --------------------------------------------------------------------------------
 struct RenderCommandOptions {
@@ -32,6 +38,13 @@ struct RenderCommandOptions {
   double fps = 25.0;
   std::string out;         // directory of PNGs, or a .avi / .mp4 video
   std::string truth_path;  // empty: next to the output (DIR/truth.json or NAME.truth.json)
+  // A strand whose width follows the first-order lag of a commanded flow profile: width =
+  // lag_um_per_mm3_s · Q_out(frame time). Empty: no lag.
+  std::string lag_commanded;
+  model::ProfileForm lag_profile_form = model::ProfileForm::kMoves;
+  double lag_k_s = 0.1;
+  double lag_um_per_mm3_s = 40;
+  double filament_diameter_mm = 1.75;
   bool Validate(std::string* why) const;
 };
 // Renders and writes frames and truth; returns the truth path written.
@@ -149,6 +162,81 @@ PredictResult ComputePrediction(const PredictCommandOptions& options);
 std::vector<std::string> WritePredictionOutputs(const PredictResult& result,
                                                 const std::string& out_dir, bool plots,
                                                 std::vector<std::string>* warnings);
+
+// The extruder preset or YAML file with "name=value" overrides applied in order, validated. Throws
+// std::invalid_argument naming --set or the parameter.
+model::ExtruderParams LoadExtruderWithOverrides(const std::string& extruder,
+                                                const std::vector<std::string>& set);
+
+// --- thermal -------------------------------------------------------------------------------
+struct ThermalCommandOptions {
+  std::string material;                  // pla or abs
+  std::vector<double> fan_velocity_m_s;  // assess these
+  std::vector<double> t4_c;              // and these measured heat-sink temperatures
+  std::string diameters;                 // optional: L_crt at every step of a diameter table
+  std::string extruder = "direct-pla";
+  std::vector<std::string> set;
+  std::optional<double> filament_modulus_pa;  // else the extruder's filament_modulus_pa
+  std::optional<double> viscosity_pa_s;       // else the study's value for the material
+  std::optional<double> hp_length_mm;         // else the exit capillary (zone 3) length
+  std::string out_dir;                        // empty: print only
+  bool Validate(std::string* why) const;
+};
+
+struct ThermalReport {
+  std::vector<model::ThermalAssessment> assessments;
+  std::optional<model::SofteningOptions> softening_options;
+  std::vector<model::SofteningStep> softening;
+};
+
+// Assesses every velocity and T4 and, with a diameter table, computes L_crt per step. Throws
+// std::invalid_argument naming the option or file for bad input.
+ThermalReport ComputeThermal(const ThermalCommandOptions& options);
+
+// --- drive ---------------------------------------------------------------------------------
+struct DriveCommandOptions {
+  model::DriveOptions drive;
+  std::optional<double> feed_force_n;         // one operating point
+  std::optional<double> filament_speed_mm_s;  // for the velocity form at that point
+  std::string diameters;                      // or every step of a diameter table
+  std::string extruder = "direct-pla";
+  std::vector<std::string> set;
+  std::string out_dir;  // empty: print only
+  bool Validate(std::string* why) const;
+};
+
+// Per-step slip from a diameter table (its slip_pct column, when present, as measured). Throws
+// std::invalid_argument for bad input.
+model::DrivePrediction ComputeDrive(const DriveCommandOptions& options);
+
+// --- lag -----------------------------------------------------------------------------------
+struct LagCommandOptions {
+  std::string commanded;  // profile CSV: time_s, flow_mm3_s or filament_speed_mm_s
+  model::ProfileForm profile_form = model::ProfileForm::kMoves;
+  double filament_diameter_mm = 1.75;
+  std::string frames;         // measure's frames CSV: fit K to it
+  std::optional<double> k_s;  // or simulate with this K
+  double k_la_s = 0;          // simulation: linear advance
+  double dt_s = 0.001;        // simulation step
+  model::LagFitOptions fit;
+  std::string out_dir = "lag-out";
+  bool plots = true;
+  bool Validate(std::string* why) const;
+};
+
+struct LagReport {
+  model::FlowProfile commanded;
+  model::WidthSeries widths;                               // fit only
+  std::optional<model::LagFitSummary> fit;                 // fit only
+  std::vector<double> times, outlet, outlet_with_advance;  // simulation only
+};
+
+// Fits K to the frames, or simulates; writes nothing. Throws std::invalid_argument for bad input.
+LagReport ComputeLag(const LagCommandOptions& options);
+// lag.json, lag_fit.csv and lag_fit.png (fit) or outlet.csv and outlet.png (simulation), each
+// written atomically. Plot problems go to `warnings`.
+std::vector<std::string> WriteLagOutputs(const LagReport& report, const LagCommandOptions& options,
+                                         std::vector<std::string>* warnings);
 
 // --- experiments: measure --manifest, and run ----------------------------------------------
 struct ExperimentCommandOptions {

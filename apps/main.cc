@@ -35,6 +35,11 @@ const Command kCommands[] = {
      "diameter table -> predicted vibration and motor current; fits"},
     {"inspect", clogscope::apps::RunInspect,
      "camera set-up: what the tool sees in one frame, and the options to use"},
+    {"thermal", clogscope::apps::RunThermal,
+     "hot-end cooling: heat-sink temperature, clog risk, critical softened length"},
+    {"drive", clogscope::apps::RunDrive, "roller-drive slip against feed and pinch force"},
+    {"lag", clogscope::apps::RunLag,
+     "extrusion lag K from video widths and a commanded flow; linear advance"},
 };
 
 void PrintUsage() {
@@ -51,6 +56,9 @@ void PrintUsage() {
       "  clogscope measure frames/ --scale-um-per-px 3 --out-frames frames.csv --overlay ov/\n"
       "  clogscope run experiment.yaml --out results/\n"
       "  clogscope predict --extruder direct-pla --diameters diameters.csv --out pred/\n"
+      "  clogscope thermal --material pla --fan-velocity-m-s 0.3\n"
+      "  clogscope drive --roller 3 --pinch-force-n 80 --feed-force-n 20\n"
+      "  clogscope lag --frames frames.csv --commanded profile.csv --out lag/\n"
       "\nEnvironment: CLOGSCOPE_LOG=debug|info|warn|error sets the log level (default info).\n");
 }
 

@@ -72,23 +72,30 @@ bool PredictCommandOptions::Validate(std::string* why) const {
   return false;
 }
 
-PredictResult ComputePrediction(const PredictCommandOptions& o) {
-  std::string why;
-  if (!o.Validate(&why)) throw std::invalid_argument(why);
-  PredictResult r;
-  r.params = model::LoadExtruder(o.extruder);
-  for (const std::string& kv : o.set) {
+model::ExtruderParams LoadExtruderWithOverrides(const std::string& extruder,
+                                                const std::vector<std::string>& set) {
+  model::ExtruderParams params = model::LoadExtruder(extruder);
+  for (const std::string& kv : set) {
     const size_t eq = kv.find('=');
     if (eq == std::string::npos || eq == 0) {
       throw std::invalid_argument("--set '" + kv + "': expected name=value");
     }
     try {
-      r.params.SetByName(kv.substr(0, eq), kv.substr(eq + 1));
+      params.SetByName(kv.substr(0, eq), kv.substr(eq + 1));
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument(std::string("--set: ") + e.what());
     }
   }
-  if (!r.params.Validate(&why)) throw std::invalid_argument("extruder parameters: " + why);
+  std::string why;
+  if (!params.Validate(&why)) throw std::invalid_argument("extruder parameters: " + why);
+  return params;
+}
+
+PredictResult ComputePrediction(const PredictCommandOptions& o) {
+  std::string why;
+  if (!o.Validate(&why)) throw std::invalid_argument(why);
+  PredictResult r;
+  r.params = LoadExtruderWithOverrides(o.extruder, o.set);
   r.steps = model::ReadDiameterTable(o.diameters, r.params.Get(Param::kReferenceTemperatureC));
   model::CheckSteps(r.params, r.steps);
   model::ExtruderParams use = r.params;

@@ -1,13 +1,17 @@
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
 
 #include "apps/cli_util.h"
 #include "apps/commands.h"
+#include "common/atomic_file.h"
 #include "common/csv.h"
+#include "model/extrusion_lag.h"
 #include "vision/video_io.h"
 
 namespace clogscope::apps {
@@ -20,6 +24,12 @@ bool RenderCommandOptions::Validate(std::string* why) const {
     *why = "--fps must be in (0, 1000]";
   else if (out.empty())
     *why = "--out is required";
+  else if (!lag_commanded.empty() && !(lag_k_s > 0))
+    *why = "--lag-k-s must be positive";
+  else if (!lag_commanded.empty() && !(lag_um_per_mm3_s > 0))
+    *why = "--lag-um-per-mm3-s must be positive";
+  else if (!(filament_diameter_mm > 0))
+    *why = "--filament-diameter-mm must be positive";
   else
     return true;
   return false;
@@ -38,7 +48,36 @@ std::string RenderToFiles(const RenderCommandOptions& o) {
       truth = (fs::path(o.out) / "truth.json").string();
     }
   }
-  vision::RenderSequence(o.scene, o.frames, o.fps, o.out, truth);
+  if (o.lag_commanded.empty()) {
+    vision::RenderSequence(o.scene, o.frames, o.fps, o.out, truth);
+    return truth;
+  }
+  // The strand's width follows the lagged outlet flow at each frame's time (frame i at i / fps).
+  const model::FlowProfile profile =
+      model::ReadFlowProfile(o.lag_commanded, o.lag_profile_form, o.filament_diameter_mm);
+  std::vector<double> times;
+  for (int i = 0; i < o.frames; ++i) times.push_back(i / o.fps);
+  const auto flow = model::OutletFlow(profile, o.lag_k_s, 0.0, times);
+  vision::SceneParams scene = o.scene;
+  scene.frame_width_um.clear();
+  for (size_t i = 0; i < flow.size(); ++i) {
+    scene.frame_width_um.push_back(o.lag_um_per_mm3_s * flow[i]);
+    if (!(scene.frame_width_um.back() > 0)) {
+      throw std::invalid_argument(
+          fmt::format("{}: the outlet flow at {:g} s is {:g} mm³/s; the strand would vanish",
+                      o.lag_commanded, times[i], flow[i]));
+    }
+  }
+  vision::RenderSequence(scene, o.frames, o.fps, o.out, truth);
+  // The lag's truth next to the frames' own.
+  auto j = nlohmann::ordered_json::parse(ReadFile(truth));
+  j["lag"] = {{"k_s", o.lag_k_s},
+              {"um_per_mm3_s", o.lag_um_per_mm3_s},
+              {"commanded", o.lag_commanded},
+              {"profile_time_s", profile.time_s},
+              {"profile_flow_mm3_s", profile.flow_mm3_s},
+              {"outlet_flow_mm3_s", flow}};
+  WriteFileAtomically(truth, j.dump(2) + "\n");
   return truth;
 }
 
@@ -115,6 +154,14 @@ int RunRender(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--clear", s.clear_strand, "A clear strand with two bright internal lines");
   app.add_option("--vignetting", s.vignetting, "Relative darkening at the corners");
+  std::string lag_form = "moves";
+  app.add_option("--lag-commanded", o.lag_commanded,
+                 "Flow profile CSV (time_s, flow_mm3_s): the width follows its first-order lag");
+  app.add_option("--lag-k-s", o.lag_k_s, "Lag K of the outlet flow")->capture_default_str();
+  app.add_option("--lag-um-per-mm3-s", o.lag_um_per_mm3_s, "Strand width per unit outlet flow")
+      ->capture_default_str();
+  app.add_option("--lag-profile-form", lag_form, "moves or linear (see clogscope lag)")
+      ->capture_default_str();
   app.add_option("--strand-tint", strand_tint, "With --colour: B,G,R gains of the strand");
   app.add_option("--background-tint", background_tint,
                  "With --colour: B,G,R gains of the background");
@@ -123,11 +170,13 @@ int RunRender(int argc, char** argv) {
       "  clogscope render --out frames/ --frames 10\n"
       "  clogscope render --out step.mp4 --frames 250 --strand-width-um 390.1 --width-jitter-um 2\n"
       "  clogscope render --out tilted/ --tilt-deg 15 --silhouette --highlight --gradient 0.3\n"
+      "  clogscope render --out lag.avi --frames 200 --lag-commanded profile.csv --lag-k-s 0.1\n"
       "  clogscope render --target pin --strand-width-um 300 --edge-bias-px 0.4 --out pin300/\n"
       "  clogscope render --target micrometer --pitch-um 100 --tilt-deg 2 --silhouette --out "
       "micro/");
   if (!ParseCommandLine(app, argc, argv)) return 0;  // --help printed
   s.target = vision::ParseTarget(target);
+  o.lag_profile_form = model::ParseProfileForm(lag_form);
   s.nozzle = !no_nozzle;
   s.strand = !no_strand;
   // "B,G,R" gains, each through the shared number parser.

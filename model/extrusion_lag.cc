@@ -41,8 +41,8 @@ FlowProfile ProfileFromMoves(const std::vector<double>& start_s, const std::vect
   FlowProfile p;
   for (size_t i = 0; i < start_s.size(); ++i) {
     if (i > 0 && !(start_s[i] > start_s[i - 1])) {
-      throw std::invalid_argument(fmt::format("profile row {}: time {:g} s does not increase",
-                                              i + 1, start_s[i]));
+      throw std::invalid_argument(
+          fmt::format("profile row {}: time {:g} s does not increase", i + 1, start_s[i]));
     }
     if (i > 0) {  // the previous rate holds up to this start, then steps
       p.time_s.push_back(start_s[i]);
@@ -74,9 +74,8 @@ std::vector<double> SimulationTimes(const FlowProfile& p, double k_s, double dt_
   const double t0 = p.StartS() - 5 * k_s, t1 = p.EndS() + 5 * k_s;
   const size_t count = static_cast<size_t>(std::floor((t1 - t0) / dt_s)) + 1;
   if (count > 10'000'000) {
-    throw std::invalid_argument(
-        fmt::format("simulation: {} samples of {:g} s is too many; use a larger step", count,
-                    dt_s));
+    throw std::invalid_argument(fmt::format(
+        "simulation: {} samples of {:g} s is too many; use a larger step", count, dt_s));
   }
   std::vector<double> t(count);
   for (size_t i = 0; i < count; ++i) t[i] = t0 + i * dt_s;

@@ -131,9 +131,8 @@ LagFitSummary FitLag(const FlowProfile& p, const std::vector<WidthSample>& sampl
   }
   for (size_t i = 1; i < samples.size(); ++i) {
     if (!(samples[i].time_s > samples[i - 1].time_s)) {
-      throw std::invalid_argument(
-          fmt::format("lag fit: frame times must increase (sample {} at {:g} s)", i + 1,
-                      samples[i].time_s));
+      throw std::invalid_argument(fmt::format(
+          "lag fit: frame times must increase (sample {} at {:g} s)", i + 1, samples[i].time_s));
     }
   }
   const double s0 = samples.front().time_s, s1 = samples.back().time_s;
@@ -171,8 +170,10 @@ LagFitSummary FitLag(const FlowProfile& p, const std::vector<WidthSample>& sampl
   std::vector<WidthSample> inliers;
   for (size_t i = 0; i < samples.size(); ++i) {
     out.outlier[i] = robust_sigma > 0 && abs_dev[i] > o.outlier_threshold_sigma * robust_sigma;
-    if (out.outlier[i]) ++out.outliers;
-    else inliers.push_back(samples[i]);
+    if (out.outlier[i])
+      ++out.outliers;
+    else
+      inliers.push_back(samples[i]);
   }
   if (out.outliers > 0 && inliers.size() >= 8) fit = Solve(p, inliers, fit.x, o);
   if (inliers.size() < 8) inliers = samples;
@@ -209,9 +210,9 @@ LagFitSummary FitLag(const FlowProfile& p, const std::vector<WidthSample>& sampl
   if (fit.summary.termination_type != ceres::CONVERGENCE) {
     out.message = "the solver did not converge: " + fit.summary.message;
   } else if (out.k_s - o.min_k_s < span || o.max_k_s - out.k_s < span) {
-    out.message = fmt::format(
-        "K ended on its bound {:g} s: the width does not follow a lag in {:g}…{:g} s",
-        out.k_s, o.min_k_s, o.max_k_s);
+    out.message =
+        fmt::format("K ended on its bound {:g} s: the width does not follow a lag in {:g}…{:g} s",
+                    out.k_s, o.min_k_s, o.max_k_s);
   } else if (o.max_offset_s > 0 && std::abs(std::abs(out.offset_s) - o.max_offset_s) < 1e-6) {
     out.message = fmt::format(
         "the time offset ended on its bound ±{:g} s: the clocks differ by more (--max-offset-s)",

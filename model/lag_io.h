@@ -18,8 +18,7 @@ ProfileForm ParseProfileForm(const std::string& name);
 
 // CSV with time_s and either flow_mm3_s or filament_speed_mm_s (converted with the filament
 // diameter). Throws std::invalid_argument naming the file and line of a bad row.
-FlowProfile ReadFlowProfile(const std::string& path, ProfileForm form,
-                            double filament_diameter_mm);
+FlowProfile ReadFlowProfile(const std::string& path, ProfileForm form, double filament_diameter_mm);
 
 // measure's frames CSV: time_s and width_um when every valid row has it, else width_px; rows not
 // valid are skipped. Throws std::invalid_argument naming the file for a missing column, more than

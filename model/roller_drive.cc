@@ -64,10 +64,9 @@ const RollerPreset& RollerByName(const std::string& name) {
     }
   }
   if (kind_matches == 1) return *by_kind;
-  throw std::invalid_argument(fmt::format("roller '{}': {}; the rollers are {}", name,
-                                          kind_matches > 1 ? "more than one has that kind"
-                                                           : "no such roller",
-                                          Names()));
+  throw std::invalid_argument(
+      fmt::format("roller '{}': {}; the rollers are {}", name,
+                  kind_matches > 1 ? "more than one has that kind" : "no such roller", Names()));
 }
 
 MinimalPinch MinimalPinchForce(const RollerPreset& r) {
@@ -84,8 +83,7 @@ MinimalPinch MinimalPinchForce(const RollerPreset& r) {
 Slip SlipPinchForm(const RollerPreset& r, double pinch_force_n, double feed_force_n,
                    double k_p_pct) {
   if (!(pinch_force_n > 0) || !std::isfinite(pinch_force_n)) {
-    throw std::invalid_argument(
-        fmt::format("pinch force {:g} N: must be positive", pinch_force_n));
+    throw std::invalid_argument(fmt::format("pinch force {:g} N: must be positive", pinch_force_n));
   }
   if (!(feed_force_n >= 0) || !std::isfinite(feed_force_n)) {
     throw std::invalid_argument(fmt::format("feed force {:g} N: must be ≥ 0", feed_force_n));

@@ -53,7 +53,8 @@ ThermalAssessment Assess(const CoolingData& d, double v, double t4) {
   a.material = d.material;
   a.velocity_m_s = v;
   a.t4_c = t4;
-  // The tested velocities bound the correlation; a tiny slack keeps the tested points themselves in.
+  // The tested velocities bound the correlation; a tiny slack keeps the tested points themselves
+  // in.
   a.extrapolated =
       v < d.min_tested_velocity_m_s * (1 - 1e-9) || v > d.max_tested_velocity_m_s * (1 + 1e-9);
   std::string why;
@@ -61,8 +62,8 @@ ThermalAssessment Assess(const CoolingData& d, double v, double t4) {
   const auto& obs = d.observations;
   if (t4 < d.safe_below_t4_c) {
     a.risk = ClogRisk::kSafe;
-    a.explanation = fmt::format("T4 {:.1f} °C is below the study's criterion {:g} °C", t4,
-                                d.safe_below_t4_c);
+    a.explanation =
+        fmt::format("T4 {:.1f} °C is below the study's criterion {:g} °C", t4, d.safe_below_t4_c);
   } else if (t4 < d.ClogRiskFromT4C()) {
     a.risk = ClogRisk::kMarginal;
     a.explanation = fmt::format(
@@ -84,7 +85,7 @@ ThermalAssessment Assess(const CoolingData& d, double v, double t4) {
   }
   for (const auto* o : {below, above}) {
     if (o) {
-      a.explanation += fmt::format("; observed {} at {:g} m/s ({:g} °C)", o->outcome,
+      a.explanation += fmt::format("; observed {} at {:g} m/s ({:.1f} °C)", o->outcome,
                                    o->velocity_m_s, o->t4_c);
     }
   }
@@ -137,8 +138,10 @@ std::optional<double> FanVelocityForT4(const CoolingData& d, double t4_c, std::s
   double v = 0.5 * (lo + hi);
   for (int i = 0; i < 200 && hi - lo > 1e-15 * std::max(1.0, hi); ++i) {
     const double f = c.T4C(v) - t4_c;
-    if (f > 0) lo = v;
-    else hi = v;
+    if (f > 0)
+      lo = v;
+    else
+      hi = v;
     if (f == 0) break;
     const double newton = v - f / c.DT4DV(v);
     // Newton when it stays inside the bracket, else bisection.
@@ -219,7 +222,8 @@ std::vector<SofteningStep> CriticalLengths(const ExtruderParams& params,
     r.step = s.step;
     r.temperature_c = s.temperature_c;
     r.diameter_um = s.diameter_m * 1e6;
-    r.dp_hagen_poiseuille_pa = HagenPoiseuillePressurePa(o.viscosity_pa_s, q, l, 0.5 * s.diameter_m);
+    r.dp_hagen_poiseuille_pa =
+        HagenPoiseuillePressurePa(o.viscosity_pa_s, q, l, 0.5 * s.diameter_m);
     r.l_crt_hagen_poiseuille_mm =
         1e3 * CriticalSoftenedLengthM(o.modulus_pa, r_fil, r.dp_hagen_poiseuille_pa);
     r.dp_power_law_pa = physics::BackPressure(p.data(), s.diameter_m, s.temperature_c).total;

@@ -59,8 +59,8 @@ struct ThermalAssessment {
   double t4_c = 0;
   bool extrapolated = false;  // outside the tested velocities (or their temperatures)
   ClogRisk risk = ClogRisk::kSafe;
-  std::string explanation;               // the criterion and the nearest observations
-  double min_safe_velocity_m_s = 0;      // V where T4 meets the criterion
+  std::string explanation;           // the criterion and the nearest observations
+  double min_safe_velocity_m_s = 0;  // V where T4 meets the criterion
 };
 
 // From a fan velocity (m/s, ≥ 0) or from a measured T4 (°C). Throw std::invalid_argument for a
@@ -77,8 +77,8 @@ double HagenPoiseuillePressurePa(double viscosity_pa_s, double flow_m3_s, double
                                  double radius_m);
 
 struct SofteningOptions {
-  double modulus_pa = 0;           // filament modulus near its glass transition
-  double viscosity_pa_s = 0;       // Hagen–Poiseuille melt viscosity (the study: PLA 100, ABS 350)
+  double modulus_pa = 0;      // filament modulus near its glass transition
+  double viscosity_pa_s = 0;  // Hagen–Poiseuille melt viscosity (the study: PLA 100, ABS 350)
   std::optional<double> hp_length_m;  // default: the extruder's exit capillary (zone 3) length
   bool Validate(std::string* why) const;
 };

@@ -99,6 +99,11 @@ bool SceneParams::Validate(std::string* why) const {
   if (std::abs(tilt_deg) > 60) return fail("tilt_deg must be within ±60");
   if (!(sway_deg >= 0) || !(width_jitter_um >= 0))
     return fail("sway_deg and width_jitter_um must not be negative");
+  for (double w : frame_width_um) {
+    if (!(w > 0) || !std::isfinite(w)) return fail("frame_width_um: every width must be positive");
+    if (target == Target::kStrand && nozzle_tip_width_um <= w)
+      return fail("nozzle_tip_width_um must exceed every scheduled width");
+  }
   if (target == Target::kStrand && nozzle_tip_width_um <= strand_width_um)
     return fail("nozzle_tip_width_um must exceed strand_width_um");
   if (!(nozzle_cone_half_angle_deg > 0 && nozzle_cone_half_angle_deg < 85))
@@ -204,7 +209,11 @@ FrameTruth FrameTruthFor(const SceneParams& p, int frame_index) {
   std::normal_distribution<double> normal(0.0, 1.0);
   double sway = normal(rng) * p.sway_deg;
   double jitter = normal(rng) * p.width_jitter_um;
-  t.width_um = p.strand_width_um + jitter;
+  const double base =
+      p.frame_width_um.empty()
+          ? p.strand_width_um
+          : p.frame_width_um[std::min<size_t>(frame_index, p.frame_width_um.size() - 1)];
+  t.width_um = base + jitter;
   if (p.target == Target::kMicrometer) t.width_um = p.line_width_um;
   t.width_px = t.width_um / p.scale_um_per_px + p.edge_bias_px;
   t.angle_deg = p.tilt_deg + sway;

@@ -64,6 +64,9 @@ struct SceneParams {
   // Per-frame variation (standard deviations): strand axis angle and strand width.
   double sway_deg = 0.0;
   double width_jitter_um = 0.0;
+  // A width schedule: when not empty, frame i's strand width is frame_width_um[i] (the last entry
+  // for later frames) instead of strand_width_um, e.g. a strand following the flow's lag.
+  std::vector<double> frame_width_um;
   // The optics' edge bias: every object appears this many px wider than width/scale (blur,
   // diffraction, edge convention). Calibration fits it; 0 renders the geometric edge.
   double edge_bias_px = 0.0;

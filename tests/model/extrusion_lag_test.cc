@@ -98,7 +98,9 @@ TEST(ExtrusionLagTest, DiscreteLinearAdvanceOnShortMovesApproachesTheContinuousF
   const auto y = OutletFlow(ProfileFromMoves(start, corrected), k, 0.0, Grid(0.0, 1.9, 0.05));
   const auto target = Grid(0.0, 1.9, 0.05);
   for (size_t i = 0; i < target.size(); ++i) {
-    const double command = target[i] < 0.5 ? 2.0 : target[i] < 1.2 ? 2.0 + 10 * (target[i] - 0.5) : 9.0;
+    const double command = target[i] < 0.5   ? 2.0
+                           : target[i] < 1.2 ? 2.0 + 10 * (target[i] - 0.5)
+                                             : 9.0;
     EXPECT_NEAR(y[i], command, 0.02) << target[i];  // O(dt·slope) from the move sampling
   }
   // The extra volume telescopes: K_LA·(q_last − q_first).

@@ -93,8 +93,7 @@ TEST(LagFitTest, ProfilesThatCannotExplainTheFramesAreRefused) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("does not change"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(FitLag(Steps(), {s.begin(), s.begin() + 5}, LagFitOptions{}),
-               std::invalid_argument);
+  EXPECT_THROW(FitLag(Steps(), {s.begin(), s.begin() + 5}, LagFitOptions{}), std::invalid_argument);
 }
 
 // A width that does not follow the flow at all: no K, and the summary says so.
