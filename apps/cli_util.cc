@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -87,6 +88,13 @@ void CheckNumbers(const CLI::App& app) {
       }
     }
   }
+}
+
+void CreateOutputDirectory(const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec || !std::filesystem::is_directory(dir))
+    throw std::invalid_argument(dir + ": cannot create output directory");
 }
 
 }  // namespace clogscope::apps

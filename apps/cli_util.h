@@ -22,6 +22,10 @@ bool ParseCommandLine(CLI::App& app, int argc, char** argv);
 // naming the option. Each quantity's own range is checked where its options are validated.
 void CheckNumbers(const CLI::App& app);
 
+// Creates `dir` (and its parents) for outputs; throws std::invalid_argument "DIR: cannot create
+// output directory" when it cannot.
+void CreateOutputDirectory(const std::string& dir);
+
 // Writes spdlog output to stderr at the given level name ("info", "warn", "debug", …).
 void SetUpLogging(const std::string& level);
 

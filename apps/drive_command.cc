@@ -153,10 +153,7 @@ int RunDrive(int argc, char** argv) {
   const auto d = ComputeDrive(o);
   PrintDrive(d, o);
   if (o.out_dir.empty()) return 0;
-  std::error_code ec;
-  fs::create_directories(o.out_dir, ec);
-  if (ec || !fs::is_directory(o.out_dir))
-    throw std::invalid_argument(o.out_dir + ": cannot create output directory");
+  CreateOutputDirectory(o.out_dir);
   const Provenance prov = CurrentProvenance();
   const std::string csv = (fs::path(o.out_dir) / "drive.csv").string();
   const std::string json = (fs::path(o.out_dir) / "drive.json").string();

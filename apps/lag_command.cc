@@ -84,10 +84,7 @@ LagReport ComputeLag(const LagCommandOptions& o) {
 
 std::vector<std::string> WriteLagOutputs(const LagReport& r, const LagCommandOptions& o,
                                          std::vector<std::string>* warnings) {
-  std::error_code ec;
-  fs::create_directories(o.out_dir, ec);
-  if (ec || !fs::is_directory(o.out_dir))
-    throw std::invalid_argument(o.out_dir + ": cannot create output directory");
+  CreateOutputDirectory(o.out_dir);
   const Provenance prov = CurrentProvenance();
   auto path = [&](const char* name) { return (fs::path(o.out_dir) / name).string(); };
   std::vector<std::string> written;

@@ -119,10 +119,7 @@ PredictResult ComputePrediction(const PredictCommandOptions& o) {
 
 std::vector<std::string> WritePredictionOutputs(const PredictResult& r, const std::string& out_dir,
                                                 bool plots, std::vector<std::string>* warnings) {
-  std::error_code ec;
-  fs::create_directories(out_dir, ec);
-  if (ec || !fs::is_directory(out_dir))
-    throw std::invalid_argument(out_dir + ": cannot create output directory");
+  CreateOutputDirectory(out_dir);
   const Provenance prov = CurrentProvenance();
   const auto& pr = r.prediction;
   const model::FitSummary* fit = r.fit ? &*r.fit : nullptr;

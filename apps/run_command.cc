@@ -129,10 +129,7 @@ ExperimentReport RunExperimentCommand(const ExperimentCommandOptions& o,
   ExperimentReport rep;
   rep.manifest = pipeline::LoadManifest(o.manifest);
   const pipeline::Manifest& m = rep.manifest;
-  std::error_code ec;
-  fs::create_directories(o.out_dir, ec);
-  if (!fs::is_directory(o.out_dir))
-    throw std::invalid_argument(o.out_dir + ": cannot create output directory");
+  CreateOutputDirectory(o.out_dir);
 
   // The conversion: command line first, then the manifest; `run` calibrates when the manifest
   // names reference images.

@@ -136,10 +136,7 @@ int RunThermal(int argc, char** argv) {
   for (const auto& a : r.assessments) PrintAssessment(a);
   if (r.softening_options) PrintSoftening(r);
   if (o.out_dir.empty()) return 0;
-  std::error_code ec;
-  fs::create_directories(o.out_dir, ec);
-  if (ec || !fs::is_directory(o.out_dir))
-    throw std::invalid_argument(o.out_dir + ": cannot create output directory");
+  CreateOutputDirectory(o.out_dir);
   const Provenance prov = CurrentProvenance();
   std::vector<std::string> written = {(fs::path(o.out_dir) / "thermal.json").string()};
   WriteFileAtomically(written[0],
