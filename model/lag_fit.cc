@@ -89,9 +89,12 @@ Solved Solve(const FlowProfile& p, const std::vector<WidthSample>& s, std::array
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::DENSE_QR;
   so.max_num_iterations = o.max_iterations;
-  so.function_tolerance = 1e-14;
-  so.parameter_tolerance = 1e-12;
-  so.gradient_tolerance = 1e-16;
+  // The response's time derivative has a corner at every step of the profile: when a frame time
+  // sits on one, the last digits of the cost chatter as the offset moves. Relative changes of
+  // 1e-10 are converged for any width measurement.
+  so.function_tolerance = 1e-10;
+  so.parameter_tolerance = 1e-10;
+  so.gradient_tolerance = 1e-14;
   so.logging_type = ceres::SILENT;
   ceres::Solve(so, &problem, &out.summary);
   ceres::Covariance::Options co;

@@ -12,35 +12,18 @@
 namespace clogscope::model {
 namespace {
 
-CoolingData MakePla() {
+// The study's numbers for one material: correlation, tested range, criterion, observations.
+CoolingData Cooling(Material m, HeatSinkCorrelation c, double min_v, double max_v, double safe_t4,
+                    double clog_v, double viscosity, std::vector<CoolingObservation> observations) {
   CoolingData d;
-  d.material = Material::kPla;
-  d.correlation = {45.5, 9.53, 47.4, 0.41};
-  d.min_tested_velocity_m_s = 0.112;
-  d.max_tested_velocity_m_s = 0.571;
-  d.safe_below_t4_c = 40.0;
-  d.clog_risk_at_velocity_m_s = 0.289;
-  d.melt_viscosity_pa_s = 100;
-  d.observations = {{0.571, 37.7, "safe"},
-                    {0.445, 40.1, "safe"},
-                    {0.289, 45.0, "problems"},
-                    {0.112, 60.9, "complete clog"}};
-  return d;
-}
-
-CoolingData MakeAbs() {
-  CoolingData d;
-  d.material = Material::kAbs;
-  d.correlation = {63.2, 8.74, 46.5, 0.26};
-  d.min_tested_velocity_m_s = 0.048;
-  d.max_tested_velocity_m_s = 0.445;
-  d.safe_below_t4_c = 69.0;
-  d.clog_risk_at_velocity_m_s = 0.048;
-  d.melt_viscosity_pa_s = 350;
-  d.observations = {{0.445, 42.7, "safe"},
-                    {0.289, 48.2, "safe"},
-                    {0.112, 68.9, "safe"},
-                    {0.048, 87.5, "complete clog"}};
+  d.material = m;
+  d.correlation = c;
+  d.min_tested_velocity_m_s = min_v;
+  d.max_tested_velocity_m_s = max_v;
+  d.safe_below_t4_c = safe_t4;
+  d.clog_risk_at_velocity_m_s = clog_v;
+  d.melt_viscosity_pa_s = viscosity;
+  d.observations = std::move(observations);
   return d;
 }
 
@@ -114,7 +97,18 @@ double HeatSinkCorrelation::DT4DV(double v) const {
 }
 
 const CoolingData& CoolingDataOf(Material m) {
-  static const CoolingData pla = MakePla(), abs = MakeAbs();
+  static const CoolingData pla =
+      Cooling(Material::kPla, {45.5, 9.53, 47.4, 0.41}, 0.112, 0.571, 40, 0.289, 100,
+              {{0.571, 37.7, "safe"},
+               {0.445, 40.1, "safe"},
+               {0.289, 45.0, "problems"},
+               {0.112, 60.9, "complete clog"}});
+  static const CoolingData abs =
+      Cooling(Material::kAbs, {63.2, 8.74, 46.5, 0.26}, 0.048, 0.445, 69, 0.048, 350,
+              {{0.445, 42.7, "safe"},
+               {0.289, 48.2, "safe"},
+               {0.112, 68.9, "safe"},
+               {0.048, 87.5, "complete clog"}});
   return m == Material::kPla ? pla : abs;
 }
 
