@@ -99,6 +99,9 @@ bool SceneParams::Validate(std::string* why) const {
   if (std::abs(tilt_deg) > 60) return fail("tilt_deg must be within ±60");
   if (!(sway_deg >= 0) || !(width_jitter_um >= 0))
     return fail("sway_deg and width_jitter_um must not be negative");
+  if (!(surface_texture_amplitude >= 0) || !std::isfinite(feed_speed_mm_s) ||
+      !(frame_rate_hz > 0 && std::isfinite(frame_rate_hz)))
+    return fail("surface texture must be ≥ 0, feed speed a number, frame rate positive");
   for (double w : frame_width_um) {
     if (!(w > 0) || !std::isfinite(w)) return fail("frame_width_um: every width must be positive");
     if (target == Target::kStrand && nozzle_tip_width_um <= w)
@@ -219,8 +222,48 @@ FrameTruth FrameTruthFor(const SceneParams& p, int frame_index) {
   t.angle_deg = p.tilt_deg + sway;
   t.tip_x_px = p.tip_x_px;
   t.tip_y_px = p.tip_y_px;
+  t.time_s = frame_index / p.frame_rate_hz;
+  t.feed_offset_px = p.feed_speed_mm_s * 1e3 * t.time_s / p.scale_um_per_px;
   return t;
 }
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// A filament's surface along its axis: a sum of sinusoids of random wavelength and phase, each
+// rendered exactly through the Gaussian PSF (exp(−2π²σ²k²)) and the pixel's box (sinc per axis).
+class SurfaceTexture {
+ public:
+  SurfaceTexture(double amplitude, uint64_t seed, double sigma, double dir_x, double dir_y) {
+    if (amplitude <= 0) return;
+    auto rng = FrameRng(seed, -1, 7);
+    std::uniform_real_distribution<double> uni(0.0, 1.0);
+    const int n = 24;
+    for (int j = 0; j < n; ++j) {
+      const double wavelength = 6 * std::pow(80.0 / 6, uni(rng));
+      const double k = 1 / wavelength;
+      const auto sinc = [](double x) { return std::abs(x) < 1e-12 ? 1.0 : std::sin(x) / x; };
+      const double att = std::exp(-2 * kPi * kPi * sigma * sigma * k * k) * sinc(kPi * k * dir_x) *
+                         sinc(kPi * k * dir_y);
+      waves_.push_back({2 * kPi * k, 2 * kPi * uni(rng), amplitude * std::sqrt(2.0 / n) * att});
+    }
+  }
+  double At(double s) const {
+    double v = 0;
+    for (const auto& w : waves_) v += w.amp * std::cos(w.omega * s + w.phase);
+    return v;
+  }
+  bool empty() const { return waves_.empty(); }
+
+ private:
+  struct Wave {
+    double omega, phase, amp;
+  };
+  std::vector<Wave> waves_;
+};
+
+}  // namespace
 
 cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out) {
   std::string why;
@@ -275,6 +318,9 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
   const SoftHalfPlane clear_l1{n_strand, -0.3 * w - cl_h}, clear_r1{n_strand, -0.3 * w + cl_h};
   const SoftHalfPlane clear_l2{n_strand, 0.3 * w - cl_h}, clear_r2{n_strand, 0.3 * w + cl_h};
   const bool has_nozzle = p.target == Target::kStrand && p.nozzle;
+  const Vec2 d_strand{std::sin(th_strand), std::cos(th_strand)};
+  const SurfaceTexture surface(p.target == Target::kMicrometer ? 0 : p.surface_texture_amplitude,
+                               p.seed, sigma, d_strand.x, d_strand.y);
   const int nc = p.colour ? 3 : 1;
   static const double kGrey[3] = {1.0, 1.0, 1.0};
   const double* tb = p.colour ? p.background_tint : kGrey;
@@ -311,6 +357,8 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
           cov = p.strand ? strand_left.Eval(d, sigma) - strand_right.Eval(d, sigma) : 0.0;
           front = p.strand_level * cov;
           if (shaded && p.strand) front += shading.At(Dot(n_strand, d));
+          if (!surface.empty() && cov > 0)
+            front += cov * surface.At(Dot(d_strand, d) - truth.feed_offset_px);
           if (p.highlight && p.strand)
             front += p.highlight_gain * (hl_left.Eval(d, sigma) - hl_right.Eval(d, sigma));
           if (p.clear_strand && p.strand) {
@@ -393,6 +441,9 @@ std::string TruthToJson(const SceneParams& p, const std::vector<FrameTruth>& tru
       {"bed_gap_um", p.bed_gap_um},
       {"sway_deg", p.sway_deg},
       {"width_jitter_um", p.width_jitter_um},
+      {"surface_texture_amplitude", p.surface_texture_amplitude},
+      {"feed_speed_mm_s", p.feed_speed_mm_s},
+      {"frame_rate_hz", p.frame_rate_hz},
       {"target", TargetName(p.target)},
       {"edge_bias_px", p.edge_bias_px},
       {"pitch_um", p.pitch_um},
@@ -419,7 +470,9 @@ std::string TruthToJson(const SceneParams& p, const std::vector<FrameTruth>& tru
                       {"width_px", t.width_px},
                       {"angle_deg", t.angle_deg},
                       {"tip_x_px", t.tip_x_px},
-                      {"tip_y_px", t.tip_y_px}});
+                      {"tip_y_px", t.tip_y_px},
+                      {"time_s", t.time_s},
+                      {"feed_offset_px", t.feed_offset_px}});
   }
   j["frames"] = frames;
   return j.dump(2) + "\n";
@@ -430,6 +483,8 @@ std::vector<FrameTruth> RenderSequence(const SceneParams& p, int frame_count, do
   std::string why;
   if (!p.Validate(&why)) throw std::invalid_argument("scene: " + why);
   if (frame_count < 1) throw std::invalid_argument("--frames: must be at least 1");
+  SceneParams timed = p;  // the motion follows the sequence's own frame rate
+  timed.frame_rate_hz = fps;
   namespace fs = std::filesystem;
   std::vector<FrameTruth> truth;
   const VideoKind kind = VideoKindForPath(out_path);
@@ -439,7 +494,7 @@ std::vector<FrameTruth> RenderSequence(const SceneParams& p, int frame_count, do
     VideoFileWriter writer(out_path, kind, fps, cv::Size(p.width_px, p.height_px));
     for (int i = 0; i < frame_count; ++i) {
       FrameTruth t;
-      writer.Write(RenderFrame(p, i, &t));
+      writer.Write(RenderFrame(timed, i, &t));
       truth.push_back(t);
     }
     writer.Commit();
@@ -450,13 +505,13 @@ std::vector<FrameTruth> RenderSequence(const SceneParams& p, int frame_count, do
       throw std::invalid_argument(out_path + ": cannot create output directory");
     for (int i = 0; i < frame_count; ++i) {
       FrameTruth t;
-      cv::Mat img = RenderFrame(p, i, &t);
+      cv::Mat img = RenderFrame(timed, i, &t);
       std::string name = (fs::path(out_path) / fmt::format("frame_{:06d}.png", i)).string();
       WriteImageAtomically(name, img);
       truth.push_back(t);
     }
   }
-  if (!truth_path.empty()) WriteFileAtomically(truth_path, TruthToJson(p, truth));
+  if (!truth_path.empty()) WriteFileAtomically(truth_path, TruthToJson(timed, truth));
   return truth;
 }
 

@@ -67,6 +67,12 @@ struct SceneParams {
   // A width schedule: when not empty, frame i's strand width is frame_width_um[i] (the last entry
   // for later frames) instead of strand_width_um, e.g. a strand following the flow's lag.
   std::vector<double> frame_width_um;
+  // A moving filament: a surface texture along the strand (± grey levels, wavelengths 6–80 px)
+  // that travels down the axis at feed_speed_mm_s; frame i is at time i / frame_rate_hz
+  // (RenderSequence sets it from its fps).
+  double surface_texture_amplitude = 0.0;
+  double feed_speed_mm_s = 0.0;
+  double frame_rate_hz = 25.0;
   // The optics' edge bias: every object appears this many px wider than width/scale (blur,
   // diffraction, edge convention). Calibration fits it; 0 renders the geometric edge.
   double edge_bias_px = 0.0;
@@ -116,6 +122,8 @@ struct FrameTruth {
   double angle_deg = 0;  // strand axis angle, image frame
   double tip_x_px = 0;
   double tip_y_px = 0;
+  double time_s = 0;          // frame_index / frame_rate_hz
+  double feed_offset_px = 0;  // how far the surface has moved down the axis since frame 0
 };
 
 // Renders frame `frame_index` of a sequence. The same params, seed and index give the same image.

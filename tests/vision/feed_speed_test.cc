@@ -1,0 +1,113 @@
+#include "vision/feed_speed.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "vision/synthetic.h"
+#include "vision/track.h"
+
+namespace clogscope::vision {
+namespace {
+
+// A 1.75 mm filament at 20 µm/px filmed at 30 frames/s, its surface marked by ±8 grey levels of
+// texture under noise σ 3: the roller-drive study's feed speeds.
+SceneParams Filament(double speed_mm_s, double texture = 8, double tilt_deg = 0) {
+  SceneParams p;
+  p.width_px = 640;
+  p.height_px = 480;
+  p.scale_um_per_px = 20;
+  p.strand_width_um = 1750;
+  p.nozzle = false;
+  p.nozzle_tip_width_um = 4000;
+  p.tip_x_px = 320;
+  p.tip_y_px = 0;
+  p.tilt_deg = tilt_deg;
+  p.surface_texture_amplitude = texture;
+  p.feed_speed_mm_s = speed_mm_s;
+  p.frame_rate_hz = 30;
+  p.seed = 5;
+  return p;
+}
+
+struct SpeedRun {
+  int valid = 0, pairs = 0, within_4_sigma = 0;
+  double mean_speed_mm_s = 0;
+  AxisShift last;
+};
+
+SpeedRun MeasureSpeeds(const SceneParams& p, int frames, const FeedSpeedOptions& fo = {}) {
+  StrandMeasureOptions o;
+  o.target = MeasureTarget::kFilament;
+  StrandTracker tracker(o);
+  cv::Mat prev;
+  StrandMeasurement prev_m;
+  FrameTruth prev_t;
+  SpeedRun r;
+  for (int i = 0; i < frames; ++i) {
+    FrameTruth t;
+    const cv::Mat f = RenderFrame(p, i, &t);
+    const StrandMeasurement m = tracker.Measure(f);
+    EXPECT_TRUE(m.valid()) << m.detail;
+    if (i > 0) {
+      ++r.pairs;
+      r.last = EstimateFeedShift(prev, f, prev_m, fo);
+      if (r.last.valid()) {
+        ++r.valid;
+        const double truth = t.feed_offset_px - prev_t.feed_offset_px;
+        r.within_4_sigma += std::abs(r.last.shift_px - truth) <= 4 * r.last.sigma_px;
+        r.mean_speed_mm_s +=
+            r.last.shift_px * p.scale_um_per_px * 1e-3 / (t.time_s - prev_t.time_s);
+      }
+    }
+    prev = f;
+    prev_m = m;
+    prev_t = t;
+  }
+  if (r.valid > 0) r.mean_speed_mm_s /= r.valid;
+  return r;
+}
+
+TEST(FeedSpeedTest, RendererMovesTheSurfaceAtTheFeedSpeed) {
+  const SceneParams p = Filament(6);
+  const FrameTruth t = FrameTruthFor(p, 45);
+  EXPECT_DOUBLE_EQ(t.time_s, 1.5);
+  EXPECT_NEAR(t.feed_offset_px, 6 * 1.5 * 1e3 / 20, 1e-12);  // 450 px
+}
+
+// Within 1 % of the speed, or 0.02 mm/s at the lowest; every pair measured, and the per-pair σ
+// covers its error.
+TEST(FeedSpeedTest, RenderedSpeedsWithinOnePercent) {
+  for (double v : {0.5, 2.0, 5.0, 15.0}) {
+    const SpeedRun r = MeasureSpeeds(Filament(v), 16);
+    EXPECT_EQ(r.valid, r.pairs) << v << " mm/s: " << r.last.detail;
+    EXPECT_NEAR(r.mean_speed_mm_s, v, std::max(0.01 * v, 0.02)) << v << " mm/s";
+    EXPECT_GE(r.within_4_sigma, r.valid - 1) << v << " mm/s";
+  }
+  const SpeedRun tilted = MeasureSpeeds(Filament(2.0, 8, 7), 16);
+  EXPECT_NEAR(tilted.mean_speed_mm_s, 2.0, 0.02);
+}
+
+TEST(FeedSpeedTest, AFilamentAtRestReadsZero) {
+  const SpeedRun r = MeasureSpeeds(Filament(0), 16);
+  EXPECT_EQ(r.valid, r.pairs);
+  EXPECT_NEAR(r.mean_speed_mm_s, 0, 0.005);
+}
+
+TEST(FeedSpeedTest, AFeaturelessFilamentHasNoSpeed) {
+  const SpeedRun r = MeasureSpeeds(Filament(2.0, 0), 6);
+  EXPECT_EQ(r.valid, 0);
+  EXPECT_EQ(r.last.status, FeedShiftStatus::kNoTexture);
+  EXPECT_NE(r.last.detail.find("noise"), std::string::npos) << r.last.detail;
+}
+
+TEST(FeedSpeedTest, BeyondTheSearchRangeIsTooFast) {
+  FeedSpeedOptions fo;
+  fo.max_shift_px = 10;  // 6 mm/s at these settings; the filament runs at 15
+  const SpeedRun r = MeasureSpeeds(Filament(15.0), 4, fo);
+  EXPECT_EQ(r.valid, 0);
+  EXPECT_EQ(r.last.status, FeedShiftStatus::kTooFast);
+}
+
+}  // namespace
+}  // namespace clogscope::vision

@@ -1,0 +1,65 @@
+#pragma once
+
+// Feed speed of a filament from consecutive frames: its surface texture (print marks, scratches,
+// colour noise) travels along its axis. Both frames are sampled along the same axis (the earlier
+// frame's geometry), the mean grey over the inner part of the width at every pixel step; the shift
+// between the two profiles is found by normalised cross-correlation over whole pixels, then refined
+// to a fraction of a pixel by Gauss–Newton on the interpolated profile.
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "vision/strand_measure.h"
+
+namespace clogscope::vision {
+
+struct FeedSpeedOptions {
+  double inner_fraction = 0.6;    // share of the width sampled, centred (keeps off the edges)
+  double max_shift_px = 40;       // search range per frame pair
+  double min_texture_ratio = 4;   // texture σ over the profile's noise σ
+  double min_correlation = 0.6;   // normalised cross-correlation at the best whole-pixel shift
+  double highpass_sigma_px = 25;  // slow illumination along the axis is removed at this scale
+  bool Validate(std::string* why) const;
+};
+
+// The surface along the axis: values[i] at s = start_s_px + i (px from the measurement origin),
+// each the mean over the inner width; noise is the estimated σ of one value.
+struct AxisProfile {
+  double start_s_px = 0;
+  std::vector<double> values;
+  double noise = 0;
+};
+
+// Samples `grey` (CV_8U or CV_16U, one channel) along the axis and inside the edges of `geometry`
+// (a measurement with geometry, of this frame or a neighbour), from the start of its band to where
+// the axis leaves the frame (the filament target's band is its whole straight stretch). Empty when
+// fewer than 32 px can be sampled.
+AxisProfile SampleAxisProfile(const cv::Mat& grey, const StrandMeasurement& geometry,
+                              const FeedSpeedOptions& options);
+
+enum class FeedShiftStatus { kValid, kNoTexture, kTooFast, kNoStrand };
+const char* FeedShiftStatusName(
+    FeedShiftStatus s);  // "valid", "no_texture", "too_fast", "no_strand"
+
+struct AxisShift {
+  FeedShiftStatus status = FeedShiftStatus::kNoStrand;
+  std::string detail;
+  double shift_px = 0;  // how far the surface moved down the axis (+s) from a to b
+  double sigma_px = 0;  // from the residuals and the texture's gradient energy
+  double correlation = 0;
+  double texture_ratio = 0;
+  int search_limit_px = 0;  // the shifts searched: ±this
+  bool valid() const { return status == FeedShiftStatus::kValid; }
+};
+
+// The shift of profile b against profile a (same axis, same sampling). Expected failures come back
+// as a status: no_texture (texture too weak for its noise), too_fast (a clear texture but no match
+// inside the search range, or the best match on its limit).
+AxisShift EstimateAxisShift(const AxisProfile& a, const AxisProfile& b,
+                            const FeedSpeedOptions& options);
+
+// Both frames sampled with `geometry` (normally the earlier frame's measurement), then the shift.
+AxisShift EstimateFeedShift(const cv::Mat& grey_a, const cv::Mat& grey_b,
+                            const StrandMeasurement& geometry, const FeedSpeedOptions& options);
+
+}  // namespace clogscope::vision
