@@ -12,6 +12,7 @@
 #include "model/roller_drive.h"
 #include "model/thermal.h"
 #include "pipeline/experiment.h"
+#include "vision/feed_speed.h"
 #include "vision/scene.h"
 #include "vision/strand_measure.h"
 #include "vision/synthetic.h"
@@ -62,6 +63,8 @@ struct MeasureCommandOptions {
   std::string overlay_dir;  // empty: no overlays
   int overlay_every = 0;    // 0: every image, every 25th video frame
   bool flag_outliers = true;
+  bool feed_speed = false;  // filament target: feed speed between consecutive video frames
+  vision::FeedSpeedOptions feed;
   bool Validate(std::string* why) const;
   // The band in px from the µm or px options (throws std::invalid_argument on a conflict).
   void ResolveBand();
@@ -81,8 +84,10 @@ struct MeasureSummary {
 // An input that cannot be opened is reported in the summary and skipped.
 MeasureSummary MeasureInputs(MeasureCommandOptions options);
 
-// The per-frame CSV's columns, in order.
+// The per-frame CSV's columns, in order (without the feed-speed columns).
 const std::vector<std::string>& FrameCsvColumns();
+// What --speed appends to them.
+const std::vector<std::string>& FeedSpeedCsvColumns();
 
 // --- inspect -------------------------------------------------------------------------------
 struct InspectCommandOptions {

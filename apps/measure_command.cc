@@ -34,6 +34,7 @@ struct Row {
   int frame = 0;
   double time_s = -1;
   vision::StrandMeasurement m;
+  vision::FeedSpeedSample speed;
 };
 
 // "<video file name>_<frame>.png" or "<image stem>.png"; a suffix keeps names of this run unique.
@@ -60,6 +61,36 @@ std::string WidthSummary(const std::vector<double>& widths_px,
   return out;
 }
 
+// The feed-speed columns of one row: mm/s, its σ (shift and scale), and the reason when empty.
+std::vector<std::string> SpeedFields(const vision::FeedSpeedSample& v,
+                                     const calib::ScaleCalibration& conv) {
+  if (!v.valid) return {"", "", v.reason};
+  const double mm_per_px = conv.scale_um_per_px * 1e-3;
+  const double speed = v.SpeedPxPerS() * mm_per_px;
+  const double sigma = std::hypot(v.SigmaPxPerS() * mm_per_px,
+                                  speed * conv.scale_sigma_um_per_px / conv.scale_um_per_px);
+  return {CsvNumber(speed, 5), CsvNumber(sigma, 5), ""};
+}
+
+// "; feed speed 0.001 ± 0.016 mm/s per frame pair (mean ± …, 95 %), N of M pairs".
+std::string SpeedSummary(const std::vector<Row>& rows, const calib::ScaleCalibration& conv) {
+  std::vector<double> speeds;
+  int pairs = 0;
+  for (const Row& r : rows) {
+    if (r.speed.reason == "first_frame" || r.speed.reason == "no_time") continue;
+    ++pairs;
+    if (r.speed.valid) speeds.push_back(r.speed.SpeedPxPerS() * conv.scale_um_per_px * 1e-3);
+  }
+  if (speeds.empty())
+    return pairs ? fmt::format("; feed speed in none of {} frame pairs", pairs) : "";
+  const pipeline::SampleStats st = pipeline::RobustStats(speeds);
+  return fmt::format(
+      "; feed speed {:.4f} ± {:.4f} mm/s per frame pair (mean ± {:.4f} mm/s, 95 %), {} of {} "
+      "pairs{}",
+      st.mean, st.std, st.ci95_half_width, speeds.size(), pairs,
+      st.n_rejected ? fmt::format(", {} left out as outliers", st.n_rejected) : "");
+}
+
 bool WritesToStdout(const MeasureCommandOptions& o) {
   return o.out_frames.empty() || o.out_frames == "-";
 }
@@ -68,6 +99,12 @@ bool WritesToStdout(const MeasureCommandOptions& o) {
 
 const std::vector<std::string>& FrameCsvColumns() { return pipeline::FrameColumns(); }
 
+const std::vector<std::string>& FeedSpeedCsvColumns() {
+  static const std::vector<std::string> kColumns = {"filament_speed_mm_s",
+                                                    "filament_speed_sigma_mm_s", "speed_reason"};
+  return kColumns;
+}
+
 bool MeasureCommandOptions::Validate(std::string* why) const {
   if (inputs.empty())
     *why = "no input given";
@@ -75,6 +112,12 @@ bool MeasureCommandOptions::Validate(std::string* why) const {
     *why = fmt::format("--scale-um-per-px {}: must be a positive number", *scale_um_per_px);
   else if (overlay_every < 0)
     *why = "--overlay-every must not be negative";
+  else if (feed_speed && strand.target != vision::MeasureTarget::kFilament)
+    *why = "--speed measures a moving filament: add --target filament";
+  else if (feed_speed && !scale_um_per_px && !calibration)
+    *why = "--speed needs a pixel scale to give mm/s: --scale-um-per-px or --calib";
+  else if (feed_speed && !feed.Validate(why))
+    return false;
   else if (!strand.Validate(why))
     return false;
   else
@@ -144,7 +187,10 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
         o.calibration->method, o.calibration->scale_um_per_px, o.calibration->scale_sigma_um_per_px,
         o.calibration->edge_bias_px, o.calibration->edge_bias_sigma_px);
   }
-  table << CsvLine(FrameCsvColumns()) << "\n";
+  std::vector<std::string> columns = FrameCsvColumns();
+  if (o.feed_speed)
+    columns.insert(columns.end(), FeedSpeedCsvColumns().begin(), FeedSpeedCsvColumns().end());
+  table << CsvLine(columns) << "\n";
 
   for (const std::string& input : o.inputs) {
     std::unique_ptr<vision::FrameSource> source;
@@ -161,13 +207,16 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
     std::vector<Row> rows;
     std::vector<std::pair<size_t, cv::Mat>> keep;  // frames to draw overlays of, by row
     const auto ts = std::chrono::steady_clock::now();
+    vision::FeedSpeedTracker speed(o.feed);  // starts afresh with every input
     try {
       vision::MeasureFrames(
           *source, o.strand, [&](vision::InputFrame& f, vision::StrandMeasurement& m) {
             if (!o.overlay_dir.empty() && !f.image.empty() && f.index % every == 0) {
               keep.emplace_back(rows.size(), f.image);
             }
-            rows.push_back({f.source, f.index, f.time_s, std::move(m)});
+            vision::FeedSpeedSample v;
+            if (o.feed_speed) v = speed.Next(f.image, f.time_s, m);
+            rows.push_back({f.source, f.index, f.time_s, std::move(m), std::move(v)});
           });
     } catch (const std::exception& e) {
       // One input that cannot be measured (its frames smaller than the ROI, a library error) is
@@ -190,7 +239,13 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
     std::vector<double> widths_px;
     for (const Row& r : rows) {
       if (r.m.valid()) widths_px.push_back(r.m.width_px);
-      table << CsvLine(pipeline::FrameFields(r.source, r.frame, r.time_s, r.m, conv)) << "\n";
+      std::vector<std::string> fields =
+          pipeline::FrameFields(r.source, r.frame, r.time_s, r.m, conv);
+      if (o.feed_speed) {
+        const auto sf = SpeedFields(r.speed, *conv);
+        fields.insert(fields.end(), sf.begin(), sf.end());
+      }
+      table << CsvLine(fields) << "\n";
     }
     const int valid = static_cast<int>(widths_px.size());
     table.flush();
@@ -213,7 +268,26 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
     summary.frames += static_cast<int>(rows.size());
     summary.valid_frames += valid;
     spdlog::info("{}: {} of {} frames valid ({:.0f} frames/s){}", input, valid, rows.size(),
-                 rows.size() / std::max(secs, 1e-9), WidthSummary(widths_px, conv));
+                 rows.size() / std::max(secs, 1e-9),
+                 WidthSummary(widths_px, conv) + (o.feed_speed ? SpeedSummary(rows, *conv) : ""));
+    if (o.feed_speed) {  // why pairs have no speed, once per reason
+      std::map<std::string, std::pair<int, std::string>> reasons;
+      for (const Row& r : rows) {
+        if (r.speed.valid || r.speed.reason == "first_frame") continue;
+        auto& [count, detail] = reasons[r.speed.reason];
+        if (count++ > 0) continue;
+        detail = r.speed.detail;
+        if (r.speed.reason == "too_fast") {
+          detail +=
+              fmt::format(" (faster than {:.2f} mm/s)",
+                          r.speed.search_limit_px * conv->scale_um_per_px * 1e-3 / r.speed.dt_s);
+        }
+      }
+      for (const auto& [reason, info] : reasons) {
+        spdlog::warn("{}: {} frame pair(s) without a feed speed: {} (first: {})", input, info.first,
+                     reason, info.second);
+      }
+    }
     if (valid < static_cast<int>(rows.size())) {
       // Say why, once per reason, so a user sees the cause without opening the CSV.
       std::map<std::string, std::pair<int, std::string>> reasons;  // count, first detail
@@ -279,6 +353,13 @@ int RunMeasure(int argc, char** argv) {
   app.add_option("--min-contrast", min_contrast_levels,
                  "Minimum edge contrast in 8-bit grey levels (default 15)");
   app.add_flag("--no-outlier-flags", no_outliers, "Do not mark width outliers between frames");
+  app.add_flag("--speed", o.feed_speed,
+               "With --target filament: feed speed from the surface texture between consecutive "
+               "video frames (columns filament_speed_mm_s, filament_speed_sigma_mm_s, "
+               "speed_reason; needs a scale)");
+  app.add_option("--speed-max-shift-px", o.feed.max_shift_px,
+                 "Largest movement per frame searched for --speed")
+      ->capture_default_str();
   bool no_shading = false;
   app.add_flag("--no-shading", no_shading,
                "Fit every edge as a plain blurred step (no shading term for front-lit strands)");
@@ -291,6 +372,7 @@ int RunMeasure(int argc, char** argv) {
       "  clogscope measure a.png b.png --roi 400,150,480,400 --polarity dark --out-frames f.csv\n"
       "  clogscope measure feed.avi --target filament --out-frames filament.csv\n"
       "  clogscope measure feed.avi --target filament > filament.csv\n"
+      "  clogscope measure feed.avi --target filament --speed --scale-um-per-px 20.6 > feed.csv\n"
       "Exit status: 0 all inputs read, 2 some inputs unreadable, 1 nothing measured.");
   if (!ParseCommandLine(app, argc, argv)) return 0;  // --help printed
   if (!exp.manifest.empty()) {

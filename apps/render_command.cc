@@ -154,6 +154,13 @@ int RunRender(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--clear", s.clear_strand, "A clear strand with two bright internal lines");
   app.add_option("--vignetting", s.vignetting, "Relative darkening at the corners");
+  app.add_option(
+         "--surface-texture", s.surface_texture_amplitude,
+         "Texture on the strand's surface along its axis, ± grey levels (a filament's marks)")
+      ->capture_default_str();
+  app.add_option("--feed-speed-mm-s", s.feed_speed_mm_s,
+                 "The surface texture travels down the axis at this speed (frame i at i / fps)")
+      ->capture_default_str();
   std::string lag_form = "moves";
   app.add_option("--lag-commanded", o.lag_commanded,
                  "Flow profile CSV (time_s, flow_mm3_s): the width follows its first-order lag");
@@ -170,6 +177,8 @@ int RunRender(int argc, char** argv) {
       "  clogscope render --out frames/ --frames 10\n"
       "  clogscope render --out step.mp4 --frames 250 --strand-width-um 390.1 --width-jitter-um 2\n"
       "  clogscope render --out tilted/ --tilt-deg 15 --silhouette --highlight --gradient 0.3\n"
+      "  clogscope render --out feed.avi --no-nozzle --scale-um-per-px 20 --strand-width-um 1750 "
+      "--tip-y-px 0 --surface-texture 8 --feed-speed-mm-s 3 --fps 30 --frames 60\n"
       "  clogscope render --out lag.avi --frames 200 --lag-commanded profile.csv --lag-k-s 0.1\n"
       "  clogscope render --target pin --strand-width-um 300 --edge-bias-px 0.4 --out pin300/\n"
       "  clogscope render --target micrometer --pitch-um 100 --tilt-deg 2 --silhouette --out "

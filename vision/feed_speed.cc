@@ -219,4 +219,51 @@ AxisShift EstimateFeedShift(const cv::Mat& grey_a, const cv::Mat& grey_b,
                            SampleAxisProfile(grey_b, geometry, o), o);
 }
 
+FeedSpeedTracker::FeedSpeedTracker(const FeedSpeedOptions& options) : options_(options) {
+  std::string why;
+  if (!options_.Validate(&why)) throw std::invalid_argument("feed speed: " + why);
+}
+
+FeedSpeedSample FeedSpeedTracker::Next(const cv::Mat& frame, double time_s,
+                                       const StrandMeasurement& m) {
+  FeedSpeedSample out;
+  cv::Mat grey;
+  if (!frame.empty()) {
+    if (frame.channels() == 1) {
+      grey = frame.clone();
+    } else {
+      cv::cvtColor(frame, grey, frame.channels() == 4 ? cv::COLOR_BGRA2GRAY : cv::COLOR_BGR2GRAY);
+    }
+  }
+  if (time_s < 0) {
+    out.reason = "no_time";
+    out.detail = "still images have no frame times";
+  } else if (previous_.empty() || previous_t_ < 0) {
+    out.reason = "first_frame";
+    out.detail = "no frame before it";
+  } else if (grey.empty() || grey.size() != previous_.size()) {
+    out.reason = "no_strand";
+    out.detail = "the frame could not be read";
+  } else if (!(time_s > previous_t_)) {
+    out.reason = "bad_time";
+    out.detail = fmt::format("timestamp {:g} s does not follow {:g} s", time_s, previous_t_);
+  } else if (!previous_m_.valid()) {
+    out.reason = "no_strand";
+    out.detail = "no filament measured in the frame before";
+  } else {
+    const AxisShift shift = EstimateFeedShift(previous_, grey, previous_m_, options_);
+    out.dt_s = time_s - previous_t_;
+    out.search_limit_px = shift.search_limit_px;
+    out.valid = shift.valid();
+    out.reason = out.valid ? "" : FeedShiftStatusName(shift.status);
+    out.detail = shift.detail;
+    out.shift_px = shift.shift_px;
+    out.sigma_px = shift.sigma_px;
+  }
+  previous_ = grey;
+  previous_m_ = m;
+  previous_t_ = time_s;
+  return out;
+}
+
 }  // namespace clogscope::vision

@@ -62,4 +62,32 @@ AxisShift EstimateAxisShift(const AxisProfile& a, const AxisProfile& b,
 AxisShift EstimateFeedShift(const cv::Mat& grey_a, const cv::Mat& grey_b,
                             const StrandMeasurement& geometry, const FeedSpeedOptions& options);
 
+// One frame's feed speed in px per second, against the frame before it.
+struct FeedSpeedSample {
+  bool valid = false;
+  std::string
+      reason;  // when not valid: first_frame, no_time, bad_time, no_strand, no_texture, too_fast
+  std::string detail;
+  double shift_px = 0, sigma_px = 0;
+  double dt_s = 0;  // between the two frames' own timestamps
+  int search_limit_px = 0;
+  double SpeedPxPerS() const { return shift_px / dt_s; }
+  double SigmaPxPerS() const { return sigma_px / dt_s; }
+};
+
+// Frame by frame along a video: keeps the previous frame and its measurement (whose geometry
+// samples both frames). Frames of any supported type; colour is measured as grey.
+class FeedSpeedTracker {
+ public:
+  explicit FeedSpeedTracker(const FeedSpeedOptions& options);
+  // time_s: the frame's own timestamp (< 0: none, as for still images).
+  FeedSpeedSample Next(const cv::Mat& frame, double time_s, const StrandMeasurement& m);
+
+ private:
+  FeedSpeedOptions options_;
+  cv::Mat previous_;
+  StrandMeasurement previous_m_;
+  double previous_t_ = -1;
+};
+
 }  // namespace clogscope::vision

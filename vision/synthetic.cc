@@ -104,10 +104,10 @@ bool SceneParams::Validate(std::string* why) const {
     return fail("surface texture must be ≥ 0, feed speed a number, frame rate positive");
   for (double w : frame_width_um) {
     if (!(w > 0) || !std::isfinite(w)) return fail("frame_width_um: every width must be positive");
-    if (target == Target::kStrand && nozzle_tip_width_um <= w)
+    if (target == Target::kStrand && nozzle && nozzle_tip_width_um <= w)
       return fail("nozzle_tip_width_um must exceed every scheduled width");
   }
-  if (target == Target::kStrand && nozzle_tip_width_um <= strand_width_um)
+  if (target == Target::kStrand && nozzle && nozzle_tip_width_um <= strand_width_um)
     return fail("nozzle_tip_width_um must exceed strand_width_um");
   if (!(nozzle_cone_half_angle_deg > 0 && nozzle_cone_half_angle_deg < 85))
     return fail("nozzle_cone_half_angle_deg must be in (0, 85)");

@@ -92,6 +92,55 @@ TEST(MeasureCommandTest, WithoutOutFramesTheTableGoesToStandardOutput) {
   EXPECT_EQ(ParseCsv(dash.out, "stdout").rows, t.rows);
 }
 
+// A filament fed at 3 mm/s past a 30 frames/s camera (MJPEG): every pair after the first has a
+// speed, their mean within 1 % of the truth; a featureless filament gets no number, a reason.
+TEST(MeasureCommandTest, FeedSpeedOfARenderedFilament) {
+  const fs::path d = FreshDir("speed");
+  const std::string scene =
+      "--no-nozzle --scale-um-per-px 20 --strand-width-um 1750 --size 640x480 --tip-x-px 320 "
+      "--tip-y-px 0 --fps 30 --frames 20 --feed-speed-mm-s 3";
+  for (const char* texture : {"8", "0"}) {
+    const std::string video = (d / (std::string("feed") + texture + ".avi")).string();
+    RunResult r =
+        RunCli("render --out " + video + " --surface-texture " + texture + " " + scene, d);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    r = RunCli("measure " + video + " --target filament --speed --scale-um-per-px 20", d);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const CsvTable t = ParseCsv(r.out, "stdout");
+    ASSERT_EQ(t.rows.size(), 20u);
+    const int c_speed = t.Column("filament_speed_mm_s"), c_reason = t.Column("speed_reason");
+    ASSERT_GE(c_speed, 0);
+    EXPECT_EQ(t.rows[0][c_reason], "first_frame");
+    double sum = 0;
+    int n = 0;
+    for (size_t i = 1; i < t.rows.size(); ++i) {
+      if (t.rows[i][c_speed].empty()) {
+        EXPECT_FALSE(t.rows[i][c_reason].empty());
+        continue;
+      }
+      sum += std::stod(t.rows[i][c_speed]);
+      ++n;
+    }
+    if (std::string(texture) == "8") {
+      EXPECT_EQ(n, 19);
+      EXPECT_NEAR(sum / n, 3.0, 0.03);
+      EXPECT_NE(r.err.find("19 of 19 pairs"), std::string::npos) << r.err;
+    } else {
+      EXPECT_EQ(n, 0);
+      EXPECT_EQ(t.rows[5][c_reason], "no_texture");
+      EXPECT_NE(r.err.find("no_texture"), std::string::npos) << r.err;
+    }
+  }
+  // --speed needs the filament target and a scale.
+  RunResult r =
+      RunCli("measure " + (d / "feed8.avi").string() + " --speed --scale-um-per-px 20", d);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--target filament"), std::string::npos) << r.err;
+  r = RunCli("measure " + (d / "feed8.avi").string() + " --target filament --speed", d);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--scale-um-per-px or --calib"), std::string::npos) << r.err;
+}
+
 TEST(MeasureCommandTest, BadInputsGiveOneLineErrorsAndExitCodes) {
   const fs::path d = FreshDir("bad");
   const std::string out = " --out-frames " + (d / "f.csv").string();
