@@ -1,5 +1,5 @@
 // clogscope_bench: the speed and accuracy figures quoted in issue closing notes.
-//   clogscope_bench [measure|accuracy|video|experiment|lag|all]   (default all)
+//   clogscope_bench [measure|accuracy|video|experiment|lag|speed|all]   (default all)
 // Prints Markdown tables. Timings are wall-clock on this machine; run on an idle machine.
 #include <fmt/format.h>
 
@@ -19,6 +19,7 @@
 #include "model/lag_fit.h"
 #include "pipeline/experiment.h"
 #include "vision/batch.h"
+#include "vision/feed_speed.h"
 #include "vision/frame_source.h"
 #include "vision/strand_measure.h"
 #include "vision/synthetic.h"
@@ -409,13 +410,62 @@ void BenchLag() {
   }
 }
 
+// Filament feed speed (640x480, 20 µm/px, 30 frames/s, surface texture ±8 grey levels under noise
+// σ 3): the error of the mean speed over 60 frame pairs, the per-pair spread, and what the speed
+// adds per frame on one core (FeedSpeedTracker::Next after the width measurement).
+void BenchFeedSpeed() {
+  cv::setNumThreads(1);
+  fmt::print(
+      "\n## Filament feed speed (640x480, 20 µm/px, 30 frames/s, 60 pairs, one core)\n\n"
+      "| speed mm/s | tilt ° | mean mm/s | error | per-pair σ mm/s | pairs with a speed | ms per "
+      "frame |\n|---|---|---|---|---|---|---|\n");
+  for (auto [v, tilt] :
+       std::vector<std::pair<double, double>>{{0, 0}, {0.5, 0}, {2, 0}, {5, 0}, {15, 0}, {2, 7}}) {
+    SceneParams p;
+    p.width_px = 640;
+    p.height_px = 480;
+    p.scale_um_per_px = 20;
+    p.strand_width_um = 1750;
+    p.nozzle = false;
+    p.tip_x_px = 320;
+    p.tip_y_px = 0;
+    p.tilt_deg = tilt;
+    p.surface_texture_amplitude = 8;
+    p.feed_speed_mm_s = v;
+    p.frame_rate_hz = 30;
+    StrandMeasureOptions o;
+    o.target = clogscope::vision::MeasureTarget::kFilament;
+    StrandTracker tracker(o);
+    clogscope::vision::FeedSpeedTracker speed(clogscope::vision::FeedSpeedOptions{});
+    std::vector<double> speeds;
+    double seconds = 0;
+    for (int i = 0; i <= 60; ++i) {
+      FrameTruth t;
+      const cv::Mat f = RenderFrame(p, i, &t);
+      const auto m = tracker.Measure(f);
+      const auto t0 = Clock::now();
+      const auto s = speed.Next(f, t.time_s, m);
+      seconds += Seconds(t0, Clock::now());
+      if (s.valid) speeds.push_back(s.SpeedPxPerS() * p.scale_um_per_px * 1e-3);
+    }
+    double mean = 0, var = 0;
+    for (double x : speeds) mean += x / speeds.size();
+    for (double x : speeds) var += (x - mean) * (x - mean) / (speeds.size() - 1);
+    fmt::print(
+        "| {:g} | {:g} | {:.4f} | {} | {:.4f} | {} of 60 | {:.3f} |\n", v, tilt, mean,
+        v > 0 ? fmt::format("{:+.2f} %", 100 * (mean - v) / v) : fmt::format("{:+.4f} mm/s", mean),
+        std::sqrt(var), speeds.size(), 1e3 * seconds / 61);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   const std::string what = argc > 1 ? argv[1] : "all";
   if (what != "all" && what != "measure" && what != "accuracy" && what != "video" &&
-      what != "experiment" && what != "lag") {
-    std::fprintf(stderr, "usage: clogscope_bench [measure|accuracy|video|experiment|lag|all]\n");
+      what != "experiment" && what != "lag" && what != "speed") {
+    std::fprintf(stderr,
+                 "usage: clogscope_bench [measure|accuracy|video|experiment|lag|speed|all]\n");
     return 2;
   }
   fmt::print("# clogscope benchmarks ({} hardware threads)\n", std::thread::hardware_concurrency());
@@ -424,5 +474,6 @@ int main(int argc, char** argv) {
   if (what == "all" || what == "video") BenchVideo();
   if (what == "all" || what == "experiment") BenchExperiment();
   if (what == "all" || what == "lag") BenchLag();
+  if (what == "all" || what == "speed") BenchFeedSpeed();
   return 0;
 }

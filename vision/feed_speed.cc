@@ -10,28 +10,27 @@
 namespace clogscope::vision {
 namespace {
 
-template <typename T>
-double Bilinear(const cv::Mat& img, double x, double y) {
-  const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
-  const double fx = x - x0, fy = y - y0;
-  const T* r0 = img.ptr<T>(y0);
-  const T* r1 = img.ptr<T>(y0 + 1);
-  return (1 - fy) * ((1 - fx) * r0[x0] + fx * r0[x0 + 1]) +
-         fy * ((1 - fx) * r1[x0] + fx * r1[x0 + 1]);
+// Running mean over ±r with the count of samples inside, so the ends are not pulled toward zero.
+std::vector<double> BoxMean(const std::vector<double>& v, int r) {
+  const int n = static_cast<int>(v.size());
+  std::vector<double> prefix(n + 1, 0.0), out(n);
+  for (int i = 0; i < n; ++i) prefix[i + 1] = prefix[i] + v[i];
+  for (int i = 0; i < n; ++i) {
+    const int lo = std::max(0, i - r), hi = std::min(n, i + r + 1);
+    out[i] = (prefix[hi] - prefix[lo]) / (hi - lo);
+  }
+  return out;
 }
 
-// Removes what varies slower than sigma (illumination along the axis): the value minus its
-// Gaussian-weighted local mean, normalised near the ends so they are not pulled toward zero.
+// Removes what varies slower than sigma (illumination along the axis): the value minus a local
+// mean, three box passes whose combined spread is sigma (close to a Gaussian, and O(n)).
 std::vector<double> HighPass(const std::vector<double>& v, double sigma) {
-  const int n = static_cast<int>(v.size());
-  const int size = 2 * static_cast<int>(std::ceil(3 * sigma)) + 1;
-  cv::Mat values(1, n, CV_64F, const_cast<double*>(v.data())), ones(1, n, CV_64F, cv::Scalar(1));
-  cv::Mat mean, weight;
-  cv::GaussianBlur(values, mean, cv::Size(size, 1), sigma, 0, cv::BORDER_CONSTANT);
-  cv::GaussianBlur(ones, weight, cv::Size(size, 1), sigma, 0, cv::BORDER_CONSTANT);
-  std::vector<double> out(n);
-  for (int i = 0; i < n; ++i) out[i] = v[i] - mean.at<double>(i) / weight.at<double>(i);
-  return out;
+  // Three boxes of half-width r have variance 3·((2r+1)² − 1)/12 = r(r+1).
+  const int r =
+      std::max(1, static_cast<int>(std::lround(0.5 * (std::sqrt(1 + 4 * sigma * sigma) - 1))));
+  std::vector<double> mean = BoxMean(BoxMean(BoxMean(v, r), r), r);
+  for (size_t i = 0; i < v.size(); ++i) mean[i] = v[i] - mean[i];
+  return mean;
 }
 
 // Catmull–Rom interpolation and its derivative at x (1 ≤ x < n − 2).
@@ -93,39 +92,75 @@ AxisProfile SampleAxisProfile(const cv::Mat& grey, const StrandMeasurement& m,
   const double dx = m.axis_dx, dy = m.axis_dy;
   const double half = 0.5 * (m.right_u0_px - m.left_u0_px) * o.inner_fraction;
   const int lines = std::max(2, static_cast<int>(std::floor(2 * half)) + 1);
-  std::vector<double> even, odd;
-  const bool wide = grey.depth() == CV_16U;
+  auto point = [&](double s, int j, double* x, double* y) {
+    const double u =
+        0.5 * (m.left_u0_px + m.right_u0_px) + m.edge_slope * s - half + 2 * half * j / (lines - 1);
+    *x = m.tip_x_px + s * dx + u * dy;
+    *y = m.tip_y_px + s * dy - u * dx;
+  };
+  auto inside = [&](double x, double y) {
+    return x >= 0 && y >= 0 && x < grey.cols - 1 && y < grey.rows - 1;
+  };
   // The whole visible stretch, from the measurement origin (the tip, or the stretch's top) until
-  // the axis leaves the frame: the longer the profile, the finer the shift.
+  // the axis leaves the frame: the longer the profile, the finer the shift. A cross line is inside
+  // when both its ends are.
   const double s_end = m.band_end_px + std::hypot(grey.cols, grey.rows);
-  for (int s = std::max(0, static_cast<int>(std::ceil(m.band_start_px))); s <= s_end; ++s) {
-    const double uc = 0.5 * (m.left_u0_px + m.right_u0_px) + m.edge_slope * s;
-    double sum[2] = {0, 0};
-    int count[2] = {0, 0};
-    bool inside = true;
-    for (int j = 0; j < lines && inside; ++j) {
-      const double u = uc - half + 2 * half * j / (lines - 1);
-      const double x = m.tip_x_px + s * dx + u * dy, y = m.tip_y_px + s * dy - u * dx;
-      inside = x >= 0 && y >= 0 && x < grey.cols - 1 && y < grey.rows - 1;
-      if (!inside) break;
-      sum[j % 2] += wide ? Bilinear<uint16_t>(grey, x, y) : Bilinear<uint8_t>(grey, x, y);
-      ++count[j % 2];
-    }
-    if (!inside) {  // the band leaves the frame here: keep the stretch sampled so far
-      if (!p.values.empty()) break;
+  int s0 = std::max(0, static_cast<int>(std::ceil(m.band_start_px))), s1 = s0 - 1;
+  double xmin = grey.cols, xmax = 0, ymin = grey.rows, ymax = 0;
+  for (int s = s0; s <= s_end; ++s) {
+    double xa, ya, xb, yb;
+    point(s, 0, &xa, &ya);
+    point(s, lines - 1, &xb, &yb);
+    const bool in = inside(xa, ya) && inside(xb, yb);
+    if (!in && s1 >= s0) break;  // the stretch ends here
+    if (!in) {
+      s0 = s + 1;
       continue;
     }
-    if (p.values.empty()) p.start_s_px = s;
-    p.values.push_back((sum[0] + sum[1]) / (count[0] + count[1]));
-    even.push_back(sum[0] / count[0]);
-    odd.push_back(sum[1] / count[1]);
+    s1 = s;
+    xmin = std::min({xmin, xa, xb});
+    xmax = std::max({xmax, xa, xb});
+    ymin = std::min({ymin, ya, yb});
+    ymax = std::max({ymax, ya, yb});
   }
-  if (p.values.size() < 32) return {};
+  const int n = s1 - s0 + 1;
+  if (n < 32) return p;
+  // Bilinear samples of the float copy of the region the lines cover (remap on 8-bit output would
+  // round each sample to a whole grey level).
+  const cv::Rect box(static_cast<int>(xmin), static_cast<int>(ymin),
+                     static_cast<int>(xmax) - static_cast<int>(xmin) + 2,
+                     static_cast<int>(ymax) - static_cast<int>(ymin) + 2);
+  cv::Mat region;
+  grey(box & cv::Rect(0, 0, grey.cols, grey.rows)).convertTo(region, CV_32F);
+  cv::Mat map_x(lines, n, CV_32F), map_y(lines, n, CV_32F), samples;
+  for (int j = 0; j < lines; ++j) {
+    float* mx = map_x.ptr<float>(j);
+    float* my = map_y.ptr<float>(j);
+    for (int i = 0; i < n; ++i) {
+      double x, y;
+      point(s0 + i, j, &x, &y);
+      mx[i] = static_cast<float>(x - box.x);
+      my[i] = static_cast<float>(y - box.y);
+    }
+  }
+  cv::remap(region, samples, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+  std::vector<double> even(n, 0.0), odd(n, 0.0);
+  for (int j = 0; j < lines; ++j) {
+    const float* row = samples.ptr<float>(j);
+    std::vector<double>& acc = j % 2 ? odd : even;
+    for (int i = 0; i < n; ++i) acc[i] += row[i];
+  }
+  const int n_even = (lines + 1) / 2, n_odd = lines / 2;
+  p.start_s_px = s0;
+  p.values.resize(n);
+  std::vector<double> diff(n);
+  for (int i = 0; i < n; ++i) {
+    p.values[i] = (even[i] + odd[i]) / lines;
+    diff[i] = even[i] / n_even - odd[i] / n_odd;
+  }
   // Interleaved halves of the width see the same surface and independent noise: the σ of one
-  // value is half the σ of their difference (what the surface does across the width counts as
-  // noise, which errs on the safe side).
-  std::vector<double> diff(even.size());
-  for (size_t i = 0; i < diff.size(); ++i) diff[i] = even[i] - odd[i];
+  // value is about half the σ of their difference (what the surface does across the width counts
+  // as noise, which errs on the safe side).
   p.noise = 0.5 * StdDev(HighPass(diff, o.highpass_sigma_px));
   return p;
 }
@@ -224,6 +259,31 @@ FeedSpeedTracker::FeedSpeedTracker(const FeedSpeedOptions& options) : options_(o
   if (!options_.Validate(&why)) throw std::invalid_argument("feed speed: " + why);
 }
 
+namespace {
+
+// A point of the centre line at s, in image coordinates.
+cv::Point2d CentreAt(const StrandMeasurement& m, double s) {
+  const double u = 0.5 * (m.left_u0_px + m.right_u0_px) + m.edge_slope * s;
+  return {m.tip_x_px + s * m.axis_dx + u * m.axis_dy, m.tip_y_px + s * m.axis_dy - u * m.axis_dx};
+}
+
+// Whether `m`'s centre line and width still match `ref` where ref's stretch begins and ends.
+bool SameGeometry(const StrandMeasurement& ref, const StrandMeasurement& m, double stretch_px) {
+  if (!ref.has_geometry || !m.has_geometry) return false;
+  const double width_ref = ref.right_u0_px - ref.left_u0_px, width_m = m.right_u0_px - m.left_u0_px;
+  if (std::abs(width_ref - width_m) > 1.0) return false;
+  // m's centre line through two of its points; the distance of ref's centre from it.
+  const cv::Point2d a = CentreAt(m, 0), b = CentreAt(m, 100);
+  const cv::Point2d d = (b - a) / cv::norm(b - a);
+  for (double s : {ref.band_start_px, ref.band_start_px + stretch_px}) {
+    const cv::Point2d q = CentreAt(ref, s) - a;
+    if (std::abs(q.x * d.y - q.y * d.x) > 0.3) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 FeedSpeedSample FeedSpeedTracker::Next(const cv::Mat& frame, double time_s,
                                        const StrandMeasurement& m) {
   FeedSpeedSample out;
@@ -235,10 +295,12 @@ FeedSpeedSample FeedSpeedTracker::Next(const cv::Mat& frame, double time_s,
       cv::cvtColor(frame, grey, frame.channels() == 4 ? cv::COLOR_BGRA2GRAY : cv::COLOR_BGR2GRAY);
     }
   }
+  const bool have_previous = !previous_.empty() && previous_t_ >= 0;
+  bool sampled = false;
   if (time_s < 0) {
     out.reason = "no_time";
     out.detail = "still images have no frame times";
-  } else if (previous_.empty() || previous_t_ < 0) {
+  } else if (!have_previous) {
     out.reason = "first_frame";
     out.detail = "no frame before it";
   } else if (grey.empty() || grey.size() != previous_.size()) {
@@ -251,15 +313,29 @@ FeedSpeedSample FeedSpeedTracker::Next(const cv::Mat& frame, double time_s,
     out.reason = "no_strand";
     out.detail = "no filament measured in the frame before";
   } else {
-    const AxisShift shift = EstimateFeedShift(previous_, grey, previous_m_, options_);
+    sampled = true;
+    const double stretch = previous_profile_.values.size();
+    if (!SameGeometry(reference_, previous_m_, stretch) || previous_profile_.values.empty()) {
+      // The filament moved (or this is the first pair): a new reference, the previous frame
+      // sampled along it.
+      reference_ = previous_m_;
+      previous_profile_ = SampleAxisProfile(previous_, reference_, options_);
+    }
+    const AxisProfile current = SampleAxisProfile(grey, reference_, options_);
+    const AxisShift shift = current.values.size() == previous_profile_.values.size()
+                                ? EstimateAxisShift(previous_profile_, current, options_)
+                                : AxisShift{};
     out.dt_s = time_s - previous_t_;
     out.search_limit_px = shift.search_limit_px;
     out.valid = shift.valid();
     out.reason = out.valid ? "" : FeedShiftStatusName(shift.status);
-    out.detail = shift.detail;
+    out.detail =
+        shift.detail.empty() ? "the filament's stretch could not be sampled" : shift.detail;
     out.shift_px = shift.shift_px;
     out.sigma_px = shift.sigma_px;
+    previous_profile_ = current;
   }
+  if (!sampled) previous_profile_ = {};  // the next pair samples the frame before it afresh
   previous_ = grey;
   previous_m_ = m;
   previous_t_ = time_s;

@@ -75,8 +75,11 @@ struct FeedSpeedSample {
   double SigmaPxPerS() const { return sigma_px / dt_s; }
 };
 
-// Frame by frame along a video: keeps the previous frame and its measurement (whose geometry
-// samples both frames). Frames of any supported type; colour is measured as grey.
+// Frame by frame along a video. Every frame is sampled once, along a reference geometry (a
+// measurement) that is kept while the filament stays where it was (its centre line within 0.3 px,
+// its width within 1 px), so the two profiles of a pair always share their axis; when it moves,
+// the previous frame is sampled again along the new reference. Frames of any supported type;
+// colour is measured as grey.
 class FeedSpeedTracker {
  public:
   explicit FeedSpeedTracker(const FeedSpeedOptions& options);
@@ -88,6 +91,8 @@ class FeedSpeedTracker {
   cv::Mat previous_;
   StrandMeasurement previous_m_;
   double previous_t_ = -1;
+  StrandMeasurement reference_;   // has_geometry false: none yet
+  AxisProfile previous_profile_;  // the previous frame along reference_
 };
 
 }  // namespace clogscope::vision

@@ -109,5 +109,35 @@ TEST(FeedSpeedTest, BeyondTheSearchRangeIsTooFast) {
   EXPECT_EQ(r.last.status, FeedShiftStatus::kTooFast);
 }
 
+// The tracker along a video with dropped frames: each pair's speed comes from the frames' own
+// timestamps, not a nominal rate; the axis sways by 0.3° per frame, so the reference geometry is
+// renewed along the way.
+TEST(FeedSpeedTest, TrackerUsesTheFramesOwnTimesAndFollowsTheAxis) {
+  SceneParams p = Filament(4.0);
+  p.sway_deg = 0.3;
+  StrandMeasureOptions o;
+  o.target = MeasureTarget::kFilament;
+  StrandTracker tracker(o);
+  FeedSpeedTracker speed(FeedSpeedOptions{});
+  double sum = 0;
+  int valid = 0;
+  for (int i : {0, 1, 3, 4, 7, 8, 9, 12, 13, 15}) {
+    FrameTruth t;
+    const cv::Mat f = RenderFrame(p, i, &t);
+    const FeedSpeedSample v = speed.Next(f, t.time_s, tracker.Measure(f));
+    if (i == 0) EXPECT_EQ(v.reason, "first_frame");
+    if (!v.valid) continue;
+    ++valid;
+    sum += v.SpeedPxPerS() * p.scale_um_per_px * 1e-3;
+  }
+  EXPECT_EQ(valid, 9);
+  EXPECT_NEAR(sum / valid, 4.0, 0.04);
+  // Still images have no times: no speed, a reason.
+  FeedSpeedTracker still(FeedSpeedOptions{});
+  const cv::Mat f = RenderFrame(p, 0, nullptr);
+  EXPECT_EQ(still.Next(f, -1, tracker.Measure(f)).reason, "no_time");
+  EXPECT_EQ(still.Next(f, -1, tracker.Measure(f)).reason, "no_time");
+}
+
 }  // namespace
 }  // namespace clogscope::vision
