@@ -13,6 +13,7 @@
 #include "model/thermal.h"
 #include "pipeline/experiment.h"
 #include "vision/feed_speed.h"
+#include "vision/gear_speed.h"
 #include "vision/scene.h"
 #include "vision/strand_measure.h"
 #include "vision/synthetic.h"
@@ -65,6 +66,9 @@ struct MeasureCommandOptions {
   bool flag_outliers = true;
   bool feed_speed = false;  // filament target: feed speed between consecutive video frames
   vision::FeedSpeedOptions feed;
+  std::optional<cv::Rect> gear_roi;           // with feed_speed: the drive gear's surface speed
+  std::optional<cv::Point2d> gear_centre_px;  // default: the ROI's centre
+  std::optional<double> gear_radius_mm;       // required with gear_roi
   bool Validate(std::string* why) const;
   // The band in px from the µm or px options (throws std::invalid_argument on a conflict).
   void ResolveBand();
@@ -86,8 +90,9 @@ MeasureSummary MeasureInputs(MeasureCommandOptions options);
 
 // The per-frame CSV's columns, in order (without the feed-speed columns).
 const std::vector<std::string>& FrameCsvColumns();
-// What --speed appends to them.
+// What --speed appends to them, and --gear-roi after those.
 const std::vector<std::string>& FeedSpeedCsvColumns();
+const std::vector<std::string>& GearCsvColumns();
 
 // --- inspect -------------------------------------------------------------------------------
 struct InspectCommandOptions {

@@ -9,6 +9,7 @@
 #include <map>
 #include <set>
 #include <stdexcept>
+#include <tuple>
 
 #include "apps/cli_util.h"
 #include "apps/commands.h"
@@ -35,6 +36,7 @@ struct Row {
   double time_s = -1;
   vision::StrandMeasurement m;
   vision::FeedSpeedSample speed;
+  vision::GearSpeedSample gear;
 };
 
 // "<video file name>_<frame>.png" or "<image stem>.png"; a suffix keeps names of this run unique.
@@ -72,6 +74,48 @@ std::vector<std::string> SpeedFields(const vision::FeedSpeedSample& v,
   return {CsvNumber(speed, 5), CsvNumber(sigma, 5), ""};
 }
 
+// The gear's surface speed |ω|·R and the slip 1 − v_filament / v_gear (%), each with its σ; the
+// filament's speed in mm/s comes in as `filament`.
+struct GearAndSlip {
+  std::optional<double> gear_mm_s, gear_sigma_mm_s, slip_pct, slip_sigma_pct;
+};
+GearAndSlip GearAndSlipOf(const Row& r, const calib::ScaleCalibration& conv, double radius_mm) {
+  GearAndSlip g;
+  if (!r.gear.valid) return g;
+  const double vg = std::abs(r.gear.RadPerS()) * radius_mm;
+  g.gear_mm_s = vg;
+  g.gear_sigma_mm_s = r.gear.SigmaRadPerS() * radius_mm;
+  if (!r.speed.valid || !(vg > 1e-9)) return g;
+  const double mm_per_px = conv.scale_um_per_px * 1e-3;
+  const double vf = r.speed.SpeedPxPerS() * mm_per_px, sf = r.speed.SigmaPxPerS() * mm_per_px;
+  g.slip_pct = 100 * (1 - vf / vg);
+  g.slip_sigma_pct = 100 * std::hypot(sf / vg, vf * *g.gear_sigma_mm_s / (vg * vg));
+  return g;
+}
+
+// "; gear 2.00 ± 0.01 mm/s …; slip 10.0 ± 0.5 % per frame pair (mean ± …, 95 %), N of M pairs".
+std::string GearSummary(const std::vector<Row>& rows, const calib::ScaleCalibration& conv,
+                        double radius_mm) {
+  std::vector<double> gear, slip;
+  for (const Row& r : rows) {
+    const GearAndSlip g = GearAndSlipOf(r, conv, radius_mm);
+    if (g.gear_mm_s) gear.push_back(*g.gear_mm_s);
+    if (g.slip_pct) slip.push_back(*g.slip_pct);
+  }
+  std::string out;
+  for (const auto& [name, unit, values] :
+       {std::tuple{"gear surface speed", "mm/s", &gear}, std::tuple{"slip", "%", &slip}}) {
+    if (values->empty()) {
+      out += fmt::format("; {} in no frame pair", name);
+      continue;
+    }
+    const pipeline::SampleStats st = pipeline::RobustStats(*values);
+    out += fmt::format("; {} {:.4f} ± {:.4f} {} per frame pair (mean ± {:.4f}, 95 %), {} pairs",
+                       name, st.mean, st.std, unit, st.ci95_half_width, values->size());
+  }
+  return out;
+}
+
 // "; feed speed 0.001 ± 0.016 mm/s per frame pair (mean ± …, 95 %), N of M pairs".
 std::string SpeedSummary(const std::vector<Row>& rows, const calib::ScaleCalibration& conv) {
   std::vector<double> speeds;
@@ -99,6 +143,12 @@ bool WritesToStdout(const MeasureCommandOptions& o) {
 
 const std::vector<std::string>& FrameCsvColumns() { return pipeline::FrameColumns(); }
 
+const std::vector<std::string>& GearCsvColumns() {
+  static const std::vector<std::string> kColumns = {"gear_speed_mm_s", "gear_speed_sigma_mm_s",
+                                                    "gear_reason", "slip_pct", "slip_sigma_pct"};
+  return kColumns;
+}
+
 const std::vector<std::string>& FeedSpeedCsvColumns() {
   static const std::vector<std::string> kColumns = {"filament_speed_mm_s",
                                                     "filament_speed_sigma_mm_s", "speed_reason"};
@@ -118,6 +168,14 @@ bool MeasureCommandOptions::Validate(std::string* why) const {
     *why = "--speed needs a pixel scale to give mm/s: --scale-um-per-px or --calib";
   else if (feed_speed && !feed.Validate(why))
     return false;
+  else if (gear_roi && !feed_speed)
+    *why = "--gear-roi goes with --speed (the slip compares the two speeds)";
+  else if (gear_roi && !gear_radius_mm)
+    *why = "--gear-roi needs --gear-radius-mm (the gear's radius where it grips the filament)";
+  else if (gear_radius_mm && !gear_roi)
+    *why = "--gear-radius-mm needs --gear-roi (where the gear is in the frame)";
+  else if (gear_radius_mm && !(*gear_radius_mm > 0 && *gear_radius_mm < 1000))
+    *why = fmt::format("--gear-radius-mm {:g}: must be in (0, 1000) mm", *gear_radius_mm);
   else if (!strand.Validate(why))
     return false;
   else
@@ -190,6 +248,15 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
   std::vector<std::string> columns = FrameCsvColumns();
   if (o.feed_speed)
     columns.insert(columns.end(), FeedSpeedCsvColumns().begin(), FeedSpeedCsvColumns().end());
+  if (o.gear_roi) columns.insert(columns.end(), GearCsvColumns().begin(), GearCsvColumns().end());
+  vision::GearSpeedOptions gear_options;
+  if (o.gear_roi) {
+    gear_options.roi = *o.gear_roi;
+    gear_options.centre_px = o.gear_centre_px;
+    gear_options.outer_radius_px = *o.gear_radius_mm * 1e3 / conv->scale_um_per_px;
+    std::string why;
+    if (!gear_options.Validate(&why)) throw std::invalid_argument("--gear-roi: " + why);
+  }
   table << CsvLine(columns) << "\n";
 
   for (const std::string& input : o.inputs) {
@@ -208,6 +275,8 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
     std::vector<std::pair<size_t, cv::Mat>> keep;  // frames to draw overlays of, by row
     const auto ts = std::chrono::steady_clock::now();
     vision::FeedSpeedTracker speed(o.feed);  // starts afresh with every input
+    std::optional<vision::GearSpeedTracker> gear;
+    if (o.gear_roi) gear.emplace(gear_options);
     try {
       vision::MeasureFrames(
           *source, o.strand, [&](vision::InputFrame& f, vision::StrandMeasurement& m) {
@@ -216,7 +285,9 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
             }
             vision::FeedSpeedSample v;
             if (o.feed_speed) v = speed.Next(f.image, f.time_s, m);
-            rows.push_back({f.source, f.index, f.time_s, std::move(m), std::move(v)});
+            vision::GearSpeedSample g;
+            if (gear) g = gear->Next(f.image, f.time_s);
+            rows.push_back({f.source, f.index, f.time_s, std::move(m), std::move(v), std::move(g)});
           });
     } catch (const std::exception& e) {
       // One input that cannot be measured (its frames smaller than the ROI, a library error) is
@@ -245,6 +316,12 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
         const auto sf = SpeedFields(r.speed, *conv);
         fields.insert(fields.end(), sf.begin(), sf.end());
       }
+      if (o.gear_roi) {
+        const GearAndSlip g = GearAndSlipOf(r, *conv, *o.gear_radius_mm);
+        fields.insert(fields.end(), {CsvNumber(g.gear_mm_s, 5), CsvNumber(g.gear_sigma_mm_s, 5),
+                                     r.gear.valid ? "" : r.gear.reason, CsvNumber(g.slip_pct, 3),
+                                     CsvNumber(g.slip_sigma_pct, 3)});
+      }
       table << CsvLine(fields) << "\n";
     }
     const int valid = static_cast<int>(widths_px.size());
@@ -269,7 +346,8 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
     summary.valid_frames += valid;
     spdlog::info("{}: {} of {} frames valid ({:.0f} frames/s){}", input, valid, rows.size(),
                  rows.size() / std::max(secs, 1e-9),
-                 WidthSummary(widths_px, conv) + (o.feed_speed ? SpeedSummary(rows, *conv) : ""));
+                 WidthSummary(widths_px, conv) + (o.feed_speed ? SpeedSummary(rows, *conv) : "") +
+                     (o.gear_roi ? GearSummary(rows, *conv, *o.gear_radius_mm) : ""));
     if (o.feed_speed) {  // why pairs have no speed, once per reason
       std::map<std::string, std::pair<int, std::string>> reasons;
       for (const Row& r : rows) {
@@ -357,6 +435,13 @@ int RunMeasure(int argc, char** argv) {
                "With --target filament: feed speed from the surface texture between consecutive "
                "video frames (columns filament_speed_mm_s, filament_speed_sigma_mm_s, "
                "speed_reason; needs a scale)");
+  std::string gear_roi, gear_centre;
+  app.add_option("--gear-roi", gear_roi,
+                 "With --speed: x,y,w,h around the drive gear: its surface speed and the slip");
+  app.add_option("--gear-centre", gear_centre,
+                 "x,y of the gear's axis (default: the ROI's centre)");
+  app.add_option("--gear-radius-mm", o.gear_radius_mm,
+                 "The gear's radius where it grips the filament (surface speed = ω·R)");
   app.add_option("--speed-max-shift-px", o.feed.max_shift_px,
                  "Largest movement per frame searched for --speed")
       ->capture_default_str();
@@ -373,6 +458,8 @@ int RunMeasure(int argc, char** argv) {
       "  clogscope measure feed.avi --target filament --out-frames filament.csv\n"
       "  clogscope measure feed.avi --target filament > filament.csv\n"
       "  clogscope measure feed.avi --target filament --speed --scale-um-per-px 20.6 > feed.csv\n"
+      "  clogscope measure feed.avi --target filament --speed --scale-um-per-px 20 --gear-roi "
+      "70,134,213,213 --gear-radius-mm 2\n"
       "Exit status: 0 all inputs read, 2 some inputs unreadable, 1 nothing measured.");
   if (!ParseCommandLine(app, argc, argv)) return 0;  // --help printed
   if (!exp.manifest.empty()) {
@@ -386,6 +473,22 @@ int RunMeasure(int argc, char** argv) {
   if (o.inputs.empty())
     throw std::invalid_argument("give inputs (images, directories, videos) or --manifest");
   if (!roi.empty()) o.strand.roi = ParseRoi(roi);
+  if (!gear_roi.empty()) {
+    try {
+      o.gear_roi = ParseRoi(gear_roi);
+    } catch (const std::invalid_argument&) {
+      throw std::invalid_argument("--gear-roi '" + gear_roi + "': expected x,y,w,h");
+    }
+  }
+  if (!gear_centre.empty()) {
+    cv::Rect c;
+    try {  // "x,y": read as a rectangle with a dummy size
+      c = ParseRoi(gear_centre + ",1,1");
+    } catch (const std::invalid_argument&) {
+      throw std::invalid_argument("--gear-centre '" + gear_centre + "': expected x,y");
+    }
+    o.gear_centre_px = cv::Point2d(c.x, c.y);
+  }
   if (!calib_path.empty()) o.calibration = calib::ReadCalibrationFile(calib_path);
   o.strand.polarity = vision::ParsePolarity(polarity);
   o.strand.target = vision::ParseMeasureTarget(target);

@@ -161,6 +161,13 @@ int RunRender(int argc, char** argv) {
   app.add_option("--feed-speed-mm-s", s.feed_speed_mm_s,
                  "The surface texture travels down the axis at this speed (frame i at i / fps)")
       ->capture_default_str();
+  std::string drive_gear;
+  app.add_option("--drive-gear", drive_gear,
+                 "CX,CY,RADIUS_PX: a toothed drive gear beside the strand (behind it)");
+  app.add_option("--gear-teeth", s.gear_teeth, "Teeth of the drive gear")->capture_default_str();
+  app.add_option("--gear-surface-speed-mm-s", s.gear_surface_speed_mm_s,
+                 "Surface speed at the gear's tip radius (+ clockwise)")
+      ->capture_default_str();
   std::string lag_form = "moves";
   app.add_option("--lag-commanded", o.lag_commanded,
                  "Flow profile CSV (time_s, flow_mm3_s): the width follows its first-order lag");
@@ -178,7 +185,8 @@ int RunRender(int argc, char** argv) {
       "  clogscope render --out step.mp4 --frames 250 --strand-width-um 390.1 --width-jitter-um 2\n"
       "  clogscope render --out tilted/ --tilt-deg 15 --silhouette --highlight --gradient 0.3\n"
       "  clogscope render --out feed.avi --no-nozzle --scale-um-per-px 20 --strand-width-um 1750 "
-      "--tip-y-px 0 --surface-texture 8 --feed-speed-mm-s 3 --fps 30 --frames 60\n"
+      "--tip-y-px 0 --surface-texture 8 --feed-speed-mm-s 3 --fps 30 --frames 60 --drive-gear "
+      "176,240,100 --gear-surface-speed-mm-s 3.3\n"
       "  clogscope render --out lag.avi --frames 200 --lag-commanded profile.csv --lag-k-s 0.1\n"
       "  clogscope render --target pin --strand-width-um 300 --edge-bias-px 0.4 --out pin300/\n"
       "  clogscope render --target micrometer --pitch-um 100 --tilt-deg 2 --silhouette --out "
@@ -188,19 +196,32 @@ int RunRender(int argc, char** argv) {
   o.lag_profile_form = model::ParseProfileForm(lag_form);
   s.nozzle = !no_nozzle;
   s.strand = !no_strand;
-  // "B,G,R" gains, each through the shared number parser.
-  const auto tint = [](const std::string& text, const char* option, double* out) {
+  // Three comma-separated numbers ("B,G,R" gains, a gear's "CX,CY,RADIUS_PX"), each through the
+  // shared number parser.
+  const auto three = [](const std::string& text, const char* option, const char* expected,
+                        double* out) {
     std::stringstream ss(text);
     std::string item;
     int c = 0;
     while (std::getline(ss, item, ',')) {
       if (c == 3) break;
-      out[c++] = ParseNumberField(item, option, "gain");
+      out[c++] = ParseNumberField(item, option, "value");
     }
     if (c != 3 || std::getline(ss, item))
-      throw std::invalid_argument(std::string(option) + " '" + text + "': expected B,G,R gains");
+      throw std::invalid_argument(std::string(option) + " '" + text + "': expected " + expected);
+  };
+  const auto tint = [&](const std::string& text, const char* option, double* out) {
+    three(text, option, "B,G,R gains", out);
   };
   if (!strand_tint.empty()) tint(strand_tint, "--strand-tint", s.strand_tint);
+  if (!drive_gear.empty()) {
+    double g[3];
+    three(drive_gear, "--drive-gear", "CX,CY,RADIUS_PX", g);
+    s.drive_gear = true;
+    s.gear_centre_x_px = g[0];
+    s.gear_centre_y_px = g[1];
+    s.gear_radius_px = g[2];
+  }
   if (!background_tint.empty()) tint(background_tint, "--background-tint", s.background_tint);
   if (silhouette) {
     const double bg = s.background_level, st = s.strand_level;

@@ -7,53 +7,9 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
+#include "vision/profile_shift.h"
+
 namespace clogscope::vision {
-namespace {
-
-// Running mean over ±r with the count of samples inside, so the ends are not pulled toward zero.
-std::vector<double> BoxMean(const std::vector<double>& v, int r) {
-  const int n = static_cast<int>(v.size());
-  std::vector<double> prefix(n + 1, 0.0), out(n);
-  for (int i = 0; i < n; ++i) prefix[i + 1] = prefix[i] + v[i];
-  for (int i = 0; i < n; ++i) {
-    const int lo = std::max(0, i - r), hi = std::min(n, i + r + 1);
-    out[i] = (prefix[hi] - prefix[lo]) / (hi - lo);
-  }
-  return out;
-}
-
-// Removes what varies slower than sigma (illumination along the axis): the value minus a local
-// mean, three box passes whose combined spread is sigma (close to a Gaussian, and O(n)).
-std::vector<double> HighPass(const std::vector<double>& v, double sigma) {
-  // Three boxes of half-width r have variance 3·((2r+1)² − 1)/12 = r(r+1).
-  const int r =
-      std::max(1, static_cast<int>(std::lround(0.5 * (std::sqrt(1 + 4 * sigma * sigma) - 1))));
-  std::vector<double> mean = BoxMean(BoxMean(BoxMean(v, r), r), r);
-  for (size_t i = 0; i < v.size(); ++i) mean[i] = v[i] - mean[i];
-  return mean;
-}
-
-// Catmull–Rom interpolation and its derivative at x (1 ≤ x < n − 2).
-void Cubic(const std::vector<double>& v, double x, double* value, double* slope) {
-  const int i = static_cast<int>(std::floor(x));
-  const double t = x - i;
-  const double p0 = v[i - 1], p1 = v[i], p2 = v[i + 1], p3 = v[i + 2];
-  const double a = -0.5 * p0 + 1.5 * p1 - 1.5 * p2 + 0.5 * p3;
-  const double b = p0 - 2.5 * p1 + 2 * p2 - 0.5 * p3;
-  const double c = -0.5 * p0 + 0.5 * p2;
-  *value = ((a * t + b) * t + c) * t + p1;
-  *slope = (3 * a * t + 2 * b) * t + c;
-}
-
-double StdDev(const std::vector<double>& v) {
-  double m = 0, q = 0;
-  for (double x : v) m += x / v.size();
-  for (double x : v) q += (x - m) * (x - m);
-  return v.size() > 1 ? std::sqrt(q / (v.size() - 1)) : 0.0;
-}
-
-}  // namespace
-
 bool FeedSpeedOptions::Validate(std::string* why) const {
   if (!(inner_fraction > 0 && inner_fraction <= 1))
     *why = "inner fraction must be in (0, 1]";
@@ -191,21 +147,9 @@ AxisShift EstimateAxisShift(const AxisProfile& pa, const AxisProfile& pb,
   // Whole pixels: b(s + k) = a(s) when the surface moved k px down the axis. At least half the
   // profile must overlap.
   const int limit = std::min(static_cast<int>(std::floor(o.max_shift_px)), n / 2);
-  int best_k = 0;
-  double best = -2;
-  for (int k = -limit; k <= limit; ++k) {
-    double ab = 0, aa = 0, bb = 0;
-    for (int i = std::max(0, -k); i < std::min(n, n - k); ++i) {
-      ab += a[i] * b[i + k];
-      aa += a[i] * a[i];
-      bb += b[i + k] * b[i + k];
-    }
-    const double ncc = aa > 0 && bb > 0 ? ab / std::sqrt(aa * bb) : 0;
-    if (ncc > best) {
-      best = ncc;
-      best_k = k;
-    }
-  }
+  const WholeShift whole = BestWholeShift(a, b, limit, /*circular=*/false);
+  const int best_k = whole.samples;
+  const double best = whole.correlation;
   out.correlation = best;
   out.search_limit_px = limit;
   // The texture is strong (checked above): no match inside the range means it moved further.
@@ -217,33 +161,9 @@ AxisShift EstimateAxisShift(const AxisProfile& pa, const AxisProfile& pb,
         limit, best, best_k);
     return out;
   }
-  // Sub-pixel: Gauss–Newton on r(s) = a(s − d/2) − b(s + d/2), both interpolated, so that the
-  // interpolators' errors cancel to first order.
-  double d = best_k, sum_r2 = 0, sum_g2 = 0;
-  int used = 0;
-  for (int iter = 0; iter < 20; ++iter) {
-    double num = 0;
-    sum_r2 = sum_g2 = 0;
-    used = 0;
-    for (int i = 0; i < n; ++i) {
-      const double xa = i - 0.5 * d, xb = i + 0.5 * d;
-      if (xa < 1 || xb < 1 || xa >= n - 2 || xb >= n - 2) continue;
-      double va, ga, vb, gb;
-      Cubic(a, xa, &va, &ga);
-      Cubic(b, xb, &vb, &gb);
-      const double r = va - vb, g = -0.5 * (ga + gb);  // dr/dd
-      num += g * r;
-      sum_g2 += g * g;
-      sum_r2 += r * r;
-      ++used;
-    }
-    if (!(sum_g2 > 0)) break;
-    const double step = -num / sum_g2;
-    d += std::clamp(step, -0.5, 0.5);
-    if (std::abs(step) < 1e-5) break;
-  }
-  out.shift_px = d;
-  out.sigma_px = used > 1 && sum_g2 > 0 ? std::sqrt(sum_r2 / (used - 1) / sum_g2) : NAN;
+  const FineShift fine = RefineShift(a, b, best_k, /*circular=*/false);
+  out.shift_px = fine.samples;
+  out.sigma_px = fine.sigma;
   out.status = FeedShiftStatus::kValid;
   return out;
 }

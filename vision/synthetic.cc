@@ -102,6 +102,9 @@ bool SceneParams::Validate(std::string* why) const {
   if (!(surface_texture_amplitude >= 0) || !std::isfinite(feed_speed_mm_s) ||
       !(frame_rate_hz > 0 && std::isfinite(frame_rate_hz)))
     return fail("surface texture must be ≥ 0, feed speed a number, frame rate positive");
+  if (drive_gear && !(gear_radius_px > gear_tooth_depth_px && gear_tooth_depth_px >= 0 &&
+                      gear_teeth >= 3 && std::isfinite(gear_surface_speed_mm_s)))
+    return fail("drive gear: radius > tooth depth ≥ 0, at least 3 teeth, a finite speed");
   for (double w : frame_width_um) {
     if (!(w > 0) || !std::isfinite(w)) return fail("frame_width_um: every width must be positive");
     if (target == Target::kStrand && nozzle && nozzle_tip_width_um <= w)
@@ -224,6 +227,10 @@ FrameTruth FrameTruthFor(const SceneParams& p, int frame_index) {
   t.tip_y_px = p.tip_y_px;
   t.time_s = frame_index / p.frame_rate_hz;
   t.feed_offset_px = p.feed_speed_mm_s * 1e3 * t.time_s / p.scale_um_per_px;
+  if (p.drive_gear) {
+    t.gear_angle_rad =
+        p.gear_surface_speed_mm_s * 1e3 * t.time_s / p.scale_um_per_px / p.gear_radius_px;
+  }
   return t;
 }
 
@@ -261,6 +268,43 @@ class SurfaceTexture {
     double omega, phase, amp;
   };
   std::vector<Wave> waves_;
+};
+
+// A toothed gear turned by `angle`: teeth where cos(N·θ′) > 0 at the tip radius, gaps tooth_depth
+// lower with smooth flanks, and marks on its face (low harmonics of θ′) that turn with it. The
+// rim is a blurred radial step (σ with the pixel's footprint): close to exact for radii ≫ σ.
+class DriveGear {
+ public:
+  DriveGear(const SceneParams& p, double angle_rad, double sigma)
+      : p_(p), angle_(angle_rad), sigma_(std::sqrt(sigma * sigma + 1.0 / 12)) {
+    auto rng = FrameRng(p.seed, -2, 9);
+    std::uniform_real_distribution<double> uni(0.0, 1.0);
+    for (int h = 1; h <= 8; ++h) marks_.push_back({h, 2 * kPi * uni(rng), 25.0 * uni(rng) / h});
+  }
+  bool enabled() const { return p_.drive_gear; }
+  // Coverage in [0, 1] and the gear's grey level at the pixel.
+  double Coverage(double x, double y, double* level) const {
+    const double dx = x - p_.gear_centre_x_px, dy = y - p_.gear_centre_y_px;
+    const double r = std::hypot(dx, dy);
+    if (r > p_.gear_radius_px + 5 * sigma_) return 0;
+    const double theta = std::atan2(dy, dx) - angle_;
+    const double tooth = 0.5 * (1 + std::tanh(3 * std::cos(p_.gear_teeth * theta)));
+    const double edge = p_.gear_radius_px - p_.gear_tooth_depth_px * (1 - tooth);
+    double v = p_.gear_level;
+    for (const auto& m : marks_)
+      v += m.amp * (r / p_.gear_radius_px) * std::cos(m.h * theta + m.phase);
+    *level = v;
+    return 0.5 * std::erfc((r - edge) / (std::sqrt(2.0) * sigma_));
+  }
+
+ private:
+  struct Mark {
+    int h;
+    double phase, amp;
+  };
+  const SceneParams& p_;
+  double angle_, sigma_;
+  std::vector<Mark> marks_;
 };
 
 }  // namespace
@@ -321,6 +365,7 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
   const Vec2 d_strand{std::sin(th_strand), std::cos(th_strand)};
   const SurfaceTexture surface(p.target == Target::kMicrometer ? 0 : p.surface_texture_amplitude,
                                p.seed, sigma, d_strand.x, d_strand.y);
+  const DriveGear gear(p, truth.gear_angle_rad, sigma);
   const int nc = p.colour ? 3 : 1;
   static const double kGrey[3] = {1.0, 1.0, 1.0};
   const double* tb = p.colour ? p.background_tint : kGrey;
@@ -340,6 +385,11 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
         for (const auto& o : clutter) {
           const double a = o.Coverage(x, y, sigma);
           if (a > 0) bg = bg * (1 - a) + o.level * a;
+        }
+        if (gear.enabled()) {
+          double level = 0;
+          const double a = gear.Coverage(x, y, &level);
+          if (a > 0) bg = bg * (1 - a) + level * a;
         }
         double cov, front;  // strand coverage, and the strand's light where it covers
         if (p.target == Target::kMicrometer) {
@@ -444,6 +494,11 @@ std::string TruthToJson(const SceneParams& p, const std::vector<FrameTruth>& tru
       {"surface_texture_amplitude", p.surface_texture_amplitude},
       {"feed_speed_mm_s", p.feed_speed_mm_s},
       {"frame_rate_hz", p.frame_rate_hz},
+      {"drive_gear", p.drive_gear},
+      {"gear_centre_px", {p.gear_centre_x_px, p.gear_centre_y_px}},
+      {"gear_radius_px", p.gear_radius_px},
+      {"gear_teeth", p.gear_teeth},
+      {"gear_surface_speed_mm_s", p.gear_surface_speed_mm_s},
       {"target", TargetName(p.target)},
       {"edge_bias_px", p.edge_bias_px},
       {"pitch_um", p.pitch_um},
@@ -472,7 +527,8 @@ std::string TruthToJson(const SceneParams& p, const std::vector<FrameTruth>& tru
                       {"tip_x_px", t.tip_x_px},
                       {"tip_y_px", t.tip_y_px},
                       {"time_s", t.time_s},
-                      {"feed_offset_px", t.feed_offset_px}});
+                      {"feed_offset_px", t.feed_offset_px},
+                      {"gear_angle_rad", t.gear_angle_rad}});
   }
   j["frames"] = frames;
   return j.dump(2) + "\n";

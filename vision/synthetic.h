@@ -73,6 +73,16 @@ struct SceneParams {
   double surface_texture_amplitude = 0.0;
   double feed_speed_mm_s = 0.0;
   double frame_rate_hz = 25.0;
+  // A drive gear turning beside the strand: centre, tip radius and teeth in px, its grey level, and
+  // the surface speed at its tip radius (mm/s; + clockwise in the image, y down). Marks on its
+  // face turn with it.
+  bool drive_gear = false;
+  double gear_centre_x_px = 0, gear_centre_y_px = 0;
+  double gear_radius_px = 100;
+  int gear_teeth = 20;
+  double gear_tooth_depth_px = 6;
+  double gear_level = 150;
+  double gear_surface_speed_mm_s = 0;
   // The optics' edge bias: every object appears this many px wider than width/scale (blur,
   // diffraction, edge convention). Calibration fits it; 0 renders the geometric edge.
   double edge_bias_px = 0.0;
@@ -124,6 +134,7 @@ struct FrameTruth {
   double tip_y_px = 0;
   double time_s = 0;          // frame_index / frame_rate_hz
   double feed_offset_px = 0;  // how far the surface has moved down the axis since frame 0
+  double gear_angle_rad = 0;  // how far the drive gear has turned since frame 0 (+ clockwise)
 };
 
 // Renders frame `frame_index` of a sequence. The same params, seed and index give the same image.

@@ -141,6 +141,43 @@ TEST(MeasureCommandTest, FeedSpeedOfARenderedFilament) {
   EXPECT_NE(r.err.find("--scale-um-per-px or --calib"), std::string::npos) << r.err;
 }
 
+// Slip from the two speeds: the gear's surface runs at 5 mm/s, the filament at 4.5 (10 % slip).
+TEST(MeasureCommandTest, GearSpeedAndSlip) {
+  const fs::path d = FreshDir("slip");
+  const std::string video = (d / "slip.avi").string();
+  RunResult r = RunCli(
+      "render --out " + video +
+          " --no-nozzle --scale-um-per-px 20 --strand-width-um 1750 --size 640x480 --tip-x-px 320 "
+          "--tip-y-px 0 --fps 30 --frames 20 --surface-texture 8 --feed-speed-mm-s 4.5 "
+          "--drive-gear 176,240,100 --gear-surface-speed-mm-s 5",
+      d);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string speed = " --target filament --speed --scale-um-per-px 20";
+  r = RunCli("measure " + video + speed + " --gear-roi 70,134,213,213 --gear-radius-mm 2", d);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const CsvTable t = ParseCsv(r.out, "stdout");
+  const int c_gear = t.Column("gear_speed_mm_s"), c_slip = t.Column("slip_pct"),
+            c_reason = t.Column("gear_reason");
+  ASSERT_GE(c_slip, 0);
+  EXPECT_EQ(t.rows[0][c_reason], "first_frame");
+  double gear = 0, slip = 0;
+  for (size_t i = 1; i < t.rows.size(); ++i) {
+    gear += std::stod(t.rows[i][c_gear]) / (t.rows.size() - 1);
+    slip += std::stod(t.rows[i][c_slip]) / (t.rows.size() - 1);
+  }
+  EXPECT_NEAR(gear, 5.0, 0.05);
+  EXPECT_NEAR(slip, 10.0, 0.5);
+  EXPECT_NE(r.err.find("slip "), std::string::npos) << r.err;
+  // A gear ROI needs the gear's radius; the radius needs the ROI.
+  r = RunCli("measure " + video + speed + " --gear-roi 70,134,213,213", d);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--gear-radius-mm"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  r = RunCli("measure " + video + speed + " --gear-radius-mm 2", d);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--gear-roi"), std::string::npos) << r.err;
+}
+
 TEST(MeasureCommandTest, BadInputsGiveOneLineErrorsAndExitCodes) {
   const fs::path d = FreshDir("bad");
   const std::string out = " --out-frames " + (d / "f.csv").string();

@@ -1,0 +1,90 @@
+#include "vision/gear_speed.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "vision/synthetic.h"
+
+namespace clogscope::vision {
+namespace {
+
+// A 20-tooth gear of 2 mm tip radius (100 px at 20 µm/px) beside a filament, 30 frames/s.
+SceneParams GearScene(double surface_speed_mm_s) {
+  SceneParams p;
+  p.width_px = 640;
+  p.height_px = 480;
+  p.scale_um_per_px = 20;
+  p.strand_width_um = 1750;
+  p.nozzle = false;
+  p.tip_x_px = 320;
+  p.tip_y_px = 0;
+  p.frame_rate_hz = 30;
+  p.drive_gear = true;
+  p.gear_centre_x_px = 176;
+  p.gear_centre_y_px = 240;
+  p.gear_radius_px = 100;
+  p.gear_surface_speed_mm_s = surface_speed_mm_s;
+  return p;
+}
+
+GearSpeedOptions Options() {
+  GearSpeedOptions o;
+  o.roi = cv::Rect(70, 134, 213, 213);
+  o.outer_radius_px = 100;
+  return o;
+}
+
+// Mean surface speed (mm/s) over `frames` − 1 pairs; every pair must be measured.
+double MeanSurfaceSpeed(const SceneParams& p, const GearSpeedOptions& o, int frames) {
+  GearSpeedTracker tracker(o);
+  double sum = 0;
+  int valid = 0;
+  for (int i = 0; i < frames; ++i) {
+    FrameTruth t;
+    const cv::Mat frame = RenderFrame(p, i, &t);  // fills t before t.time_s is read
+    const GearSpeedSample s = tracker.Next(frame, t.time_s);
+    if (i == 0) EXPECT_EQ(s.reason, "first_frame");
+    if (!s.valid) {
+      if (i > 0) ADD_FAILURE() << s.reason << ": " << s.detail;
+      continue;
+    }
+    ++valid;
+    EXPECT_NEAR(s.rotation_rad, p.gear_surface_speed_mm_s / 30 / 2.0, 5 * s.sigma_rad + 1e-4);
+    sum += s.RadPerS() * p.gear_radius_px * p.scale_um_per_px * 1e-3;
+  }
+  EXPECT_EQ(valid, frames - 1);
+  return sum / std::max(valid, 1);
+}
+
+TEST(GearSpeedTest, RendererTurnsTheGearAtItsSurfaceSpeed) {
+  const FrameTruth t = FrameTruthFor(GearScene(3.0), 30);  // 1 s
+  EXPECT_NEAR(t.gear_angle_rad, 3.0 / 2.0, 1e-12);         // v / R, R = 2 mm
+}
+
+// Within 1 % of the surface speed over the roller-drive study's range; at rest, zero.
+TEST(GearSpeedTest, RenderedSurfaceSpeedsWithinOnePercent) {
+  for (double v : {0.5, 2.0, 5.0, 15.0, -4.0}) {
+    EXPECT_NEAR(MeanSurfaceSpeed(GearScene(v), Options(), 11), v, 0.01 * std::abs(v)) << v;
+  }
+  EXPECT_NEAR(MeanSurfaceSpeed(GearScene(0), Options(), 6), 0, 0.005);
+}
+
+TEST(GearSpeedTest, TurnsBeyondTheSearchRangeAndROIsOffTheFrameGiveReasons) {
+  GearSpeedOptions o = Options();
+  o.max_rotation_deg = 2;  // 15 mm/s turns 14° per frame
+  GearSpeedTracker fast(o);
+  const SceneParams p = GearScene(15);
+  fast.Next(RenderFrame(p, 0, nullptr), 0.0);
+  EXPECT_EQ(fast.Next(RenderFrame(p, 1, nullptr), 1 / 30.0).reason, "too_fast");
+  o = Options();
+  o.roi = cv::Rect(600, 400, 100, 100);
+  GearSpeedTracker outside(o);
+  EXPECT_EQ(outside.Next(RenderFrame(p, 0, nullptr), 0.0).reason, "no_gear");
+  std::string why;
+  o.roi = cv::Rect(0, 0, 8, 8);
+  EXPECT_FALSE(o.Validate(&why));
+}
+
+}  // namespace
+}  // namespace clogscope::vision
