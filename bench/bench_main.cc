@@ -21,6 +21,7 @@
 #include "vision/batch.h"
 #include "vision/feed_speed.h"
 #include "vision/frame_source.h"
+#include "vision/gear_speed.h"
 #include "vision/strand_measure.h"
 #include "vision/synthetic.h"
 #include "vision/track.h"
@@ -458,6 +459,63 @@ void BenchFeedSpeed() {
   }
 }
 
+// Gear surface speed and slip: a 20-tooth gear of 2 mm tip radius beside the filament, the
+// filament at (1 − slip) of the gear's surface speed; 30 pairs each.
+void BenchSlip() {
+  cv::setNumThreads(1);
+  fmt::print(
+      "\n## Gear surface speed and slip (640x480, 20 µm/px, 30 frames/s, 30 pairs, one core)\n\n"
+      "| gear mm/s | slip % | gear mean mm/s | gear error | slip mean % | slip error pp | gear ms "
+      "per "
+      "frame |\n|---|---|---|---|---|---|---|\n");
+  for (double vg : {0.5, 5.0, 15.0}) {
+    for (double slip : {0.0, 10.0, 20.0}) {
+      SceneParams p;
+      p.width_px = 640;
+      p.height_px = 480;
+      p.scale_um_per_px = 20;
+      p.strand_width_um = 1750;
+      p.nozzle = false;
+      p.tip_x_px = 320;
+      p.tip_y_px = 0;
+      p.surface_texture_amplitude = 8;
+      p.feed_speed_mm_s = vg * (1 - slip / 100);
+      p.frame_rate_hz = 30;
+      p.drive_gear = true;
+      p.gear_centre_x_px = 176;
+      p.gear_centre_y_px = 240;
+      p.gear_radius_px = 100;
+      p.gear_surface_speed_mm_s = vg;
+      StrandMeasureOptions o;
+      o.target = clogscope::vision::MeasureTarget::kFilament;
+      StrandTracker tracker(o);
+      clogscope::vision::FeedSpeedTracker feed(clogscope::vision::FeedSpeedOptions{});
+      clogscope::vision::GearSpeedOptions go;
+      go.roi = cv::Rect(70, 134, 213, 213);
+      go.outer_radius_px = 100;
+      clogscope::vision::GearSpeedTracker gear(go);
+      double gear_sum = 0, slip_sum = 0, seconds = 0;
+      int n = 0;
+      for (int i = 0; i <= 30; ++i) {
+        FrameTruth t;
+        const cv::Mat f = RenderFrame(p, i, &t);
+        const auto fs = feed.Next(f, t.time_s, tracker.Measure(f));
+        const auto t0 = Clock::now();
+        const auto gs = gear.Next(f, t.time_s);
+        seconds += Seconds(t0, Clock::now());
+        if (!fs.valid || !gs.valid) continue;
+        const double g = std::abs(gs.RadPerS()) * 2.0;  // R = 2 mm
+        gear_sum += g;
+        slip_sum += 100 * (1 - fs.SpeedPxPerS() * p.scale_um_per_px * 1e-3 / g);
+        ++n;
+      }
+      fmt::print("| {:g} | {:g} | {:.4f} | {:+.2f} % | {:.3f} | {:+.3f} | {:.2f} |\n", vg, slip,
+                 gear_sum / n, 100 * (gear_sum / n - vg) / vg, slip_sum / n, slip_sum / n - slip,
+                 1e3 * seconds / 31);
+    }
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -474,6 +532,9 @@ int main(int argc, char** argv) {
   if (what == "all" || what == "video") BenchVideo();
   if (what == "all" || what == "experiment") BenchExperiment();
   if (what == "all" || what == "lag") BenchLag();
-  if (what == "all" || what == "speed") BenchFeedSpeed();
+  if (what == "all" || what == "speed") {
+    BenchFeedSpeed();
+    BenchSlip();
+  }
   return 0;
 }
