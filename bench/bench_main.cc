@@ -422,18 +422,8 @@ void BenchFeedSpeed() {
       "frame |\n|---|---|---|---|---|---|---|\n");
   for (auto [v, tilt] :
        std::vector<std::pair<double, double>>{{0, 0}, {0.5, 0}, {2, 0}, {5, 0}, {15, 0}, {2, 7}}) {
-    SceneParams p;
-    p.width_px = 640;
-    p.height_px = 480;
-    p.scale_um_per_px = 20;
-    p.strand_width_um = 1750;
-    p.nozzle = false;
-    p.tip_x_px = 320;
-    p.tip_y_px = 0;
+    SceneParams p = clogscope::vision::FeedstockScene(v);
     p.tilt_deg = tilt;
-    p.surface_texture_amplitude = 8;
-    p.feed_speed_mm_s = v;
-    p.frame_rate_hz = 30;
     StrandMeasureOptions o;
     o.target = clogscope::vision::MeasureTarget::kFilament;
     StrandTracker tracker(o);
@@ -470,22 +460,7 @@ void BenchSlip() {
       "frame |\n|---|---|---|---|---|---|---|\n");
   for (double vg : {0.5, 5.0, 15.0}) {
     for (double slip : {0.0, 10.0, 20.0}) {
-      SceneParams p;
-      p.width_px = 640;
-      p.height_px = 480;
-      p.scale_um_per_px = 20;
-      p.strand_width_um = 1750;
-      p.nozzle = false;
-      p.tip_x_px = 320;
-      p.tip_y_px = 0;
-      p.surface_texture_amplitude = 8;
-      p.feed_speed_mm_s = vg * (1 - slip / 100);
-      p.frame_rate_hz = 30;
-      p.drive_gear = true;
-      p.gear_centre_x_px = 176;
-      p.gear_centre_y_px = 240;
-      p.gear_radius_px = 100;
-      p.gear_surface_speed_mm_s = vg;
+      const SceneParams p = clogscope::vision::FeedstockScene(vg * (1 - slip / 100), vg);
       StrandMeasureOptions o;
       o.target = clogscope::vision::MeasureTarget::kFilament;
       StrandTracker tracker(o);

@@ -17,9 +17,9 @@ struct GearSpeedOptions {
   // The band's outer radius: the gear's tip radius when known (keeps what stands still beyond the
   // teeth out of it), else the largest circle inside the ROI.
   std::optional<double> outer_radius_px;
-  double inner_radius_fraction = 0.5;    // the radial band averaged: from this share of the
-                                         // largest circle inside the ROI to its edge
-  double max_rotation_deg = 30;          // search range per frame pair
+  double inner_radius_fraction = 0.5;  // the radial band averaged: from this share of the
+                                       // largest circle inside the ROI to its edge
+  double max_rotation_deg = 30;        // search range per frame pair
   double min_correlation = 0.6;
   bool Validate(std::string* why) const;
 };

@@ -58,12 +58,12 @@ FineShift RefineShift(const std::vector<double>& a, const std::vector<double>& b
                       bool circular) {
   // Gauss–Newton on r(x) = a(x − d/2) − b(x + d/2).
   const int n = static_cast<int>(a.size());
-  double d = start, sum_r2 = 0, sum_g2 = 0;
-  int used = 0;
+  double d = start, sum_g2 = 0;
+  std::vector<double> residuals;
   for (int iter = 0; iter < 20; ++iter) {
     double num = 0;
-    sum_r2 = sum_g2 = 0;
-    used = 0;
+    sum_g2 = 0;
+    residuals.clear();
     for (int i = 0; i < n; ++i) {
       const double xa = i - 0.5 * d, xb = i + 0.5 * d;
       if (!circular && (xa < 1 || xb < 1 || xa >= n - 2 || xb >= n - 2)) continue;
@@ -73,15 +73,25 @@ FineShift RefineShift(const std::vector<double>& a, const std::vector<double>& b
       const double r = va - vb, g = -0.5 * (ga + gb);  // dr/dd
       num += g * r;
       sum_g2 += g * g;
-      sum_r2 += r * r;
-      ++used;
+      residuals.push_back(r);
     }
     if (!(sum_g2 > 0)) break;
     const double step = -num / sum_g2;
     d += std::clamp(step, -0.5, 0.5);
     if (std::abs(step) < 1e-5) break;
   }
-  return {d, used > 1 && sum_g2 > 0 ? std::sqrt(sum_r2 / (used - 1) / sum_g2) : NAN};
+  const size_t m = residuals.size();
+  if (m < 2 || !(sum_g2 > 0)) return {d, NAN};
+  // Neighbouring residuals are correlated (the optics' blur, interpolation, a polar grid finer than
+  // the pixels): the plain formula would claim too much. An AR(1) model's variance inflation
+  // (1 + ρ)/(1 − ρ), ρ the lag-1 correlation of the residuals, accounts for it.
+  double r2 = 0, r1 = 0;
+  for (size_t i = 0; i < m; ++i) {
+    r2 += residuals[i] * residuals[i];
+    if (i + 1 < m) r1 += residuals[i] * residuals[i + 1];
+  }
+  const double rho = std::clamp(r2 > 0 ? r1 / r2 : 0.0, 0.0, 0.95);
+  return {d, std::sqrt(r2 / (m - 1) / sum_g2 * (1 + rho) / (1 - rho))};
 }
 
 std::vector<double> HighPass(const std::vector<double>& v, double sigma) {

@@ -148,6 +148,30 @@ void SceneParams::SetSilhouette() {
   bed_level = 60.0;
 }
 
+SceneParams FeedstockScene(double feed_speed_mm_s, std::optional<double> gear_surface_speed_mm_s) {
+  SceneParams p;
+  p.width_px = 640;
+  p.height_px = 480;
+  p.scale_um_per_px = 20;
+  p.strand_width_um = 1750;
+  p.nozzle = false;
+  p.tip_x_px = 320;
+  p.tip_y_px = 0;
+  p.surface_texture_amplitude = 8;
+  p.feed_speed_mm_s = feed_speed_mm_s;
+  p.frame_rate_hz = 30;
+  p.seed = 5;
+  if (gear_surface_speed_mm_s) {
+    p.drive_gear = true;
+    p.gear_centre_x_px = 176;
+    p.gear_centre_y_px = 240;
+    p.gear_radius_px = 100;
+    p.gear_teeth = 20;
+    p.gear_surface_speed_mm_s = *gear_surface_speed_mm_s;
+  }
+  return p;
+}
+
 SceneParams RandomRealisticScene(uint64_t seed) {
   std::mt19937_64 rng(seed * 0x9e3779b97f4a7c15ull + 17);
   std::uniform_real_distribution<double> u01(0, 1);

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -123,6 +124,14 @@ struct SceneParams {
 // lit strands, clear strands on backlights, a coloured strand on a coloured background, an
 // illumination gradient, vignetting, highlights and beds. `seed` picks everything.
 SceneParams RandomRealisticScene(uint64_t seed);
+
+// Feedstock seen from the side, as in Greeff & Schilling's video: a 1.75 mm filament at 20 µm/px
+// (87.5 px) running down a 640×480 frame through its centre, no nozzle, 30 frames/s, ±8 grey
+// levels of surface texture moving at feed_speed_mm_s; with gear_surface_speed_mm_s, a 20-tooth
+// drive gear of 2 mm tip radius (100 px, centre 176,240) turning beside it, its rim at the
+// filament's left edge.
+SceneParams FeedstockScene(double feed_speed_mm_s,
+                           std::optional<double> gear_surface_speed_mm_s = std::nullopt);
 
 // The exact geometry of one rendered frame.
 struct FrameTruth {

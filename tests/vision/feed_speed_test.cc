@@ -10,23 +10,11 @@
 namespace clogscope::vision {
 namespace {
 
-// A 1.75 mm filament at 20 µm/px filmed at 30 frames/s, its surface marked by ±8 grey levels of
-// texture under noise σ 3: the roller-drive study's feed speeds.
+// The feedstock scene (synthetic.h) with its texture and tilt varied.
 SceneParams Filament(double speed_mm_s, double texture = 8, double tilt_deg = 0) {
-  SceneParams p;
-  p.width_px = 640;
-  p.height_px = 480;
-  p.scale_um_per_px = 20;
-  p.strand_width_um = 1750;
-  p.nozzle = false;
-  p.nozzle_tip_width_um = 4000;
-  p.tip_x_px = 320;
-  p.tip_y_px = 0;
-  p.tilt_deg = tilt_deg;
+  SceneParams p = FeedstockScene(speed_mm_s);
   p.surface_texture_amplitude = texture;
-  p.feed_speed_mm_s = speed_mm_s;
-  p.frame_rate_hz = 30;
-  p.seed = 5;
+  p.tilt_deg = tilt_deg;
   return p;
 }
 
