@@ -23,6 +23,14 @@ using model::Param;
 
 void PrintTable(const PredictResult& r) {
   const auto& pr = r.prediction;
+  int measured_feedstock = 0;
+  for (const auto& s : pr.steps) measured_feedstock += s.filament_diameter_um.has_value();
+  if (measured_feedstock > 0) {
+    fmt::print(
+        "filament diameter: measured at {} of {} steps (filament_diameter_um), used there for the "
+        "filament area and the entry radius R1 instead of the extruder's {:g} mm\n",
+        measured_feedstock, pr.steps.size(), 1e3 * r.params.Get(Param::kFilamentDiameterM));
+  }
   const bool amp = pr.gain_m_s2_per_n.has_value();
   const bool cur = !pr.steps.empty() && pr.steps[0].current_ma.has_value();
   fmt::print("{:>4} {:>7} {:>9} {:>11} {:>9} {:>9} {:>8}{}{}\n", "step", "T °C", "D µm",

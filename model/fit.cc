@@ -32,7 +32,10 @@ struct RelativeResidual {
     std::array<T, kParamCount> p;
     for (int i = 0; i < kParamCount; ++i) p[i] = T(base[i]);
     for (size_t j = 0; j < unknowns.size(); ++j) p[unknowns[j]] = x[0][j];
-    const T f_bp = physics::BackPressureForce(p.data(), T(step.diameter_m), T(step.temperature_c));
+    // The step's measured feedstock (if any) sets its back-pressure force; W_0 stays nominal.
+    std::array<T, kParamCount> ps = p;
+    UseStepFeedstock(step, ps.data());
+    const T f_bp = physics::BackPressureForce(ps.data(), T(step.diameter_m), T(step.temperature_c));
     T model;
     if (quantity == Quantity::kAmplitude) {
       const T load = physics::Load(p.data(), f_bp, load_model);
@@ -49,8 +52,7 @@ struct RelativeResidual {
 };
 
 double BackPressureForceAt(const ExtruderParams& params, const StepInput& s) {
-  std::array<double, kParamCount> v{};
-  for (int i = 0; i < kParamCount; ++i) v[i] = params.Get(static_cast<Param>(i));
+  const auto v = StepValues(params, s);
   return physics::BackPressureForce(v.data(), s.diameter_m, s.temperature_c);
 }
 

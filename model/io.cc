@@ -35,6 +35,7 @@ std::vector<StepInput> ReadDiameterTable(const std::string& path, double default
     throw std::invalid_argument(path + ": no mean_um column (the diameter table of measure)");
   if (t.rows.empty()) throw std::invalid_argument(path + ": no rows");
   const int c_status = t.Column("status");  // measure's table marks steps that failed: skipped
+  const int c_filament = t.Column("filament_diameter_um");  // optional: measured feedstock
   std::vector<StepInput> steps;
   std::set<int> seen;
   for (size_t i = 0; i < t.rows.size(); ++i) {
@@ -47,6 +48,10 @@ std::vector<StepInput> ReadDiameterTable(const std::string& path, double default
     s.diameter_m = ParseNumberField(row[c_mean], where, "mean_um") * 1e-6;
     s.temperature_c =
         c_temp >= 0 ? ParseNumberField(row[c_temp], where, "temperature_c") : default_temperature_c;
+    if (c_filament >= 0 && !row[c_filament].empty()) {
+      s.filament_diameter_m =
+          ParseNumberField(row[c_filament], where, "filament_diameter_um") * 1e-6;
+    }
     if (!seen.insert(s.step).second)
       throw std::invalid_argument(fmt::format("{}: step {} appears twice", where, s.step));
     steps.push_back(s);
@@ -188,14 +193,15 @@ std::string PredictionsCsv(const Prediction& pr, const Provenance& prov) {
   out +=
       "step,temperature_c,diameter_um,dp1_pa,dp2_pa,dp3_pa,dp_total_pa,f_bp_n,f_feed_n,load_n,"
       "relative_amplitude,amplitude_increase_pct,amplitude_m_s2,natural_frequency_hz,current_ma,"
-      "buckling_ratio\n";
+      "buckling_ratio,filament_diameter_um\n";
   for (const auto& r : pr.steps) {
     out += CsvLine({std::to_string(r.step), Fmt(r.temperature_c), Fmt(r.diameter_um), Fmt(r.dp1_pa),
                     Fmt(r.dp2_pa), Fmt(r.dp3_pa), Fmt(r.dp_total_pa), Fmt(r.f_bp_n),
                     Fmt(r.f_feed_n), Fmt(r.load_n), Fmt(r.relative_amplitude),
                     Fmt(r.amplitude_increase_pct), r.amplitude_m_s2 ? Fmt(*r.amplitude_m_s2) : "",
                     Fmt(r.natural_frequency_hz), r.current_ma ? Fmt(*r.current_ma) : "",
-                    r.buckling_ratio ? Fmt(*r.buckling_ratio) : ""});
+                    r.buckling_ratio ? Fmt(*r.buckling_ratio) : "",
+                    r.filament_diameter_um ? Fmt(*r.filament_diameter_um) : ""});
     out += "\n";
   }
   return out;
@@ -240,7 +246,8 @@ std::string PredictionsJson(const Prediction& pr, const ExtruderParams& params,
                     {"amplitude_m_s2", opt(r.amplitude_m_s2)},
                     {"natural_frequency_hz", r.natural_frequency_hz},
                     {"current_ma", opt(r.current_ma)},
-                    {"buckling_ratio", opt(r.buckling_ratio)}});
+                    {"buckling_ratio", opt(r.buckling_ratio)},
+                    {"filament_diameter_um", opt(r.filament_diameter_um)}});
   }
   j["steps"] = rows;
   if (fit) {

@@ -23,9 +23,19 @@ std::array<double, kParamCount> Values(const ExtruderParams& p) {
 
 }  // namespace
 
+std::array<double, kParamCount> StepValues(const ExtruderParams& params, const StepInput& step) {
+  std::array<double, kParamCount> v = Values(params);
+  UseStepFeedstock(step, v.data());
+  return v;
+}
+
 void CheckSteps(const ExtruderParams& params, const std::vector<StepInput>& steps) {
-  const double bore_m = 2 * params.Get(Param::kNozzleEntryRadiusM);
   for (const auto& s : steps) {
+    if (s.filament_diameter_m && !(*s.filament_diameter_m > 0 && *s.filament_diameter_m < 0.01)) {
+      throw std::invalid_argument(fmt::format("{}: filament diameter {:g} µm must be in (0, 10) mm",
+                                              Where(s), *s.filament_diameter_m * 1e6));
+    }
+    const double bore_m = 2 * StepValues(params, s)[static_cast<int>(Param::kNozzleEntryRadiusM)];
     if (!(s.diameter_m > 0) || !std::isfinite(s.diameter_m)) {
       throw std::invalid_argument(
           fmt::format("{}: diameter {:g} µm must be positive", Where(s), s.diameter_m * 1e6));
@@ -87,12 +97,16 @@ Prediction Predict(const ExtruderParams& params, const std::vector<StepInput>& s
     r.step = s.step;
     r.temperature_c = s.temperature_c;
     r.diameter_um = s.diameter_m * 1e6;
-    const auto bp = physics::BackPressure(p, s.diameter_m, s.temperature_c);
+    // A measured feedstock diameter enters through the filament's area and the entry radius.
+    const auto vs = StepValues(params, s);
+    const double* ps = vs.data();
+    if (s.filament_diameter_m) r.filament_diameter_um = *s.filament_diameter_m * 1e6;
+    const auto bp = physics::BackPressure(ps, s.diameter_m, s.temperature_c);
     r.dp1_pa = bp.dp1;
     r.dp2_pa = bp.dp2;
     r.dp3_pa = bp.dp3;
     r.dp_total_pa = bp.total;
-    r.f_bp_n = bp.total * physics::FilamentArea(p);
+    r.f_bp_n = bp.total * physics::FilamentArea(ps);
     r.f_feed_n = out.feed_force_n;
     r.load_n = physics::Load(p, r.f_bp_n, params.load_model);
     r.relative_amplitude = r.load_n / out.reference_load_n;
@@ -102,7 +116,7 @@ Prediction Predict(const ExtruderParams& params, const std::vector<StepInput>& s
     if (has_current) r.current_ma = physics::MotorCurrent(p, r.f_bp_n);
     if (has_buckling) {
       // Pin-ended Euler buckling of the unsupported filament: π² E I / L², I = π d⁴ / 64.
-      const double d = params.Get(Param::kFilamentDiameterM);
+      const double d = vs[static_cast<int>(Param::kFilamentDiameterM)];
       const double l = params.Get(Param::kUnsupportedLengthM);
       const double f_cr = physics::kPi * physics::kPi * params.Get(Param::kFilamentModulusPa) *
                           (physics::kPi * std::pow(d, 4) / 64.0) / (l * l);

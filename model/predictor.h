@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -14,7 +15,20 @@ struct StepInput {
   double temperature_c = 0;
   double diameter_m = 0;
   int source_line = 0;  // line in the table it came from (0: not from a file), for messages
+  // The feedstock measured at this step (the table's filament_diameter_um): replaces the preset's
+  // d_f and the entry radius R1 = d_f / 2 for this step.
+  std::optional<double> filament_diameter_m;
 };
+
+// The parameter values for one step: `params` with the step's measured filament diameter put in
+// (d_f and R1 = d_f / 2) when it has one. T = double or ceres::Jet.
+template <typename T>
+void UseStepFeedstock(const StepInput& step, T* values) {
+  if (!step.filament_diameter_m) return;
+  values[static_cast<int>(Param::kFilamentDiameterM)] = T(*step.filament_diameter_m);
+  values[static_cast<int>(Param::kNozzleEntryRadiusM)] = T(0.5 * *step.filament_diameter_m);
+}
+std::array<double, kParamCount> StepValues(const ExtruderParams& params, const StepInput& step);
 
 // predictor.md §8, one row per step.
 struct StepPrediction {
@@ -30,6 +44,7 @@ struct StepPrediction {
   double natural_frequency_hz = 0;
   std::optional<double> current_ma;      // when I_0 and g are known
   std::optional<double> buckling_ratio;  // F_bp / F_cr when filament modulus and length are given
+  std::optional<double> filament_diameter_um;  // the step's measured feedstock, when used
 };
 
 struct Prediction {

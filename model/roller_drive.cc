@@ -153,7 +153,8 @@ DrivePrediction PredictDrive(const ExtruderParams& params, const std::vector<Ste
     d.step = s.step;
     d.temperature_c = s.temperature_c;
     d.diameter_um = s.diameter_m * 1e6;
-    d.f_bp_n = physics::BackPressureForce(p.data(), s.diameter_m, s.temperature_c);
+    d.f_bp_n =
+        physics::BackPressureForce(StepValues(params, s).data(), s.diameter_m, s.temperature_c);
     d.feed_force_n = d.f_bp_n + o.friction_n;
     d.slip_pinch = SlipPinchForm(out.roller, o.pinch_force_n, d.feed_force_n, o.k_p_pct);
     d.slip_velocity =

@@ -205,10 +205,7 @@ std::vector<SofteningStep> CriticalLengths(const ExtruderParams& params,
   Require(o.Validate(&why), why);
   Require(params.Validate(&why), "extruder parameters: " + why);
   CheckSteps(params, steps);
-  std::array<double, kParamCount> p{};
-  for (int i = 0; i < kParamCount; ++i) p[i] = params.Get(static_cast<Param>(i));
-  const double q = physics::FlowRate(p.data());
-  const double r_fil = 0.5 * params.Get(Param::kFilamentDiameterM);
+  const double q = physics::FlowRate(StepValues(params, StepInput{}).data());
   const double l = o.hp_length_m.value_or(params.Get(Param::kZone3LengthM));
   std::vector<SofteningStep> out;
   for (const auto& s : steps) {
@@ -216,11 +213,14 @@ std::vector<SofteningStep> CriticalLengths(const ExtruderParams& params,
     r.step = s.step;
     r.temperature_c = s.temperature_c;
     r.diameter_um = s.diameter_m * 1e6;
+    // The filament radius R: the step's measured feedstock when the table has it.
+    const auto ps = StepValues(params, s);
+    const double r_fil = 0.5 * ps[static_cast<int>(Param::kFilamentDiameterM)];
     r.dp_hagen_poiseuille_pa =
         HagenPoiseuillePressurePa(o.viscosity_pa_s, q, l, 0.5 * s.diameter_m);
     r.l_crt_hagen_poiseuille_mm =
         1e3 * CriticalSoftenedLengthM(o.modulus_pa, r_fil, r.dp_hagen_poiseuille_pa);
-    r.dp_power_law_pa = physics::BackPressure(p.data(), s.diameter_m, s.temperature_c).total;
+    r.dp_power_law_pa = physics::BackPressure(ps.data(), s.diameter_m, s.temperature_c).total;
     r.l_crt_power_law_mm = 1e3 * CriticalSoftenedLengthM(o.modulus_pa, r_fil, r.dp_power_law_pa);
     out.push_back(r);
   }

@@ -30,6 +30,24 @@ const char* kTable =
     "1,220,50,400.0,2,0.28,0.57\n2,210,50,396.9,2,0.28,0.57\n3,200,50,390.1,2,0.28,0.57\n"
     "4,190,50,381.3,2,0.28,0.57\n5,180,50,365.9,2,0.28,0.57\n6,170,50,345.4,2,0.28,0.57\n";
 
+// A diameter table that carries the measured feedstock: the output says so and the CSV shows it.
+TEST(PredictCommandTest, MeasuredFilamentDiameterIsUsedAndSaid) {
+  const fs::path d = FreshDir("feedstock");
+  WriteFileAtomically((d / "d.csv").string(),
+                      "step,temperature_c,mean_um,filament_diameter_um\n1,220,400.0,1748\n"
+                      "2,210,396.9,\n3,200,390.1,1761\n");
+  const RunResult r = RunCli(
+      "predict --diameters " + (d / "d.csv").string() + " --no-plots --out " + (d / "out").string(),
+      d);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("filament diameter: measured at 2 of 3 steps"), std::string::npos) << r.out;
+  const CsvTable t = ParseCsv(ReadFile((d / "out/predictions.csv").string()), "predictions.csv");
+  const int c = t.Column("filament_diameter_um");
+  ASSERT_GE(c, 0);
+  EXPECT_EQ(t.rows[0][c], "1748");
+  EXPECT_EQ(t.rows[1][c], "");
+}
+
 TEST(PredictCommandTest, ReferenceTableAndFitEndToEnd) {
   const fs::path d = FreshDir("e2e");
   WriteFileAtomically((d / "d.csv").string(), kTable);

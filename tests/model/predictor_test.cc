@@ -22,6 +22,29 @@ std::array<double, kParamCount> Values(const ExtruderParams& p) {
 
 // For n = 1 the power-law drops are Hagen–Poiseuille's: 8 μ L Q / (π R⁴) in the cylinders, and
 // its integral along the cone, 8 μ Q (R2⁻³ − R1⁻³) / (3 π tanθ).
+// A step's measured feedstock diameter replaces d_f and R1 = d_f/2 for that step only: its
+// prediction equals one made with an extruder of that filament, the other steps and W_0 stay.
+TEST(PredictorTest, MeasuredFilamentDiameterIsUsedPerStep) {
+  const auto params = ExtruderParams::Preset("direct-pla");
+  auto steps = ReferenceSteps();
+  steps[3].filament_diameter_m = 1.80e-3;
+  const Prediction with = Predict(params, steps);
+  const Prediction plain = Predict(params, ReferenceSteps());
+  auto thick = params;
+  thick.Set(Param::kFilamentDiameterM, 1.80e-3);
+  thick.Set(Param::kNozzleEntryRadiusM, 0.90e-3);
+  const Prediction all_thick = Predict(thick, ReferenceSteps());
+  EXPECT_NEAR(with.steps[3].f_bp_n, all_thick.steps[3].f_bp_n, 1e-12 * all_thick.steps[3].f_bp_n);
+  EXPECT_NEAR(with.steps[3].dp_total_pa, all_thick.steps[3].dp_total_pa, 1e-6);
+  EXPECT_GT(with.steps[3].f_bp_n, plain.steps[3].f_bp_n);  // a larger area under similar pressure
+  EXPECT_DOUBLE_EQ(*with.steps[3].filament_diameter_um, 1800);
+  EXPECT_FALSE(with.steps[2].filament_diameter_um.has_value());
+  EXPECT_DOUBLE_EQ(with.steps[2].f_bp_n, plain.steps[2].f_bp_n);
+  EXPECT_DOUBLE_EQ(with.reference_load_n, plain.reference_load_n);
+  steps[3].filament_diameter_m = -1;
+  EXPECT_THROW(Predict(params, steps), std::invalid_argument);
+}
+
 TEST(PredictorTest, NewtonianLimitIsHagenPoiseuille) {
   ExtruderParams p = ExtruderParams::Preset("direct-pla");
   p.Set(Param::kFlowIndex, 1.0);
