@@ -85,7 +85,8 @@ GearAndSlip GearAndSlipOf(const Row& r, const calib::ScaleCalibration& conv, dou
   const double vg = std::abs(r.gear.RadPerS()) * radius_mm;
   g.gear_mm_s = vg;
   g.gear_sigma_mm_s = r.gear.SigmaRadPerS() * radius_mm;
-  if (!r.speed.valid || !(vg > 1e-9)) return g;
+  // A gear that does not turn measurably (under 3σ) has no slip to speak of.
+  if (!r.speed.valid || !(vg > 3 * *g.gear_sigma_mm_s && vg > 1e-9)) return g;
   const double mm_per_px = conv.scale_um_per_px * 1e-3;
   const double vf = r.speed.SpeedPxPerS() * mm_per_px, sf = r.speed.SigmaPxPerS() * mm_per_px;
   g.slip_pct = 100 * (1 - vf / vg);
@@ -114,6 +115,25 @@ std::string GearSummary(const std::vector<Row>& rows, const calib::ScaleCalibrat
                        name, st.mean, st.std, unit, st.ci95_half_width, values->size());
   }
   return out;
+}
+
+// Logs why frame pairs have no value, once per reason with the first detail. `reason_of` returns
+// an empty reason for rows that need no word.
+std::pair<std::string, std::string> Skipped() { return {}; }
+template <typename ReasonOf>
+void WarnOncePerReason(const std::string& input, const char* what, const std::vector<Row>& rows,
+                       ReasonOf reason_of) {
+  std::map<std::string, std::pair<int, std::string>> reasons;  // count, first detail
+  for (const Row& r : rows) {
+    const auto [reason, detail] = reason_of(r);
+    if (reason.empty()) continue;
+    auto& [count, first] = reasons[reason];
+    if (count++ == 0) first = detail;
+  }
+  for (const auto& [reason, info] : reasons) {
+    spdlog::warn("{}: {} frame pair(s) {}: {} (first: {})", input, info.first, what, reason,
+                 info.second);
+  }
 }
 
 // "; feed speed 0.001 ± 0.016 mm/s per frame pair (mean ± …, 95 %), N of M pairs".
@@ -348,23 +368,23 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
                  rows.size() / std::max(secs, 1e-9),
                  WidthSummary(widths_px, conv) + (o.feed_speed ? SpeedSummary(rows, *conv) : "") +
                      (o.gear_roi ? GearSummary(rows, *conv, *o.gear_radius_mm) : ""));
-    if (o.feed_speed) {  // why pairs have no speed, once per reason
-      std::map<std::string, std::pair<int, std::string>> reasons;
-      for (const Row& r : rows) {
-        if (r.speed.valid || r.speed.reason == "first_frame") continue;
-        auto& [count, detail] = reasons[r.speed.reason];
-        if (count++ > 0) continue;
-        detail = r.speed.detail;
+    if (o.feed_speed) {
+      WarnOncePerReason(input, "without a feed speed", rows, [&](const Row& r) {
+        if (r.speed.valid || r.speed.reason == "first_frame") return Skipped();
+        std::string detail = r.speed.detail;
         if (r.speed.reason == "too_fast") {
           detail +=
               fmt::format(" (faster than {:.2f} mm/s)",
                           r.speed.search_limit_px * conv->scale_um_per_px * 1e-3 / r.speed.dt_s);
         }
-      }
-      for (const auto& [reason, info] : reasons) {
-        spdlog::warn("{}: {} frame pair(s) without a feed speed: {} (first: {})", input, info.first,
-                     reason, info.second);
-      }
+        return std::make_pair(r.speed.reason, detail);
+      });
+    }
+    if (o.gear_roi) {
+      WarnOncePerReason(input, "without a gear speed", rows, [](const Row& r) {
+        if (r.gear.valid || r.gear.reason == "first_frame") return Skipped();
+        return std::make_pair(r.gear.reason, r.gear.detail);
+      });
     }
     if (valid < static_cast<int>(rows.size())) {
       // Say why, once per reason, so a user sees the cause without opening the CSV.
