@@ -143,8 +143,7 @@ int RunDrive(int argc, char** argv) {
     if (o.filament_speed_mm_s) {
       const auto v =
           model::SlipVelocityForm(roller, *o.filament_speed_mm_s, *o.feed_force_n, o.drive.k_p_pct);
-      const bool out = o.drive.pinch_force_n < model::kVelocityFormMinPinchN ||
-                       o.drive.pinch_force_n > model::kVelocityFormMaxPinchN;
+      const bool out = !model::VelocityFormFitted(o.drive.pinch_force_n);
       fmt::print("slip at {:g} mm/s: {:.3f} % (feed-velocity form{})\n", *o.filament_speed_mm_s,
                  v.pct, out ? ", EXTRAPOLATED: fitted for 80–130 N of pinch" : "");
     }

@@ -139,8 +139,7 @@ FitSummary FitParameters(const ExtruderParams& start_in, const std::vector<StepI
   // Starting values for unknowns the parameter set leaves open: from the data, in closed form.
   if (fitted(Param::kGainMS2PerN) && !start.Has(Param::kGainMS2PerN)) {
     std::vector<double> ratios;
-    std::array<double, kParamCount> v{};
-    for (int i = 0; i < kParamCount; ++i) v[i] = start.Get(static_cast<Param>(i));
+    const auto& v = start.Values();
     for (const auto& o : obs) {
       if (o.quantity != Quantity::kAmplitude) continue;
       const double f =
@@ -187,8 +186,7 @@ FitSummary FitParameters(const ExtruderParams& start_in, const std::vector<StepI
     unknowns.push_back(static_cast<int>(p));
     x.push_back(start.Get(p));
   }
-  std::array<double, kParamCount> base{};
-  for (int i = 0; i < kParamCount; ++i) base[i] = start.Get(static_cast<Param>(i));
+  const std::array<double, kParamCount> base = start.Values();
 
   ceres::Problem problem;
   const int k = static_cast<int>(x.size());

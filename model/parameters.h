@@ -69,6 +69,8 @@ class ExtruderParams {
 
   double Get(Param p) const { return values_[static_cast<int>(p)]; }
   bool Has(Param p) const { return has_[static_cast<int>(p)]; }
+  // Every value by Param index (absent optional ones are 0): the array physics.h reads.
+  const std::array<double, kParamCount>& Values() const { return values_; }
   void Set(Param p, double value);
   void Unset(Param p);
   // Sets by name; "load_model" takes "sum" or "difference". Throws std::invalid_argument naming the

@@ -15,16 +15,10 @@ std::string Where(const StepInput& s) {
                            : fmt::format("step {}", s.step);
 }
 
-std::array<double, kParamCount> Values(const ExtruderParams& p) {
-  std::array<double, kParamCount> v{};
-  for (int i = 0; i < kParamCount; ++i) v[i] = p.Get(static_cast<Param>(i));
-  return v;
-}
-
 }  // namespace
 
 std::array<double, kParamCount> StepValues(const ExtruderParams& params, const StepInput& step) {
-  std::array<double, kParamCount> v = Values(params);
+  std::array<double, kParamCount> v = params.Values();
   UseStepFeedstock(step, v.data());
   return v;
 }
@@ -71,7 +65,7 @@ Prediction Predict(const ExtruderParams& params, const std::vector<StepInput>& s
   std::string why;
   if (!params.Validate(&why)) throw std::invalid_argument("extruder parameters: " + why);
   CheckSteps(params, steps);
-  const auto v = Values(params);
+  const auto& v = params.Values();
   const double* p = v.data();
   Prediction out;
   out.feed_force_n = physics::FeedForce(p);

@@ -136,15 +136,13 @@ DrivePrediction PredictDrive(const ExtruderParams& params, const std::vector<Ste
   if (!measured.empty() && measured.size() != steps.size()) {
     throw std::invalid_argument("measured slip: one value (or none) per step expected");
   }
-  std::array<double, kParamCount> p{};
-  for (int i = 0; i < kParamCount; ++i) p[i] = params.Get(static_cast<Param>(i));
+  const auto& p = params.Values();
 
   DrivePrediction out;
   out.roller = RollerByName(o.roller);
   out.min_pinch = MinimalPinchForce(out.roller);
   out.pinch_below_minimum = o.pinch_force_n < out.min_pinch.computed_n;
-  out.velocity_form_extrapolated =
-      o.pinch_force_n < kVelocityFormMinPinchN || o.pinch_force_n > kVelocityFormMaxPinchN;
+  out.velocity_form_extrapolated = !VelocityFormFitted(o.pinch_force_n);
   const double q_m3_s = physics::FlowRate(p.data());
   out.filament_speed_mm_s = 1e3 * q_m3_s / physics::FilamentArea(p.data());
   for (size_t i = 0; i < steps.size(); ++i) {

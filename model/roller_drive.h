@@ -51,6 +51,9 @@ Slip SlipVelocityForm(const RollerPreset& roller, double filament_speed_mm_s, do
                       double k_p_pct = 0);
 // The velocity form was fitted for these pinch forces.
 constexpr double kVelocityFormMinPinchN = 80, kVelocityFormMaxPinchN = 130;
+inline bool VelocityFormFitted(double pinch_force_n) {
+  return pinch_force_n >= kVelocityFormMinPinchN && pinch_force_n <= kVelocityFormMaxPinchN;
+}
 
 struct DriveOptions {
   std::string roller = "3-hobb-goblin";

@@ -205,7 +205,7 @@ std::vector<SofteningStep> CriticalLengths(const ExtruderParams& params,
   Require(o.Validate(&why), why);
   Require(params.Validate(&why), "extruder parameters: " + why);
   CheckSteps(params, steps);
-  const double q = physics::FlowRate(StepValues(params, StepInput{}).data());
+  const double q = physics::FlowRate(params.Values().data());
   const double l = o.hp_length_m.value_or(params.Get(Param::kZone3LengthM));
   std::vector<SofteningStep> out;
   for (const auto& s : steps) {

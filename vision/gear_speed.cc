@@ -95,8 +95,10 @@ GearSpeedSample GearSpeedTracker::Next(const cv::Mat& frame, double time_s) {
       b[i] -= mb;
     }
     const int limit = static_cast<int>(options_.max_rotation_deg / 360 * options_.angle_samples);
-    const WholeShift whole = BestWholeShift(a, b, limit, /*circular=*/true);
-    if (StdDev(a) < 1e-6) {
+    // A flat ring has nothing to follow: say so before searching it.
+    const bool flat = StdDev(a) < 1e-6;
+    const WholeShift whole = flat ? WholeShift{} : BestWholeShift(a, b, limit, /*circular=*/true);
+    if (flat) {
       out.reason = "no_gear";
       out.detail = "nothing varies around the gear's centre";
     } else if (whole.correlation < options_.min_correlation || std::abs(whole.samples) >= limit) {

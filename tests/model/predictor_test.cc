@@ -178,10 +178,11 @@ TEST(PredictorTest, BadStepsNameTheStep) {
     }
     return std::string();
   };
-  EXPECT_NE(message({3, 200, 0.0, 7}).find("step 3 (line 7)"), std::string::npos);
-  EXPECT_NE(message({3, 200, -1e-4}).find("positive"), std::string::npos);
-  EXPECT_NE(message({4, 200, 2e-3}).find("entry bore"), std::string::npos);
-  EXPECT_NE(message({5, -273.15, 0.4e-3}).find("absolute zero"), std::string::npos);
+  EXPECT_NE(message({3, 200, 0.0, 7, std::nullopt}).find("step 3 (line 7)"), std::string::npos);
+  EXPECT_NE(message({3, 200, -1e-4, 0, std::nullopt}).find("positive"), std::string::npos);
+  EXPECT_NE(message({4, 200, 2e-3, 0, std::nullopt}).find("entry bore"), std::string::npos);
+  EXPECT_NE(message({5, -273.15, 0.4e-3, 0, std::nullopt}).find("absolute zero"),
+            std::string::npos);
   ExtruderParams bad = p;
   bad.Set(Param::kFlowIndex, -1);
   EXPECT_THROW(Predict(bad, ReferenceSteps()), std::invalid_argument);

@@ -13,7 +13,7 @@ inline std::vector<StepInput> ReferenceSteps() {
   const double t[] = {220, 210, 200, 190, 180, 170};
   const double d_mm[] = {0.4000, 0.3969, 0.3901, 0.3813, 0.3659, 0.3454};
   std::vector<StepInput> steps;
-  for (int i = 0; i < 6; ++i) steps.push_back({i + 1, t[i], d_mm[i] * 1e-3});
+  for (int i = 0; i < 6; ++i) steps.push_back({i + 1, t[i], d_mm[i] * 1e-3, 0, std::nullopt});
   return steps;
 }
 

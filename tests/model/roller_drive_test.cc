@@ -82,7 +82,9 @@ TEST(RollerDriveTest, ClogRaisesFeedForceAndSlip) {
     EXPECT_NEAR(s.slip_pinch.pct, (96.0 / 3600 + 0.32) * s.feed_force_n, 1e-12);
     EXPECT_NEAR(s.delivered_flow_mm3_s, s.commanded_flow_mm3_s * (1 - s.slip_pinch.pct / 100),
                 1e-12);
-    if (i > 0) EXPECT_GT(s.slip_pinch.pct, d.steps[i - 1].slip_pinch.pct);
+    if (i > 0) {
+      EXPECT_GT(s.slip_pinch.pct, d.steps[i - 1].slip_pinch.pct);
+    }
   }
   o.pinch_force_n = 0;
   EXPECT_THROW(PredictDrive(p, steps, o), std::invalid_argument);

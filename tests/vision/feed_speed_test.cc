@@ -113,7 +113,9 @@ TEST(FeedSpeedTest, TrackerUsesTheFramesOwnTimesAndFollowsTheAxis) {
     FrameTruth t;
     const cv::Mat f = RenderFrame(p, i, &t);
     const FeedSpeedSample v = speed.Next(f, t.time_s, tracker.Measure(f));
-    if (i == 0) EXPECT_EQ(v.reason, "first_frame");
+    if (i == 0) {
+      EXPECT_EQ(v.reason, "first_frame");
+    }
     if (!v.valid) continue;
     ++valid;
     sum += v.SpeedPxPerS() * p.scale_um_per_px * 1e-3;

@@ -28,7 +28,9 @@ double MeanSurfaceSpeed(const SceneParams& p, const GearSpeedOptions& o, int fra
     FrameTruth t;
     const cv::Mat frame = RenderFrame(p, i, &t);  // fills t before t.time_s is read
     const GearSpeedSample s = tracker.Next(frame, t.time_s);
-    if (i == 0) EXPECT_EQ(s.reason, "first_frame");
+    if (i == 0) {
+      EXPECT_EQ(s.reason, "first_frame");
+    }
     if (!s.valid) {
       if (i > 0) ADD_FAILURE() << s.reason << ": " << s.detail;
       continue;
