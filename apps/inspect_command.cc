@@ -134,6 +134,12 @@ InspectReport InspectInput(const InspectCommandOptions& o) {
         rep.target == vision::MeasureTarget::kStrand ? "tip" : "stretch top", m.tip_x_px,
         m.tip_y_px, m.band_start_px, m.band_end_px, m.calipers_used, m.calipers_total, m.blur_px,
         m.contrast, m.shading_left ? "shaded" : "plain", m.shading_right ? "shaded" : "plain");
+    if (m.straight_start_px > m.band_start_px || m.straight_end_px < m.band_end_px) {
+      t += fmt::format(
+          "  the edges are rough (knurl or gear marks) on {} calipers: the width is the straight "
+          "part's, {:.0f}–{:.0f} px\n",
+          m.rough_calipers, m.straight_start_px, m.straight_end_px);
+    }
     rep.suggested_roi = SuggestRoi(rep.scene.geometry, roi, img.size());
   } else {
     t += fmt::format("result: {}: {}\n", vision::FrameStatusName(m.status), m.detail);

@@ -13,6 +13,7 @@
 
 #include "apps/cli_util.h"
 #include "apps/commands.h"
+#include "apps/measure_rows.h"
 #include "calib/calibration_file.h"
 #include "common/atomic_file.h"
 #include "common/csv.h"
@@ -29,131 +30,6 @@ namespace fs = std::filesystem;
 
 // The reference band: from 50 µm to 200 µm below the tip; at the nominal 3 µm/px without a scale.
 constexpr int kVideoOverlayEvery = 25;
-
-struct Row {
-  std::string source;
-  int frame = 0;
-  double time_s = -1;
-  vision::StrandMeasurement m;
-  vision::FeedSpeedSample speed;
-  vision::GearSpeedSample gear;
-};
-
-// "<video file name>_<frame>.png" or "<image stem>.png"; a suffix keeps names of this run unique.
-std::string OverlayName(const Row& r, bool from_video, std::set<std::string>* used) {
-  const fs::path p(r.source);
-  const std::string base =
-      from_video ? fmt::format("{}_{:06d}", p.filename().string(), r.frame) : p.stem().string();
-  std::string name = base + ".png";
-  for (int k = 2; !used->insert(name).second; ++k) name = fmt::format("{}-{}.png", base, k);
-  return name;
-}
-
-// "; width 139.570 ± 0.104 px per frame (mean ± 0.012 px, 95 %)[ = … µm]", from the valid
-// frames after the steps' own outlier rejection; empty without valid frames.
-std::string WidthSummary(const std::vector<double>& widths_px,
-                         const std::optional<calib::ScaleCalibration>& conv) {
-  if (widths_px.empty()) return "";
-  const pipeline::SampleStats st = pipeline::RobustStats(widths_px);
-  std::string out = fmt::format("; width {:.3f} ± {:.3f} px per frame (mean ± {:.3f} px, 95 %)",
-                                st.mean, st.std, st.ci95_half_width);
-  if (conv) out += fmt::format(" = {:.2f} µm", conv->ToMicrons(st.mean));
-  if (st.n_rejected > 0)
-    out += fmt::format(", {} of {} widths left out as outliers", st.n_rejected, widths_px.size());
-  return out;
-}
-
-// The feed-speed columns of one row: mm/s, its σ (shift and scale), and the reason when empty.
-std::vector<std::string> SpeedFields(const vision::FeedSpeedSample& v,
-                                     const calib::ScaleCalibration& conv) {
-  if (!v.valid) return {"", "", v.reason};
-  const double mm_per_px = conv.scale_um_per_px * 1e-3;
-  const double speed = v.SpeedPxPerS() * mm_per_px;
-  const double sigma = std::hypot(v.SigmaPxPerS() * mm_per_px,
-                                  speed * conv.scale_sigma_um_per_px / conv.scale_um_per_px);
-  return {CsvNumber(speed, 5), CsvNumber(sigma, 5), ""};
-}
-
-// The gear's surface speed |ω|·R and the slip 1 − v_filament / v_gear (%), each with its σ; the
-// filament's speed in mm/s comes in as `filament`.
-struct GearAndSlip {
-  std::optional<double> gear_mm_s, gear_sigma_mm_s, slip_pct, slip_sigma_pct;
-};
-GearAndSlip GearAndSlipOf(const Row& r, const calib::ScaleCalibration& conv, double radius_mm) {
-  GearAndSlip g;
-  if (!r.gear.valid) return g;
-  const double vg = std::abs(r.gear.RadPerS()) * radius_mm;
-  g.gear_mm_s = vg;
-  g.gear_sigma_mm_s = r.gear.SigmaRadPerS() * radius_mm;
-  // A gear that does not turn measurably (under 3σ) has no slip to speak of.
-  if (!r.speed.valid || !(vg > 3 * *g.gear_sigma_mm_s && vg > 1e-9)) return g;
-  const double mm_per_px = conv.scale_um_per_px * 1e-3;
-  const double vf = r.speed.SpeedPxPerS() * mm_per_px, sf = r.speed.SigmaPxPerS() * mm_per_px;
-  g.slip_pct = 100 * (1 - vf / vg);
-  g.slip_sigma_pct = 100 * std::hypot(sf / vg, vf * *g.gear_sigma_mm_s / (vg * vg));
-  return g;
-}
-
-// "; gear 2.00 ± 0.01 mm/s …; slip 10.0 ± 0.5 % per frame pair (mean ± …, 95 %), N of M pairs".
-std::string GearSummary(const std::vector<Row>& rows, const calib::ScaleCalibration& conv,
-                        double radius_mm) {
-  std::vector<double> gear, slip;
-  for (const Row& r : rows) {
-    const GearAndSlip g = GearAndSlipOf(r, conv, radius_mm);
-    if (g.gear_mm_s) gear.push_back(*g.gear_mm_s);
-    if (g.slip_pct) slip.push_back(*g.slip_pct);
-  }
-  std::string out;
-  for (const auto& [name, unit, values] :
-       {std::tuple{"gear surface speed", "mm/s", &gear}, std::tuple{"slip", "%", &slip}}) {
-    if (values->empty()) {
-      out += fmt::format("; {} in no frame pair", name);
-      continue;
-    }
-    const pipeline::SampleStats st = pipeline::RobustStats(*values);
-    out += fmt::format("; {} {:.4f} ± {:.4f} {} per frame pair (mean ± {:.4f}, 95 %), {} pairs",
-                       name, st.mean, st.std, unit, st.ci95_half_width, values->size());
-  }
-  return out;
-}
-
-// Logs why frame pairs have no value, once per reason with the first detail. `reason_of` returns
-// an empty reason for rows that need no word.
-std::pair<std::string, std::string> Skipped() { return {}; }
-template <typename ReasonOf>
-void WarnOncePerReason(const std::string& input, const char* what, const std::vector<Row>& rows,
-                       ReasonOf reason_of) {
-  std::map<std::string, std::pair<int, std::string>> reasons;  // count, first detail
-  for (const Row& r : rows) {
-    const auto [reason, detail] = reason_of(r);
-    if (reason.empty()) continue;
-    auto& [count, first] = reasons[reason];
-    if (count++ == 0) first = detail;
-  }
-  for (const auto& [reason, info] : reasons) {
-    spdlog::warn("{}: {} frame pair(s) {}: {} (first: {})", input, info.first, what, reason,
-                 info.second);
-  }
-}
-
-// "; feed speed 0.001 ± 0.016 mm/s per frame pair (mean ± …, 95 %), N of M pairs".
-std::string SpeedSummary(const std::vector<Row>& rows, const calib::ScaleCalibration& conv) {
-  std::vector<double> speeds;
-  int pairs = 0;
-  for (const Row& r : rows) {
-    if (r.speed.reason == "first_frame" || r.speed.reason == "no_time") continue;
-    ++pairs;
-    if (r.speed.valid) speeds.push_back(r.speed.SpeedPxPerS() * conv.scale_um_per_px * 1e-3);
-  }
-  if (speeds.empty())
-    return pairs ? fmt::format("; feed speed in none of {} frame pairs", pairs) : "";
-  const pipeline::SampleStats st = pipeline::RobustStats(speeds);
-  return fmt::format(
-      "; feed speed {:.4f} ± {:.4f} mm/s per frame pair (mean ± {:.4f} mm/s, 95 %), {} of {} "
-      "pairs{}",
-      st.mean, st.std, st.ci95_half_width, speeds.size(), pairs,
-      st.n_rejected ? fmt::format(", {} left out as outliers", st.n_rejected) : "");
-}
 
 bool WritesToStdout(const MeasureCommandOptions& o) {
   return o.out_frames.empty() || o.out_frames == "-";
@@ -368,6 +244,8 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
                  rows.size() / std::max(secs, 1e-9),
                  WidthSummary(widths_px, conv) + (o.feed_speed ? SpeedSummary(rows, *conv) : "") +
                      (o.gear_roi ? GearSummary(rows, *conv, *o.gear_radius_mm) : ""));
+    if (const std::string part = StraightPartSummary(rows); !part.empty())
+      spdlog::info("{}: {}", input, part);
     if (o.feed_speed) {
       WarnOncePerReason(input, "without a feed speed", rows, [&](const Row& r) {
         if (r.speed.valid || r.speed.reason == "first_frame") return Skipped();

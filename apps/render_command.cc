@@ -168,6 +168,9 @@ int RunRender(int argc, char** argv) {
   app.add_option("--gear-surface-speed-mm-s", s.gear_surface_speed_mm_s,
                  "Surface speed at the gear's tip radius (+ clockwise)")
       ->capture_default_str();
+  std::string knurl;
+  app.add_option("--knurl", knurl,
+                 "DEPTH,PITCH,START (px): knurl marks on the strand's left edge below START");
   std::string lag_form = "moves";
   app.add_option("--lag-commanded", o.lag_commanded,
                  "Flow profile CSV (time_s, flow_mm3_s): the width follows its first-order lag");
@@ -221,6 +224,13 @@ int RunRender(int argc, char** argv) {
     s.gear_centre_x_px = g[0];
     s.gear_centre_y_px = g[1];
     s.gear_radius_px = g[2];
+  }
+  if (!knurl.empty()) {
+    double k[3];
+    three(knurl, "--knurl", "DEPTH,PITCH,START", k);
+    s.knurl_depth_px = k[0];
+    s.knurl_pitch_px = k[1];
+    s.knurl_start_px = k[2];
   }
   if (!background_tint.empty()) tint(background_tint, "--background-tint", s.background_tint);
   if (silhouette) {

@@ -11,6 +11,7 @@
 #include "vision/caliper_samples.h"
 #include "vision/cylinder_fit.h"
 #include "vision/edge_fit.h"
+#include "vision/straight_run.h"
 
 namespace clogscope::vision {
 namespace {
@@ -182,8 +183,8 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   // A filament's band is its whole visible stretch, parts of which a drive gear or a guide may
   // hide: a quarter of it (at least 8 calipers) will do. A strand's short band must be clean.
   const bool filament = opt.target == MeasureTarget::kFilament;
-  const double min_used = filament ? std::max(8.0, 0.5 * opt.min_caliper_fraction * n_cal)
-                                   : opt.min_caliper_fraction * n_cal;
+  double min_used = filament ? std::max(8.0, 0.5 * opt.min_caliper_fraction * n_cal)
+                             : opt.min_caliper_fraction * n_cal;
   // Usually one pass. Another re-centres the windows on the fitted edge lines, or widens them to
   // the fitted blur; a badly blurred frame needs a few widenings before its fit sees the whole
   // edge.
@@ -352,12 +353,45 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   m->contrast = Median(steps);
   m->blur_px = Median(blurs);
 
+  // A filament's width is taken on the longest straight part of its stretch (straight_run.h).
+  int run_begin = 0, run_end = n_cal;
+  if (filament) {
+    StraightRunOptions so;
+    if (g.straight_s1_px > g.straight_s0_px) {
+      so.prefer_begin =
+          static_cast<int>(std::lround((g.straight_s0_px - band_s0) / opt.caliper_spacing_px));
+      so.prefer_end =
+          static_cast<int>(std::lround((g.straight_s1_px - band_s0) / opt.caliper_spacing_px));
+    }
+    const StraightRun run = FindStraightRun(m->calipers, so);
+    m->rough_calipers = run.rough;
+    if (run.sections > 0) {
+      run_begin = run.begin;
+      run_end = run.end;
+      cal_widths.clear();
+      for (int k = run_begin; k < run_end; ++k)
+        if (m->calipers[k].fitted) cal_widths.push_back(m->calipers[k].width_px);
+      if (cal_widths.size() < 2) {
+        const long unfitted = std::count_if(m->calipers.begin(), m->calipers.end(),
+                                            [](const Caliper& c) { return !c.fitted; });
+        return fail(FrameStatus::kOccluded,
+                    fmt::format("no straight part of the stretch: of {} calipers {} have rough "
+                                "edges (gear or knurl marks), {} lack an edge",
+                                n_cal, run.rough, unfitted));
+      }
+      min_used = std::max(8.0, 0.5 * opt.min_caliper_fraction * (run_end - run_begin));
+    }
+  }
+  m->straight_start_px = band_s0 + run_begin * opt.caliper_spacing_px;
+  m->straight_end_px = band_s0 + run_end * opt.caliper_spacing_px;
+
   const double med = Median(cal_widths);
   const double mad = Mad(cal_widths, med);
   const double tol = std::max(4.0 * 1.4826 * mad, 0.1);
   double sum = 0, sum2 = 0;
   int used = 0;
-  for (auto& c : m->calipers) {
+  for (int k = run_begin; k < run_end; ++k) {
+    Caliper& c = m->calipers[k];
     if (!c.fitted) continue;
     c.inlier = std::abs(c.width_px - med) <= tol;
     if (!c.inlier) continue;
@@ -373,15 +407,16 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   if (cal_widths.size() >= 4) {
     Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
     Eigen::Vector3d atb = Eigen::Vector3d::Zero();
-    const double s_mid = 0.5 * (m->band_start_px + m->band_end_px);
-    for (const auto& c : m->calipers) {
+    const double s_mid = 0.5 * (m->straight_start_px + m->straight_end_px);
+    for (int k = run_begin; k < run_end; ++k) {
+      const Caliper& c = m->calipers[k];
       if (!c.fitted) continue;
       const Eigen::Vector3d row(1.0, c.s_px - s_mid, (c.s_px - s_mid) * (c.s_px - s_mid));
       ata += row * row.transpose();
       atb += row * c.width_px;
     }
     const Eigen::Vector3d coef = ata.ldlt().solve(atb);
-    const double half = 0.5 * (m->band_end_px - m->band_start_px);
+    const double half = 0.5 * (m->straight_end_px - m->straight_start_px);
     // A disc's chord w(s) ≈ 2R − s²/R bends with |w''|/2 = 1/R ≈ 2/w; a strand's slow changes
     // (or a filament's along a long stretch) bend hundreds of widths more gently.
     const double sag = std::abs(coef[2]) * half * half;

@@ -462,7 +462,13 @@ bool FollowPair(const GreyImage& img, const SceneOptions& o, const PairCandidate
     }
     s_origin = 0.5 * (up_l.s + up_r.s);
   } else {
-    s_origin = std::max(up_l.s, up_r.s);
+    // Where both edges are still there; but when one edge's walk stops at an object while the
+    // other runs on to the border, where the other ends: an object beside the filament (a gear's
+    // rim) cuts a walk short although the edge goes on. Calipers where it does not are not
+    // fitted, or rough, and the width comes from the straight part (straight_run.h).
+    const EdgeEnd& lower = up_l.s >= up_r.s ? up_l : up_r;
+    const EdgeEnd& higher = up_l.s >= up_r.s ? up_r : up_l;
+    s_origin = lower.at_object && !higher.at_object ? higher.s : lower.s;
   }
   const double s_end = std::min(dn_l.s, dn_r.s);
   const bool end_object = dn_l.s <= dn_r.s ? dn_l.at_object : dn_r.at_object;

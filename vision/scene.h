@@ -60,6 +60,9 @@ struct StrandGeometry {
   // Edge model per side: −1 decide from the calipers, 0 plain blurred step, 1 shaded (tracking
   // keeps the first frame's decision).
   int shading_left = -1, shading_right = -1;
+  // Tracking a filament: the straight part of the stretch measured last (px from origin; empty
+  // when none), kept while it stays straight so that the width comes from the same place.
+  double straight_s0_px = 0, straight_s1_px = 0;
   double s_end = 0;  // where the pair ends downward (bed, obstacle or border), from origin
   bool end_is_object = false;  // the pair ends at an object (bed) rather than the border
   double score = 0;

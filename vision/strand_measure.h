@@ -80,6 +80,10 @@ struct StrandMeasurement {
   double axis_dx = 0, axis_dy = 1;
   double band_start_px = 0, band_end_px = 0;
   double left_u0_px = 0, right_u0_px = 0, edge_slope = 0;
+  // The part of the band the width comes from: all of it, but for a filament whose edges are
+  // rough (knurl marks) over part of its stretch, its longest straight part (straight_run.h).
+  double straight_start_px = 0, straight_end_px = 0;
+  int rough_calipers = 0;  // filament: calipers whose edges are not straight
   std::vector<Caliper> calipers;
 };
 

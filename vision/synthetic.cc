@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -105,6 +106,8 @@ bool SceneParams::Validate(std::string* why) const {
   if (drive_gear && !(gear_radius_px > gear_tooth_depth_px && gear_tooth_depth_px >= 0 &&
                       gear_teeth >= 3 && std::isfinite(gear_surface_speed_mm_s)))
     return fail("drive gear: radius > tooth depth ≥ 0, at least 3 teeth, a finite speed");
+  if (!(knurl_depth_px >= 0) || !(knurl_pitch_px > 0) || !std::isfinite(knurl_start_px))
+    return fail("knurl: depth ≥ 0, pitch > 0, a finite start");
   for (double w : frame_width_um) {
     if (!(w > 0) || !std::isfinite(w)) return fail("frame_width_um: every width must be positive");
     if (target == Target::kStrand && nozzle && nozzle_tip_width_um <= w)
@@ -428,9 +431,19 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
           }
           front = p.strand_level * cov;
         } else {
-          cov = p.strand ? strand_left.Eval(d, sigma) - strand_right.Eval(d, sigma) : 0.0;
+          double left = strand_left.Eval(d, sigma);
+          const double s_axis = Dot(d_strand, d), u = Dot(n_strand, d);
+          double shading_u = u;
+          if (p.knurl_depth_px > 0 && s_axis > p.knurl_start_px) {
+            const double ph = (s_axis - truth.feed_offset_px) / p.knurl_pitch_px;
+            const double out = p.knurl_depth_px * (ph - std::floor(ph) - 1.0 / 3.0);
+            left = SoftHalfPlane{n_strand, -0.5 * w - out}.Eval(d, sigma);
+            // The left half's shading follows the marked edge.
+            shading_u = u + out * std::clamp(-2.0 * u / w, 0.0, 1.0);
+          }
+          cov = p.strand ? left - strand_right.Eval(d, sigma) : 0.0;
           front = p.strand_level * cov;
-          if (shaded && p.strand) front += shading.At(Dot(n_strand, d));
+          if (shaded && p.strand) front += shading.At(shading_u);
           if (!surface.empty() && cov > 0)
             front += cov * surface.At(Dot(d_strand, d) - truth.feed_offset_px);
           if (p.highlight && p.strand)
@@ -523,6 +536,7 @@ std::string TruthToJson(const SceneParams& p, const std::vector<FrameTruth>& tru
       {"gear_radius_px", p.gear_radius_px},
       {"gear_teeth", p.gear_teeth},
       {"gear_surface_speed_mm_s", p.gear_surface_speed_mm_s},
+      {"knurl_px", {p.knurl_depth_px, p.knurl_pitch_px, p.knurl_start_px}},
       {"target", TargetName(p.target)},
       {"edge_bias_px", p.edge_bias_px},
       {"pitch_um", p.pitch_um},

@@ -84,6 +84,13 @@ struct SceneParams {
   double gear_tooth_depth_px = 6;
   double gear_level = 150;
   double gear_surface_speed_mm_s = 0;
+  // A drive gear's knurl marks on the strand's left edge from knurl_start_px along the axis (below
+  // the tip point) on: a saw tooth knurl_depth_px deep (a third pressed in, two thirds pushed
+  // out), knurl_pitch_px long, moving with the feed. Rendered as a locally straight edge (exact
+  // on the long flank, approximate at the steep one). Truth stays the unmarked width.
+  double knurl_depth_px = 0;
+  double knurl_pitch_px = 40;
+  double knurl_start_px = 0;
   // The optics' edge bias: every object appears this many px wider than width/scale (blur,
   // diffraction, edge convention). Calibration fits it; 0 renders the geometric edge.
   double edge_bias_px = 0.0;

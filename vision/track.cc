@@ -89,6 +89,8 @@ void StrandTracker::Remember(const SceneResult& scene, const StrandMeasurement& 
   g.precise = true;
   g.shading_left = m.shading_left ? 1 : 0;
   g.shading_right = m.shading_right ? 1 : 0;
+  g.straight_s0_px = m.straight_start_px;
+  g.straight_s1_px = m.straight_end_px;
   width_px_ = m.width_px;
   frame_size_ = frame_size;
   tracking_ = true;

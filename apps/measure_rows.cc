@@ -1,0 +1,128 @@
+#include "apps/measure_rows.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <filesystem>
+#include <tuple>
+
+#include "common/csv.h"
+#include "common/robust.h"
+#include "pipeline/statistics.h"
+
+namespace clogscope::apps {
+
+namespace fs = std::filesystem;
+
+// "<video file name>_<frame>.png" or "<image stem>.png"; a suffix keeps names of this run unique.
+std::string OverlayName(const Row& r, bool from_video, std::set<std::string>* used) {
+  const fs::path p(r.source);
+  const std::string base =
+      from_video ? fmt::format("{}_{:06d}", p.filename().string(), r.frame) : p.stem().string();
+  std::string name = base + ".png";
+  for (int k = 2; !used->insert(name).second; ++k) name = fmt::format("{}-{}.png", base, k);
+  return name;
+}
+
+// "; width 139.570 ± 0.104 px per frame (mean ± 0.012 px, 95 %)[ = … µm]", from the valid
+// frames after the steps' own outlier rejection; empty without valid frames.
+std::string WidthSummary(const std::vector<double>& widths_px,
+                         const std::optional<calib::ScaleCalibration>& conv) {
+  if (widths_px.empty()) return "";
+  const pipeline::SampleStats st = pipeline::RobustStats(widths_px);
+  std::string out = fmt::format("; width {:.3f} ± {:.3f} px per frame (mean ± {:.3f} px, 95 %)",
+                                st.mean, st.std, st.ci95_half_width);
+  if (conv) out += fmt::format(" = {:.2f} µm", conv->ToMicrons(st.mean));
+  if (st.n_rejected > 0)
+    out += fmt::format(", {} of {} widths left out as outliers", st.n_rejected, widths_px.size());
+  return out;
+}
+
+std::string StraightPartSummary(const std::vector<Row>& rows) {
+  int valid = 0, part = 0;
+  std::vector<double> s0, s1;
+  for (const Row& r : rows) {
+    if (!r.m.valid()) continue;
+    ++valid;
+    if (r.m.straight_start_px <= r.m.band_start_px && r.m.straight_end_px >= r.m.band_end_px)
+      continue;
+    ++part;
+    s0.push_back(r.m.straight_start_px);
+    s1.push_back(r.m.straight_end_px);
+  }
+  if (part == 0) return "";
+  return fmt::format(
+      "on {} of {} valid frames the filament's edges are rough (knurl or gear marks) along part "
+      "of the stretch: the width is the straight part's, {:.0f}-{:.0f} px along it (median)",
+      part, valid, Median(s0), Median(s1));
+}
+
+// The feed-speed columns of one row: mm/s, its σ (shift and scale), and the reason when empty.
+std::vector<std::string> SpeedFields(const vision::FeedSpeedSample& v,
+                                     const calib::ScaleCalibration& conv) {
+  if (!v.valid) return {"", "", v.reason};
+  const double mm_per_px = conv.scale_um_per_px * 1e-3;
+  const double speed = v.SpeedPxPerS() * mm_per_px;
+  const double sigma = std::hypot(v.SigmaPxPerS() * mm_per_px,
+                                  speed * conv.scale_sigma_um_per_px / conv.scale_um_per_px);
+  return {CsvNumber(speed, 5), CsvNumber(sigma, 5), ""};
+}
+
+GearAndSlip GearAndSlipOf(const Row& r, const calib::ScaleCalibration& conv, double radius_mm) {
+  GearAndSlip g;
+  if (!r.gear.valid) return g;
+  const double vg = std::abs(r.gear.RadPerS()) * radius_mm;
+  g.gear_mm_s = vg;
+  g.gear_sigma_mm_s = r.gear.SigmaRadPerS() * radius_mm;
+  // A gear that does not turn measurably (under 3σ) has no slip to speak of.
+  if (!r.speed.valid || !(vg > 3 * *g.gear_sigma_mm_s && vg > 1e-9)) return g;
+  const double mm_per_px = conv.scale_um_per_px * 1e-3;
+  const double vf = r.speed.SpeedPxPerS() * mm_per_px, sf = r.speed.SigmaPxPerS() * mm_per_px;
+  g.slip_pct = 100 * (1 - vf / vg);
+  g.slip_sigma_pct = 100 * std::hypot(sf / vg, vf * *g.gear_sigma_mm_s / (vg * vg));
+  return g;
+}
+
+// "; gear 2.00 ± 0.01 mm/s …; slip 10.0 ± 0.5 % per frame pair (mean ± …, 95 %), N of M pairs".
+std::string GearSummary(const std::vector<Row>& rows, const calib::ScaleCalibration& conv,
+                        double radius_mm) {
+  std::vector<double> gear, slip;
+  for (const Row& r : rows) {
+    const GearAndSlip g = GearAndSlipOf(r, conv, radius_mm);
+    if (g.gear_mm_s) gear.push_back(*g.gear_mm_s);
+    if (g.slip_pct) slip.push_back(*g.slip_pct);
+  }
+  std::string out;
+  for (const auto& [name, unit, values] :
+       {std::tuple{"gear surface speed", "mm/s", &gear}, std::tuple{"slip", "%", &slip}}) {
+    if (values->empty()) {
+      out += fmt::format("; {} in no frame pair", name);
+      continue;
+    }
+    const pipeline::SampleStats st = pipeline::RobustStats(*values);
+    out += fmt::format("; {} {:.4f} ± {:.4f} {} per frame pair (mean ± {:.4f}, 95 %), {} pairs",
+                       name, st.mean, st.std, unit, st.ci95_half_width, values->size());
+  }
+  return out;
+}
+
+// "; feed speed 0.001 ± 0.016 mm/s per frame pair (mean ± …, 95 %), N of M pairs".
+std::string SpeedSummary(const std::vector<Row>& rows, const calib::ScaleCalibration& conv) {
+  std::vector<double> speeds;
+  int pairs = 0;
+  for (const Row& r : rows) {
+    if (r.speed.reason == "first_frame" || r.speed.reason == "no_time") continue;
+    ++pairs;
+    if (r.speed.valid) speeds.push_back(r.speed.SpeedPxPerS() * conv.scale_um_per_px * 1e-3);
+  }
+  if (speeds.empty())
+    return pairs ? fmt::format("; feed speed in none of {} frame pairs", pairs) : "";
+  const pipeline::SampleStats st = pipeline::RobustStats(speeds);
+  return fmt::format(
+      "; feed speed {:.4f} ± {:.4f} mm/s per frame pair (mean ± {:.4f} mm/s, 95 %), {} of {} "
+      "pairs{}",
+      st.mean, st.std, st.ci95_half_width, speeds.size(), pairs,
+      st.n_rejected ? fmt::format(", {} left out as outliers", st.n_rejected) : "");
+}
+
+}  // namespace clogscope::apps

@@ -1,0 +1,78 @@
+#pragma once
+
+#include <spdlog/spdlog.h>
+
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "calib/pixel_scale.h"
+#include "vision/feed_speed.h"
+#include "vision/gear_speed.h"
+#include "vision/strand_measure.h"
+
+namespace clogscope::apps {
+
+// One measured frame of `measure` in inputs mode: the width, and with --speed the feed and gear
+// speeds.
+struct Row {
+  std::string source;
+  int frame = 0;
+  double time_s = -1;
+  vision::StrandMeasurement m;
+  vision::FeedSpeedSample speed;
+  vision::GearSpeedSample gear;
+};
+
+// "<video file name>_<frame>.png" or "<image stem>.png"; a suffix keeps names of this run unique.
+std::string OverlayName(const Row& r, bool from_video, std::set<std::string>* used);
+
+// "; width 139.570 ± 0.104 px per frame (mean ± 0.012 px, 95 %)[ = … µm]", from the valid
+// frames after the steps' own outlier rejection; empty without valid frames.
+std::string WidthSummary(const std::vector<double>& widths_px,
+                         const std::optional<calib::ScaleCalibration>& conv);
+
+// For a filament whose edges are rough (knurl or gear marks) over part of its stretch on some
+// valid frames: a sentence saying so and where the straight part measured lies; else empty.
+std::string StraightPartSummary(const std::vector<Row>& rows);
+
+// The feed-speed columns of one row: mm/s, its σ (shift and scale), and the reason when empty.
+std::vector<std::string> SpeedFields(const vision::FeedSpeedSample& v,
+                                     const calib::ScaleCalibration& conv);
+
+// The gear's surface speed |ω|·R and the slip 1 − v_filament / v_gear (%), each with its σ.
+struct GearAndSlip {
+  std::optional<double> gear_mm_s, gear_sigma_mm_s, slip_pct, slip_sigma_pct;
+};
+GearAndSlip GearAndSlipOf(const Row& r, const calib::ScaleCalibration& conv, double radius_mm);
+
+// "; gear 2.00 ± 0.01 mm/s …; slip 10.0 ± 0.5 % per frame pair (mean ± …, 95 %), N of M pairs".
+std::string GearSummary(const std::vector<Row>& rows, const calib::ScaleCalibration& conv,
+                        double radius_mm);
+
+// "; feed speed 0.001 ± 0.016 mm/s per frame pair (mean ± …, 95 %), N of M pairs".
+std::string SpeedSummary(const std::vector<Row>& rows, const calib::ScaleCalibration& conv);
+
+// Logs why frame pairs have no value, once per reason with the first detail. `reason_of` returns
+// an empty reason (Skipped()) for rows that need no word.
+inline std::pair<std::string, std::string> Skipped() { return {}; }
+template <typename ReasonOf>
+void WarnOncePerReason(const std::string& input, const char* what, const std::vector<Row>& rows,
+                       ReasonOf reason_of) {
+  std::map<std::string, std::pair<int, std::string>> reasons;  // count, first detail
+  for (const Row& r : rows) {
+    const auto [reason, detail] = reason_of(r);
+    if (reason.empty()) continue;
+    auto& [count, first] = reasons[reason];
+    if (count++ == 0) first = detail;
+  }
+  for (const auto& [reason, info] : reasons) {
+    spdlog::warn("{}: {} frame pair(s) {}: {} (first: {})", input, info.first, what, reason,
+                 info.second);
+  }
+}
+
+}  // namespace clogscope::apps
