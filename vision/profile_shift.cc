@@ -18,20 +18,51 @@ std::vector<double> BoxMean(const std::vector<double>& v, int r) {
   return out;
 }
 
-// Catmull–Rom interpolation and its derivative at x; circular profiles wrap, open ones need
-// 1 ≤ x < n − 2.
-void Cubic(const std::vector<double>& v, double x, bool circular, double* value, double* slope) {
-  const int n = static_cast<int>(v.size());
-  const int i = static_cast<int>(std::floor(x));
-  const double t = x - i;
-  auto at = [&](int k) { return circular ? v[((k % n) + n) % n] : v[k]; };
-  const double p0 = at(i - 1), p1 = at(i), p2 = at(i + 1), p3 = at(i + 2);
-  const double a = -0.5 * p0 + 1.5 * p1 - 1.5 * p2 + 0.5 * p3;
-  const double b = p0 - 2.5 * p1 + 2 * p2 - 0.5 * p3;
-  const double c = -0.5 * p0 + 0.5 * p2;
-  *value = ((a * t + b) * t + c) * t + p1;
-  *slope = (3 * a * t + 2 * b) * t + c;
-}
+// Interpolating cubic B-spline of a profile (Unser's recursive prefilter, pole √3 − 2), with its
+// derivative. Its phase error is far below Catmull–Rom's: with Catmull–Rom the shift carried a
+// bias of ~0.01 px that repeats with the fractional shift, which at a slow feed (the same
+// fractional shift every frame) did not average out. Circular profiles wrap; open ones mirror
+// at their ends and need 1 ≤ x < n − 2.
+class Spline {
+ public:
+  Spline(const std::vector<double>& v, bool circular) : c_(v), circular_(circular) {
+    const int n = static_cast<int>(v.size());
+    if (n < 4) return;
+    constexpr double z = -0.2679491924311228;  // √3 − 2
+    const int terms = std::min(n, 30);         // |z|^30 < 1e-17
+    double sum = 0, zk = 1;
+    for (int k = 0; k < terms; ++k, zk *= z) sum += zk * c_[circular ? (n - k) % n : k];
+    c_[0] = sum;
+    for (int k = 1; k < n; ++k) c_[k] += z * c_[k - 1];
+    if (circular) {
+      double last = 0;
+      zk = z;
+      for (int j = 0; j < terms; ++j, zk *= z) last -= zk * c_[(n - 1 + j) % n];
+      c_[n - 1] = last;
+    } else {
+      c_[n - 1] = z / (z * z - 1) * (c_[n - 1] + z * c_[n - 2]);
+    }
+    for (int k = n - 2; k >= 0; --k) c_[k] = z * (c_[k + 1] - c_[k]);
+    for (double& x : c_) x *= 6;
+  }
+
+  void At(double x, double* value, double* slope) const {
+    const int n = static_cast<int>(c_.size());
+    const int i = static_cast<int>(std::floor(x));
+    const double t = x - i, u = 1 - t, t2 = t * t, t3 = t2 * t;
+    auto at = [&](int k) { return circular_ ? c_[((k % n) + n) % n] : c_[k]; };
+    const double c0 = at(i - 1), c1 = at(i), c2 = at(i + 1), c3 = at(i + 2);
+    *value = (c0 * u * u * u + c1 * (3 * t3 - 6 * t2 + 4) + c2 * (-3 * t3 + 3 * t2 + 3 * t + 1) +
+              c3 * t3) /
+             6;
+    *slope =
+        -0.5 * c0 * u * u + c1 * (1.5 * t2 - 2 * t) + c2 * (-1.5 * t2 + t + 0.5) + 0.5 * c3 * t2;
+  }
+
+ private:
+  std::vector<double> c_;
+  bool circular_;
+};
 
 }  // namespace
 
@@ -58,6 +89,7 @@ FineShift RefineShift(const std::vector<double>& a, const std::vector<double>& b
                       bool circular) {
   // Gauss–Newton on r(x) = a(x − d/2) − b(x + d/2).
   const int n = static_cast<int>(a.size());
+  const Spline sa(a, circular), sb(b, circular);
   double d = start, sum_g2 = 0;
   std::vector<double> residuals;
   for (int iter = 0; iter < 20; ++iter) {
@@ -68,8 +100,8 @@ FineShift RefineShift(const std::vector<double>& a, const std::vector<double>& b
       const double xa = i - 0.5 * d, xb = i + 0.5 * d;
       if (!circular && (xa < 1 || xb < 1 || xa >= n - 2 || xb >= n - 2)) continue;
       double va, ga, vb, gb;
-      Cubic(a, xa, circular, &va, &ga);
-      Cubic(b, xb, circular, &vb, &gb);
+      sa.At(xa, &va, &ga);
+      sb.At(xb, &vb, &gb);
       const double r = va - vb, g = -0.5 * (ga + gb);  // dr/dd
       num += g * r;
       sum_g2 += g * g;

@@ -2,7 +2,8 @@
 
 // The shift between two sampled 1-D profiles of the same surface, b(x + d) = a(x): whole samples
 // by normalised cross-correlation, then a fraction of a sample by Gauss–Newton on both profiles
-// interpolated half-way (Catmull–Rom), so that the interpolators' errors cancel to first order.
+// interpolated half-way (interpolating cubic B-splines: their phase error is small enough that
+// a fractional shift repeated frame after frame, as at a slow feed, leaves no bias to speak of).
 // Open profiles compare where they overlap; circular ones (an angle around a gear) wrap.
 #include <vector>
 
