@@ -60,6 +60,24 @@ class Progress {
   int total_;
 };
 
+// "filament 1749.91 ± 0.07 µm (10 of 10 pairs), feed 4.502 mm/s, gear 5.001 mm/s, slip 9.98 ±
+// 0.31 % (10 pairs)", or why not.
+std::string FeedstockLine(const pipeline::FeedstockResult& f) {
+  if (f.n_diameter == 0) return fmt::format("feedstock {}: {}", f.status, f.detail);
+  std::string out =
+      f.has_um ? fmt::format("filament {:.2f} ± {:.2f} µm", f.diameter_um, f.diameter_ci95_um)
+               : fmt::format("filament {:.3f} px", f.diameter_px);
+  out += fmt::format(" ({} of {} pairs)", f.n_diameter, f.n_pairs);
+  if (f.speed_mm_s) out += fmt::format(", feed {:.3f} mm/s", *f.speed_mm_s);
+  if (f.gear_mm_s) out += fmt::format(", gear {:.3f} mm/s", *f.gear_mm_s);
+  if (f.slip_pct) {
+    out += fmt::format(", slip {:.2f}{} % ({} pairs)", *f.slip_pct,
+                       f.slip_ci95_pct ? fmt::format(" ± {:.2f}", *f.slip_ci95_pct) : "", f.n_slip);
+  }
+  if (f.status != "ok") out += fmt::format("; {}: {}", f.status, f.detail);
+  return out;
+}
+
 std::string Summary(const ExperimentReport& rep, const Provenance& prov) {
   std::string md = fmt::format("# {}\n\nclogscope {} — {} — `{}`\n\n", rep.manifest.name,
                                prov.version, prov.created_utc, prov.command_line);
@@ -81,6 +99,13 @@ std::string Summary(const ExperimentReport& rep, const Provenance& prov) {
                       r.has_um && r.n_used ? fmt::format("{:.2f}", r.ci95_um) : "",
                       r.has_um && r.n_used ? fmt::format("{:.2f}", r.std_um) : "", r.n_rejected,
                       r.status, r.detail.empty() ? "" : ": " + r.detail);
+  }
+  bool feedstock_header = false;
+  for (const auto& r : rep.steps) {
+    if (!r.feedstock) continue;
+    if (!feedstock_header) md += "\n## Feedstock (95 % CI)\n\n";
+    feedstock_header = true;
+    md += fmt::format("- step {}: {}\n", r.spec.step, FeedstockLine(*r.feedstock));
   }
   if (rep.prediction) {
     const auto& pr = rep.prediction->prediction;
@@ -121,6 +146,62 @@ bool ExperimentCommandOptions::Validate(std::string* why) const {
     return true;
   return false;
 }
+
+namespace {
+
+// How the manifest's feedstock is measured: as a filament (its whole straight stretch) inside its
+// ROI, one frame pair per sample, with its gear when it names one. A gear needs a scale (its
+// radius is in mm).
+pipeline::FeedstockOptions FeedstockOptionsFor(const pipeline::Manifest& m,
+                                               const std::optional<calib::ScaleCalibration>& conv,
+                                               int samples) {
+  const pipeline::FeedstockSpec& f = m.feedstock;
+  pipeline::FeedstockOptions fo;
+  fo.pairs = samples;
+  // The feedstock camera's own scale, else the strand camera's (the feedstock in the same view).
+  if (f.scale_um_per_px) {
+    fo.conversion = pipeline::PlainScale(*f.scale_um_per_px);
+  } else if (!f.calibration_file.empty()) {
+    fo.conversion = calib::ReadCalibrationFile(f.calibration_file);
+  } else {
+    fo.conversion = conv;
+  }
+  fo.strand.target = vision::MeasureTarget::kFilament;
+  const vision::BandPx band =
+      vision::DefaultBand(fo.strand.target, fo.conversion ? fo.conversion->scale_um_per_px : 3.0);
+  fo.strand.band_start_px = band.start_px;
+  fo.strand.band_height_px = band.height_px;
+  const auto where = [&](const std::string& key, const std::string& text) {
+    try {
+      return ParseRoi(text);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(fmt::format("{}: feedstock: {}: {}", m.path, key, e.what()));
+    }
+  };
+  if (!f.roi.empty()) fo.strand.roi = where("roi", f.roi);
+  fo.strand.polarity = vision::ParsePolarity(f.polarity);
+  if (!f.gear_roi.empty()) {
+    if (!fo.conversion) {
+      throw std::invalid_argument(m.path +
+                                  ": feedstock: gear_roi: needs a pixel scale (the gear's radius "
+                                  "is in mm): give feedstock: scale_um_per_px: or calibration:");
+    }
+    vision::GearSpeedOptions g;
+    g.roi = where("gear_roi", f.gear_roi);
+    if (!f.gear_centre.empty()) {
+      const cv::Rect c = where("gear_centre", f.gear_centre + ",1,1");
+      g.centre_px = cv::Point2d(c.x, c.y);
+    }
+    g.outer_radius_px = f.gear_radius_mm * 1e3 / fo.conversion->scale_um_per_px;
+    fo.gear = g;
+    fo.gear_radius_mm = f.gear_radius_mm;
+  }
+  std::string why;
+  if (!fo.Validate(&why)) throw std::invalid_argument(m.path + ": feedstock: " + why);
+  return fo;
+}
+
+}  // namespace
 
 ExperimentReport RunExperimentCommand(const ExperimentCommandOptions& o,
                                       std::atomic<bool>* cancel) {
@@ -175,6 +256,7 @@ ExperimentReport RunExperimentCommand(const ExperimentCommandOptions& o,
   const vision::BandPx band = vision::DefaultBand(eo.strand.target, scale);
   eo.strand.band_start_px = m.band_start_um ? *m.band_start_um / scale : band.start_px;
   eo.strand.band_height_px = m.band_height_um ? *m.band_height_um / scale : band.height_px;
+  if (m.feedstock.enabled) eo.feedstock = FeedstockOptionsFor(m, rep.conversion, eo.samples);
   Progress progress(static_cast<int>(m.steps.size()));
   eo.on_step = [&](const pipeline::StepResult& r, int done, int) { progress.Step(r, done); };
   rep.steps = pipeline::RunExperiment(m, eo);
@@ -276,6 +358,10 @@ int RunExperimentCli(const ExperimentCommandOptions& o) {
                  r.n_used ? fmt::format("{:.3f}px", r.mean_px) : "-", "", "", r.n_rejected,
                  r.status, r.detail.empty() ? "" : ": " + r.detail);
     }
+  }
+  for (const auto& r : rep.steps) {
+    if (r.feedstock)
+      fmt::print("step {} feedstock: {}\n", r.spec.step, FeedstockLine(*r.feedstock));
   }
   spdlog::info("wrote {} file(s) in {}", rep.files.size(), o.out_dir);
   if (rep.cancelled) {

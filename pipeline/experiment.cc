@@ -15,6 +15,7 @@
 #include "common/csv.h"
 #include "common/plot.h"
 #include "common/provenance.h"
+#include "pipeline/feedstock_io.h"
 #include "pipeline/statistics.h"
 #include "pipeline/step_file.h"
 #include "vision/overlay.h"
@@ -340,6 +341,19 @@ std::vector<StepResult> RunExperiment(const Manifest& m, const ExperimentOptions
       StepResult r;
       try {
         r = MeasureStep(m.steps[i], o, decoder_threads, &overlays);
+        const StepSpec& s = m.steps[i];
+        if (o.feedstock && !s.feedstock_video.empty()) {
+          try {
+            r.feedstock =
+                MeasureFeedstock(s.feedstock_video, s.start_s + s.settle_s, s.end_s, *o.feedstock);
+          } catch (const std::exception& e) {
+            // The strand's diameter stands without the feedstock's.
+            r.feedstock = FeedstockResult{};
+            r.feedstock->status = "failed";
+            r.feedstock->detail = e.what();
+            r.feedstock->video = s.feedstock_video;
+          }
+        }
       } catch (const std::exception& e) {
         r = FailedStep(m.steps[i], fmt::format("measuring stopped: {}", e.what()));
       } catch (...) {
@@ -416,22 +430,41 @@ std::vector<std::string> WriteExperimentTables(const Manifest& m,
   WriteFileAtomically((out / "frames.csv").string(), frames);
   written.push_back((out / "frames.csv").string());
 
-  // The diameter table.
+  // The diameter table; with feedstock, its columns after the strand's.
+  const bool feedstock = std::any_of(results.begin(), results.end(),
+                                     [](const StepResult& r) { return r.feedstock.has_value(); });
   std::string table = ProvenanceCsvComment(prov) + conv_line;
   table +=
       "step,temperature_c,n,mean_um,std_um,sem_um,ci95_um,cal_sigma_um,mean_px,std_px,n_rejected,"
-      "n_valid,n_examined,status,detail\n";
+      "n_valid,n_examined,status,detail";
+  if (feedstock) table += "," + CsvLine(FeedstockColumns());
+  table += "\n";
   json rows = json::array();
   for (const auto& r : results) {
     const bool have = r.n_used > 0;
     auto um = [&](double v, int d) { return have && r.has_um ? CsvNumber(v, d) : std::string(); };
-    table +=
-        CsvLine({std::to_string(r.spec.step), CsvNumber(r.spec.temperature_c, 2),
-                 std::to_string(r.n_used), um(r.mean_um, 3), um(r.std_um, 3), um(r.sem_um, 3),
-                 um(r.ci95_um, 3), um(r.cal_sigma_um, 3), have ? CsvNumber(r.mean_px, 4) : "",
-                 have ? CsvNumber(r.std_px, 4) : "", std::to_string(r.n_rejected),
-                 std::to_string(r.n_valid), std::to_string(r.n_examined), r.status, r.detail}) +
-        "\n";
+    std::vector<std::string> cells = {std::to_string(r.spec.step),
+                                      CsvNumber(r.spec.temperature_c, 2),
+                                      std::to_string(r.n_used),
+                                      um(r.mean_um, 3),
+                                      um(r.std_um, 3),
+                                      um(r.sem_um, 3),
+                                      um(r.ci95_um, 3),
+                                      um(r.cal_sigma_um, 3),
+                                      have ? CsvNumber(r.mean_px, 4) : "",
+                                      have ? CsvNumber(r.std_px, 4) : "",
+                                      std::to_string(r.n_rejected),
+                                      std::to_string(r.n_valid),
+                                      std::to_string(r.n_examined),
+                                      r.status,
+                                      r.detail};
+    if (feedstock) {
+      const std::vector<std::string> f =
+          r.feedstock ? FeedstockFields(*r.feedstock)
+                      : std::vector<std::string>(FeedstockColumns().size(), "");
+      cells.insert(cells.end(), f.begin(), f.end());
+    }
+    table += CsvLine(cells) + "\n";
     json row = {{"step", r.spec.step},
                 {"temperature_c", r.spec.temperature_c},
                 {"n", r.n_used},
@@ -443,6 +476,7 @@ std::vector<std::string> WriteExperimentTables(const Manifest& m,
                 {"status", r.status},
                 {"detail", r.detail},
                 {"source", r.spec.video.empty() ? r.spec.images : r.spec.video}};
+    if (r.feedstock) row["feedstock"] = FeedstockJson(*r.feedstock);
     if (have && r.has_um) {
       row["mean_um"] = r.mean_um;
       row["std_um"] = r.std_um;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "calib/pixel_scale.h"
+#include "pipeline/feedstock.h"
 #include "pipeline/manifest.h"
 #include "vision/strand_measure.h"
 
@@ -38,6 +39,8 @@ struct StepResult {
   double ci95_um = 0;       // half-width: t·SEM and 1.96·cal_sigma in quadrature
   std::vector<FrameRecord> frames;
   bool resumed = false;  // read back from an earlier run
+  // The step's feedstock filament, when the manifest films it (pipeline/feedstock.h).
+  std::optional<FeedstockResult> feedstock;
 };
 
 struct ExperimentOptions {
@@ -49,7 +52,9 @@ struct ExperimentOptions {
   double outlier_mad_k = 3.5;
   vision::StrandMeasureOptions strand;
   std::optional<calib::ScaleCalibration> conversion;  // a calibration, or a plain scale as one
-  std::atomic<bool>* cancel = nullptr;                // set (e.g. by Ctrl-C) to stop early
+  // How steps naming a feedstock video measure it; without, their feedstock is not measured.
+  std::optional<FeedstockOptions> feedstock;
+  std::atomic<bool>* cancel = nullptr;  // set (e.g. by Ctrl-C) to stop early
   // Called after each step (from the worker that ran it, serialised).
   std::function<void(const StepResult&, int done, int total)> on_step;
   bool Validate(std::string* why) const;

@@ -160,10 +160,26 @@ Manifest LoadManifest(const std::string& path) {
     const YamlReader y(path);
     if (!root.IsMap())
       throw std::invalid_argument(path + ": expected a mapping (name:, steps:, …)");
-    y.CheckKeys(root, {"name", "samples", "settle_s", "scale_um_per_px", "calibration", "calibrate",
-                       "extruder", "extruder_set", "roi", "polarity", "target", "band_start_um",
-                       "band_height_um", "steps", "video", "temperature_log", "video_start_s",
-                       "hold_tolerance_c", "min_step_s"});
+    y.CheckKeys(root, {"name",
+                       "samples",
+                       "settle_s",
+                       "scale_um_per_px",
+                       "calibration",
+                       "calibrate",
+                       "extruder",
+                       "extruder_set",
+                       "roi",
+                       "polarity",
+                       "target",
+                       "band_start_um",
+                       "band_height_um",
+                       "steps",
+                       "video",
+                       "temperature_log",
+                       "video_start_s",
+                       "hold_tolerance_c",
+                       "min_step_s",
+                       "feedstock"});
     m.path = path;
     const fs::path base = fs::path(path).parent_path();
     m.name = root["name"] ? y.Text(root["name"], "name") : fs::path(path).stem().string();
@@ -209,6 +225,30 @@ Manifest LoadManifest(const std::string& path) {
     if (root["video"]) m.video = Resolve(base, y.Text(root["video"], "video"));
     if (root["temperature_log"])
       m.temperature_log = Resolve(base, y.Text(root["temperature_log"], "temperature_log"));
+    if (const auto f = root["feedstock"]) {
+      if (!f.IsMap())
+        y.Fail(f, "feedstock: expected roi:, gear_roi:, gear_radius_mm:, scale_um_per_px:, …");
+      y.CheckKeys(f, {"roi", "gear_roi", "gear_centre", "gear_radius_mm", "polarity",
+                      "scale_um_per_px", "calibration"});
+      FeedstockSpec& fs = m.feedstock;
+      fs.enabled = true;
+      if (f["roi"]) fs.roi = y.Text(f["roi"], "roi");
+      if (f["gear_roi"]) fs.gear_roi = y.Text(f["gear_roi"], "gear_roi");
+      if (f["gear_centre"]) fs.gear_centre = y.Text(f["gear_centre"], "gear_centre");
+      if (f["gear_radius_mm"]) fs.gear_radius_mm = y.Number(f["gear_radius_mm"], "gear_radius_mm");
+      if (f["polarity"]) fs.polarity = y.Text(f["polarity"], "polarity");
+      if (f["scale_um_per_px"]) {
+        fs.scale_um_per_px = y.Number(f["scale_um_per_px"], "scale_um_per_px");
+        if (!(*fs.scale_um_per_px > 0))
+          y.Fail(f["scale_um_per_px"], "scale_um_per_px: must be positive");
+      }
+      if (f["calibration"])
+        fs.calibration_file = Resolve(base, y.Text(f["calibration"], "calibration"));
+      if (fs.scale_um_per_px && !fs.calibration_file.empty())
+        y.Fail(f, "feedstock: give scale_um_per_px: or calibration:, not both");
+      if (!fs.gear_roi.empty() && !(fs.gear_radius_mm > 0))
+        y.Fail(f, "feedstock: gear_roi: needs gear_radius_mm: (the gear's radius where it grips)");
+    }
     if (root["steps"] && (root["video"] || root["temperature_log"])) {
       y.Fail(root["steps"], "give either steps: or video: with temperature_log:, not both");
     }
@@ -216,8 +256,8 @@ Manifest LoadManifest(const std::string& path) {
       if (!steps.IsSequence()) y.Fail(steps, "steps: expected a list");
       for (const auto& n : steps) {
         if (!n.IsMap()) y.Fail(n, "a step: expected step:, temperature_c: and video: or images:");
-        y.CheckKeys(n,
-                    {"step", "temperature_c", "video", "images", "start_s", "end_s", "settle_s"});
+        y.CheckKeys(n, {"step", "temperature_c", "video", "images", "start_s", "end_s", "settle_s",
+                        "feedstock_video"});
         StepSpec s;
         s.line = n.Mark().line + 1;
         if (!n["step"]) y.Fail(n, "a step needs step:");
@@ -231,6 +271,10 @@ Manifest LoadManifest(const std::string& path) {
         if (n["start_s"]) s.start_s = y.Number(n["start_s"], "start_s");
         if (n["end_s"]) s.end_s = y.Number(n["end_s"], "end_s");
         s.settle_s = n["settle_s"] ? y.Number(n["settle_s"], "settle_s") : m.settle_s;
+        if (n["feedstock_video"]) {
+          s.feedstock_video = Resolve(base, y.Text(n["feedstock_video"], "feedstock_video"));
+          m.feedstock.enabled = true;
+        }
         m.steps.push_back(s);
       }
     } else if (!m.video.empty() || !m.temperature_log.empty()) {
@@ -241,6 +285,13 @@ Manifest LoadManifest(const std::string& path) {
     }
   }
   if (m.steps.empty()) throw std::invalid_argument(m.path + ": no steps");
+  // With a feedstock ROI, a step without its own feedstock video films the feedstock in its own
+  // video (the ROI tells the filament from the strand). Other steps have no feedstock.
+  if (!m.feedstock.roi.empty()) {
+    for (auto& s : m.steps) {
+      if (s.feedstock_video.empty()) s.feedstock_video = s.video;
+    }
+  }
   std::map<int, int> seen;  // step -> line
   for (const auto& s : m.steps) {
     const auto [it, fresh] = seen.insert({s.step, s.line});

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "common/csv.h"
+#include "pipeline/feedstock_io.h"
 
 namespace clogscope::pipeline {
 namespace {
@@ -44,6 +45,30 @@ json MeasuredHow(const StepSpec& s, const ExperimentOptions& o) {
               {"shading", m.shading},
               {"min_caliper_fraction", m.min_caliper_fraction},
               {"max_saturated_fraction", m.max_saturated_fraction}};
+  if (o.feedstock && !s.feedstock_video.empty()) {
+    const FeedstockOptions& f = *o.feedstock;
+    const cv::Rect& r = f.strand.roi;
+    json gear;
+    if (f.gear) {
+      const cv::Rect& g = f.gear->roi;
+      gear = {g.x,
+              g.y,
+              g.width,
+              g.height,
+              f.gear_radius_mm,
+              f.gear->centre_px ? json({f.gear->centre_px->x, f.gear->centre_px->y}) : json()};
+    }
+    key["feedstock"] = {{"video", s.feedstock_video},
+                        {"pairs", f.pairs},
+                        {"roi", {r.x, r.y, r.width, r.height}},
+                        {"polarity", static_cast<int>(f.strand.polarity)},
+                        {"gear", gear}};
+    if (f.conversion) {
+      const calib::ScaleCalibration& c = *f.conversion;
+      key["feedstock"]["conversion"] = {c.method, c.scale_um_per_px, c.scale_sigma_um_per_px,
+                                        c.edge_bias_px, c.edge_bias_sigma_px};
+    }
+  }
   if (o.conversion) {
     const calib::ScaleCalibration& c = *o.conversion;
     key["conversion"] = {c.method, c.scale_um_per_px, c.scale_sigma_um_per_px, c.edge_bias_px,
@@ -114,6 +139,11 @@ void Read(const json& j, const StepSpec& spec, const ExperimentOptions& o, StepR
   if (r->has_um != o.conversion.has_value() || r->std_um < 0 || r->sem_um < 0 ||
       r->cal_sigma_um < 0 || r->ci95_um < 0)
     throw std::invalid_argument("its spreads are inconsistent");
+  if (j.contains("feedstock") && !j.at("feedstock").is_null()) {
+    r->feedstock = FeedstockFromJson(j.at("feedstock"));
+    if (r->feedstock->status == "failed")
+      throw std::invalid_argument("the step's feedstock failed last time");
+  }
   r->resumed = true;
 }
 
@@ -124,23 +154,24 @@ std::string StepFileName(int step) { return fmt::format("step_{:04d}.json", step
 std::string StepFileText(const StepResult& r, const ExperimentOptions& o) {
   json frames = json::array();
   for (const auto& f : r.frames) frames.push_back({{"fields", f.fields}, {"used", f.used}});
-  const json j = {{"spec", MeasuredHow(r.spec, o)},
-                  {"line", r.spec.line},
-                  {"status", r.status},
-                  {"detail", r.detail},
-                  {"n_examined", r.n_examined},
-                  {"n_valid", r.n_valid},
-                  {"n_used", r.n_used},
-                  {"n_rejected", r.n_rejected},
-                  {"mean_px", r.mean_px},
-                  {"std_px", r.std_px},
-                  {"has_um", r.has_um},
-                  {"mean_um", r.mean_um},
-                  {"std_um", r.std_um},
-                  {"sem_um", r.sem_um},
-                  {"cal_sigma_um", r.cal_sigma_um},
-                  {"ci95_um", r.ci95_um},
-                  {"frames", frames}};
+  json j = {{"spec", MeasuredHow(r.spec, o)},
+            {"line", r.spec.line},
+            {"status", r.status},
+            {"detail", r.detail},
+            {"n_examined", r.n_examined},
+            {"n_valid", r.n_valid},
+            {"n_used", r.n_used},
+            {"n_rejected", r.n_rejected},
+            {"mean_px", r.mean_px},
+            {"std_px", r.std_px},
+            {"has_um", r.has_um},
+            {"mean_um", r.mean_um},
+            {"std_um", r.std_um},
+            {"sem_um", r.sem_um},
+            {"cal_sigma_um", r.cal_sigma_um},
+            {"ci95_um", r.ci95_um},
+            {"frames", frames}};
+  if (r.feedstock) j["feedstock"] = FeedstockJson(*r.feedstock);
   // Replace invalid UTF-8 (say, from a file name) rather than throw.
   return j.dump(-1, ' ', false, json::error_handler_t::replace) + "\n";
 }

@@ -116,7 +116,7 @@ TEST_F(ExperimentTest, ShortStepsAndBadSourcesAreMarkedNotFatal) {
 
 TEST_F(ExperimentTest, RunWritesTablesAndResumes) {
   Manifest m = VideoSteps(3, 5.0, 50);
-  m.steps.push_back({4, 190, (dir_ / "missing.mp4").string(), "", 0, -1, 0, 0});
+  m.steps.push_back({4, 190, (dir_ / "missing.mp4").string(), "", 0, -1, 0, 0, ""});
   ExperimentOptions o = Options(10);
   const auto results = RunExperiment(m, o);
   ASSERT_EQ(results.size(), 4u);
@@ -156,7 +156,7 @@ TEST_F(ExperimentTest, OneStepsErrorDoesNotStopTheRun) {
   const fs::path tiny = dir_ / "tiny";
   fs::create_directories(tiny);
   cv::imwrite((tiny / "a.png").string(), cv::Mat(16, 16, CV_8UC1, cv::Scalar(90)));
-  m.steps.push_back({3, 200, "", tiny.string(), 0, -1, 0, 0});
+  m.steps.push_back({3, 200, "", tiny.string(), 0, -1, 0, 0, ""});
   ExperimentOptions o = Options(5);
   o.strand.roi = cv::Rect(0, 0, 600, 300);
   fs::create_directories(dir_ / "out" / "steps" / "step_0002.json");

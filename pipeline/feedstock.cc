@@ -1,0 +1,144 @@
+#include "pipeline/feedstock.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include "pipeline/statistics.h"
+#include "vision/feed_speed.h"
+#include "vision/track.h"
+#include "vision/video_decoder.h"
+
+namespace clogscope::pipeline {
+namespace {
+
+constexpr double kSeekAheadS = 2.0;  // seek rather than decode further ahead than this
+constexpr double kZ975 = 1.959963984540054;
+
+// Mean and 95 % half-width of values after robust outlier rejection.
+void MeanAndCi(const std::vector<double>& v, std::optional<double>* mean,
+               std::optional<double>* ci95) {
+  if (v.empty()) return;
+  const SampleStats st = RobustStats(v);
+  *mean = st.mean;
+  if (st.n_used >= 2) *ci95 = st.ci95_half_width;
+}
+
+}  // namespace
+
+bool FeedstockOptions::Validate(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (pairs < 1) return fail("feedstock pairs must be at least 1");
+  if (strand.target != vision::MeasureTarget::kFilament)
+    return fail("feedstock is measured as a filament (target filament)");
+  if (!strand.Validate(why)) return false;
+  if (gear) {
+    if (!gear->Validate(why)) return false;
+    if (!(gear_radius_mm > 0)) return fail("feedstock gear: gear_radius_mm must be positive");
+    if (!conversion) return fail("feedstock gear: needs a pixel scale (its radius is in mm)");
+  }
+  return true;
+}
+
+FeedstockResult MeasureFeedstock(const std::string& video, double start_s, double end_s,
+                                 const FeedstockOptions& o) {
+  const std::optional<calib::ScaleCalibration>& conversion = o.conversion;
+  FeedstockResult r;
+  r.video = video;
+  std::string why;
+  if (!o.Validate(&why)) throw std::invalid_argument(why);
+  std::unique_ptr<vision::VideoDecoder> dec;
+  try {
+    dec = std::make_unique<vision::VideoDecoder>(video, 1);
+  } catch (const std::invalid_argument& e) {
+    r.status = "failed";
+    r.detail = e.what();
+    return r;
+  }
+  const double a = start_s;
+  const double b = end_s >= 0 && (dec->duration_s() <= 0 || end_s < dec->duration_s())
+                       ? end_s
+                       : dec->duration_s();
+  if (!(b > a)) {
+    r.status = "failed";
+    r.detail = fmt::format("{}: nothing between {:g} s and {:g} s", video, a, b);
+    return r;
+  }
+  const double slot = (b - a) / o.pairs;
+  const double mm_per_px = conversion ? conversion->scale_um_per_px * 1e-3 : 0.0;
+  vision::StrandTracker strand(o.strand);
+  std::vector<double> widths, speeds, gears, slips;
+  if (a > kSeekAheadS) dec->SeekToTime(a);
+  vision::DecodedFrame f;
+  for (int k = 0; k < o.pairs; ++k) {
+    const double target = a + (k + 0.5) * slot;
+    // Fresh speed trackers for each pair: the frame before a seek is no neighbour.
+    vision::FeedSpeedTracker feed{vision::FeedSpeedOptions{}};
+    std::optional<vision::GearSpeedTracker> gear;
+    if (o.gear) gear.emplace(*o.gear);
+    bool have_target = false;
+    int in_pair = 0;
+    while (in_pair < 2) {
+      if (!have_target && target - f.time_s > kSeekAheadS) dec->SeekToTime(target);
+      have_target = true;
+      if (!dec->Read(&f)) break;
+      if (f.time_s < target - 1e-9 && in_pair == 0) continue;
+      const vision::StrandMeasurement m = strand.Measure(f.grey);
+      if (in_pair == 0) {
+        ++r.n_pairs;
+        if (m.valid()) widths.push_back(m.width_px);
+      }
+      const vision::FeedSpeedSample v = feed.Next(f.grey, f.time_s, m);
+      vision::GearSpeedSample g;
+      if (gear) g = gear->Next(f.grey, f.time_s);
+      if (in_pair == 1 && conversion) {
+        if (v.valid) speeds.push_back(v.SpeedPxPerS() * mm_per_px);
+        if (g.valid) {
+          const double vg = std::abs(g.RadPerS()) * o.gear_radius_mm;
+          gears.push_back(vg);
+          if (v.valid && vg > 3 * g.SigmaRadPerS() * o.gear_radius_mm && vg > 1e-9)
+            slips.push_back(100 * (1 - v.SpeedPxPerS() * mm_per_px / vg));
+        }
+      }
+      ++in_pair;
+    }
+    if (in_pair < 2) break;  // the video ended
+  }
+  r.n_diameter = static_cast<int>(widths.size());
+  r.n_speed = static_cast<int>(speeds.size());
+  r.n_gear = static_cast<int>(gears.size());
+  r.n_slip = static_cast<int>(slips.size());
+  if (widths.empty()) {
+    r.status = "failed";
+    r.detail = fmt::format("{}: no valid filament width in {} frame pairs", video, r.n_pairs);
+    return r;
+  }
+  const SampleStats st = RobustStats(widths);
+  r.diameter_px = st.mean;
+  r.diameter_std_px = st.std;
+  if (conversion) {
+    const calib::ScaleCalibration& c = *conversion;
+    r.has_um = true;
+    r.diameter_um = c.ToMicrons(st.mean);
+    const double cal_sigma_um = std::hypot((st.mean - c.edge_bias_px) * c.scale_sigma_um_per_px,
+                                           c.scale_um_per_px * c.edge_bias_sigma_px);
+    const double t = st.n_used >= 2 ? StudentT975(st.n_used - 1) : NAN;
+    r.diameter_ci95_um = std::hypot(t * st.sem * c.scale_um_per_px, kZ975 * cal_sigma_um);
+  }
+  MeanAndCi(speeds, &r.speed_mm_s, &r.speed_ci95_mm_s);
+  MeanAndCi(gears, &r.gear_mm_s, &r.gear_ci95_mm_s);
+  MeanAndCi(slips, &r.slip_pct, &r.slip_ci95_pct);
+  r.status = r.n_diameter >= o.pairs ? "ok" : "too_few_pairs";
+  if (r.status != "ok") {
+    r.detail = fmt::format("{} valid filament widths of {} pairs asked ({} examined)", r.n_diameter,
+                           o.pairs, r.n_pairs);
+  }
+  return r;
+}
+
+}  // namespace clogscope::pipeline
