@@ -113,10 +113,7 @@ void Summarise(StepResult* r, const ExperimentOptions& o) {
     r->mean_um = c.ToMicrons(st.mean);
     r->std_um = st.std * c.scale_um_per_px;
     r->sem_um = st.sem * c.scale_um_per_px;
-    r->cal_sigma_um = std::hypot((st.mean - c.edge_bias_px) * c.scale_sigma_um_per_px,
-                                 c.scale_um_per_px * c.edge_bias_sigma_px);
-    const double t = st.n_used >= 2 ? StudentT975(st.n_used - 1) : NAN;
-    r->ci95_um = std::hypot(t * r->sem_um, 1.959963984540054 * r->cal_sigma_um);
+    r->ci95_um = MeanCi95Um(st, c, &r->cal_sigma_um);
   }
   r->status = r->n_valid >= o.samples ? "ok" : "too_few_frames";
   if (r->status == "too_few_frames") {
@@ -140,6 +137,13 @@ bool ExperimentOptions::Validate(std::string* why) const {
   else
     return true;
   return false;
+}
+
+double MeanCi95Um(const SampleStats& st, const calib::ScaleCalibration& c, double* cal_sigma_um) {
+  *cal_sigma_um = std::hypot((st.mean - c.edge_bias_px) * c.scale_sigma_um_per_px,
+                             c.scale_um_per_px * c.edge_bias_sigma_px);
+  const double t = st.n_used >= 2 ? StudentT975(st.n_used - 1) : NAN;
+  return std::hypot(t * st.sem * c.scale_um_per_px, 1.959963984540054 * *cal_sigma_um);
 }
 
 calib::ScaleCalibration PlainScale(double scale) {

@@ -10,6 +10,7 @@
 #include "calib/pixel_scale.h"
 #include "pipeline/feedstock.h"
 #include "pipeline/manifest.h"
+#include "pipeline/statistics.h"
 #include "vision/strand_measure.h"
 
 namespace clogscope::pipeline {
@@ -84,6 +85,11 @@ const std::vector<std::string>& FrameColumns();
 std::vector<std::string> FrameFields(const std::string& source, int frame, double time_s,
                                      const vision::StrandMeasurement& m,
                                      const std::optional<calib::ScaleCalibration>& conversion);
+
+// The 95 % half-width (µm) of the mean width of `st`: t(0.975, n−1)·SEM and 1.96 × the
+// calibration's share (scale and edge-bias σ at that width, the same for every frame) in
+// quadrature; that share goes to *cal_sigma_um. NaN with fewer than two widths.
+double MeanCi95Um(const SampleStats& st, const calib::ScaleCalibration& c, double* cal_sigma_um);
 
 // A plain scale as a calibration with no bias and no uncertainty.
 calib::ScaleCalibration PlainScale(double scale_um_per_px);

@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "pipeline/experiment.h"
 #include "pipeline/statistics.h"
 #include "vision/feed_speed.h"
 #include "vision/track.h"
@@ -15,7 +16,6 @@ namespace clogscope::pipeline {
 namespace {
 
 constexpr double kSeekAheadS = 2.0;  // seek rather than decode further ahead than this
-constexpr double kZ975 = 1.959963984540054;
 
 // Mean and 95 % half-width of values after robust outlier rejection.
 void MeanAndCi(const std::vector<double>& v, std::optional<double>* mean,
@@ -125,10 +125,8 @@ FeedstockResult MeasureFeedstock(const std::string& video, double start_s, doubl
     const calib::ScaleCalibration& c = *conversion;
     r.has_um = true;
     r.diameter_um = c.ToMicrons(st.mean);
-    const double cal_sigma_um = std::hypot((st.mean - c.edge_bias_px) * c.scale_sigma_um_per_px,
-                                           c.scale_um_per_px * c.edge_bias_sigma_px);
-    const double t = st.n_used >= 2 ? StudentT975(st.n_used - 1) : NAN;
-    r.diameter_ci95_um = std::hypot(t * st.sem * c.scale_um_per_px, kZ975 * cal_sigma_um);
+    double cal_sigma_um = 0;
+    r.diameter_ci95_um = MeanCi95Um(st, c, &cal_sigma_um);
   }
   MeanAndCi(speeds, &r.speed_mm_s, &r.speed_ci95_mm_s);
   MeanAndCi(gears, &r.gear_mm_s, &r.gear_ci95_mm_s);
