@@ -88,6 +88,7 @@ FeedstockResult MeasureFeedstock(const std::string& video, double start_s, doubl
       have_target = true;
       if (!dec->Read(&f)) break;
       if (f.time_s < target - 1e-9 && in_pair == 0) continue;
+      if (in_pair == 0 && f.time_s >= b - 1e-9) break;  // the step's part is over
       const vision::StrandMeasurement m = strand.Measure(f.grey);
       if (in_pair == 0) {
         ++r.n_pairs;
@@ -107,7 +108,7 @@ FeedstockResult MeasureFeedstock(const std::string& video, double start_s, doubl
       }
       ++in_pair;
     }
-    if (in_pair < 2) break;  // the video ended
+    if (in_pair < 2) break;  // the video or the step's part ended
   }
   r.n_diameter = static_cast<int>(widths.size());
   r.n_speed = static_cast<int>(speeds.size());
