@@ -1,5 +1,7 @@
 #pragma once
 
+#include <atomic>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -12,6 +14,7 @@
 #include "model/roller_drive.h"
 #include "model/thermal.h"
 #include "pipeline/experiment.h"
+#include "pipeline/live_watch.h"
 #include "vision/feed_speed.h"
 #include "vision/gear_speed.h"
 #include "vision/scene.h"
@@ -32,6 +35,7 @@ int RunInspect(int argc, char** argv);
 int RunThermal(int argc, char** argv);
 int RunDrive(int argc, char** argv);
 int RunLag(int argc, char** argv);
+int RunWatch(int argc, char** argv);
 
 // --- render --------------------------------------------------------------------------------
 struct RenderCommandOptions {
@@ -47,6 +51,9 @@ struct RenderCommandOptions {
   double lag_k_s = 0.1;
   double lag_um_per_mm3_s = 40;
   double filament_diameter_mm = 1.75;
+  // A clog sequence for `watch`: the strand narrows by drop_pct % at drop_at_s (0: no drop).
+  double drop_pct = 0;
+  double drop_at_s = 0;
   bool Validate(std::string* why) const;
 };
 // Renders and writes frames and truth; returns the truth path written.
@@ -281,5 +288,35 @@ ExperimentReport RunExperimentCommand(const ExperimentCommandOptions& options,
 // The command-line side shared by `run` and `measure --manifest`: Ctrl-C handling, the printed
 // table, the exit status.
 int RunExperimentCli(const ExperimentCommandOptions& options);
+
+// --- watch ---------------------------------------------------------------------------------
+struct WatchCommandOptions {
+  // The measurement as `measure` has it (scale or calibration, ROI, band, target, polarity…);
+  // its inputs are not used.
+  MeasureCommandOptions measure;
+  // Source, its timeouts, the rolling window and thresholds, report interval, duration. Its
+  // strand, conversion and extruder are filled from the fields here.
+  pipeline::LiveWatchOptions live;
+  std::string extruder;                 // preset or YAML: attaches the clog index; empty: none
+  std::vector<std::string> set;         // "name=value" overrides of the extruder
+  std::optional<double> temperature_c;  // the nozzle's; default the extruder's reference
+  std::string log_path;                 // JSON lines appended here; empty: standard output
+  std::string http;                     // HOST:PORT for /status, /metrics, /frame.jpg
+  std::string on_alert;                 // shell command run on every level change
+};
+
+struct WatchReport {
+  pipeline::LiveWatchSummary summary;
+  int http_port = 0;  // the bound port (useful with --http HOST:0)
+  std::vector<std::string> alert_failures;
+};
+
+// Watches a camera, stream, file or folder until *stop (or the file's end, or --duration-s),
+// writing JSON lines, serving HTTP and running the alert command. Throws std::invalid_argument
+// (one line naming the option, file or source) when nothing can be watched: bad options, a source
+// that cannot be opened or yields no frame, a log that cannot be opened, a port in use.
+// `on_started`, when given, is called once the HTTP server listens (before the source opens).
+WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* stop,
+                        const std::function<void(int http_port)>& on_started = {});
 
 }  // namespace clogscope::apps

@@ -40,6 +40,8 @@ const Command kCommands[] = {
     {"drive", clogscope::apps::RunDrive, "roller-drive slip against feed and pinch force"},
     {"lag", clogscope::apps::RunLag,
      "extrusion lag K from video widths and a commanded flow; linear advance"},
+    {"watch", clogscope::apps::RunWatch,
+     "live camera or stream: diameter drift, clog index, alerts (JSON lines, HTTP)"},
 };
 
 void PrintUsage() {
@@ -58,6 +60,8 @@ void PrintUsage() {
       "  clogscope predict --extruder direct-pla --diameters diameters.csv --out pred/\n"
       "  clogscope thermal --material pla --fan-velocity-m-s 0.3\n"
       "  clogscope drive --roller 3 --pinch-force-n 80 --feed-force-n 20\n"
+      "  clogscope watch http://printer.local/webcam/?action=stream --calib calib.yaml --http "
+      "0.0.0.0:8090\n"
       "  clogscope lag --frames frames.csv --commanded profile.csv --out lag/\n"
       "\nEnvironment: CLOGSCOPE_LOG=debug|info|warn|error sets the log level (default info).\n");
 }

@@ -13,6 +13,7 @@
 
 #include "apps/cli_util.h"
 #include "apps/commands.h"
+#include "apps/measure_options.h"
 #include "apps/measure_rows.h"
 #include "calib/calibration_file.h"
 #include "common/atomic_file.h"
@@ -286,8 +287,6 @@ int RunMeasure(int argc, char** argv) {
   CLI::App app{"Measure the strand width in every frame of images, image directories or videos.",
                "clogscope measure"};
   MeasureCommandOptions o;
-  std::string roi, polarity = "auto", target = "strand";
-  double min_contrast_levels = 0;
   bool no_outliers = false;
   ExperimentCommandOptions exp;
   int samples = 0;
@@ -299,35 +298,13 @@ int RunMeasure(int argc, char** argv) {
   app.add_option("--jobs", exp.jobs,
                  "With --manifest: steps measured at once (default: all cores)");
   app.add_flag("--resume", exp.resume, "With --manifest: keep steps already measured in --out");
-  std::string calib_path;
-  app.add_option("--scale-um-per-px", o.scale_um_per_px,
-                 "Pixel scale; widths in µm need it or --calib");
-  app.add_option("--calib", calib_path,
-                 "Calibration file from clogscope calibrate (scale and edge bias)");
+  MeasureCliText text;
+  AddMeasurementOptions(app, &o, &text);
   app.add_option("--out-frames", o.out_frames,
                  "Per-frame CSV to write (inputs mode; default or '-': standard output)");
   app.add_option("--overlay", o.overlay_dir, "Directory for annotated PNGs");
   app.add_option("--overlay-every", o.overlay_every,
                  "Overlay every Nth frame (default: every image, every 25th video frame)");
-  app.add_option("--roi", roi, "Search only inside x,y,w,h (px)");
-  app.add_option("--band-start-um", o.band_start_um, "Band start below the tip (default 50 µm)");
-  app.add_option("--band-height-um", o.band_height_um, "Band height (default 150 µm)");
-  app.add_option("--band-start-px", o.band_start_px, "Band start in px (default 50 µm at 3 µm/px)");
-  app.add_option("--band-height-px", o.band_height_px,
-                 "Band height in px (default 150 µm at 3 µm/px)");
-  app.add_option("--caliper-px", o.strand.caliper_spacing_px, "Caliper thickness along the axis")
-      ->capture_default_str();
-  app.add_option("--polarity", polarity, "auto, bright (lit strand) or dark (silhouette)")
-      ->capture_default_str();
-  app.add_option("--target", target,
-                 "strand (below a nozzle tip; band from the tip) or filament (no tip: feedstock, "
-                 "needle, pin; band along the whole visible stretch)")
-      ->capture_default_str();
-  app.add_option("--max-blur-px", o.strand.max_blur_px,
-                 "Frames blurrier than this are out of focus")
-      ->capture_default_str();
-  app.add_option("--min-contrast", min_contrast_levels,
-                 "Minimum edge contrast in 8-bit grey levels (default 15)");
   app.add_flag("--no-outlier-flags", no_outliers, "Do not mark width outliers between frames");
   app.add_flag("--speed", o.feed_speed,
                "With --target filament: feed speed from the surface texture between consecutive "
@@ -343,9 +320,6 @@ int RunMeasure(int argc, char** argv) {
   app.add_option("--speed-max-shift-px", o.feed.max_shift_px,
                  "Largest movement per frame searched for --speed")
       ->capture_default_str();
-  bool no_shading = false;
-  app.add_flag("--no-shading", no_shading,
-               "Fit every edge as a plain blurred step (no shading term for front-lit strands)");
   app.footer(
       "Examples:\n"
       "  clogscope measure step1.mp4 --scale-um-per-px 3.0 --out-frames frames.csv\n"
@@ -364,13 +338,12 @@ int RunMeasure(int argc, char** argv) {
     if (!o.inputs.empty())
       throw std::invalid_argument("give either inputs or --manifest, not both");
     exp.scale_um_per_px = o.scale_um_per_px;
-    exp.calib_path = calib_path;
+    exp.calib_path = text.calib_path;
     if (samples) exp.samples = samples;
     return RunExperimentCli(exp);
   }
   if (o.inputs.empty())
     throw std::invalid_argument("give inputs (images, directories, videos) or --manifest");
-  if (!roi.empty()) o.strand.roi = ParseRoi(roi);
   if (!gear_roi.empty()) {
     try {
       o.gear_roi = ParseRoi(gear_roi);
@@ -387,16 +360,8 @@ int RunMeasure(int argc, char** argv) {
     }
     o.gear_centre_px = cv::Point2d(c.x, c.y);
   }
-  if (!calib_path.empty()) o.calibration = calib::ReadCalibrationFile(calib_path);
-  o.strand.polarity = vision::ParsePolarity(polarity);
-  o.strand.target = vision::ParseMeasureTarget(target);
-  if (app.count("--min-contrast")) {
-    if (!(min_contrast_levels > 0 && min_contrast_levels < 255))
-      throw std::invalid_argument("--min-contrast: must be in (0, 255) grey levels");
-    o.strand.min_contrast_fraction = min_contrast_levels / 255.0;
-  }
+  ApplyMeasurementOptions(app, text, &o);
   o.flag_outliers = !no_outliers;
-  o.strand.shading = !no_shading;
   const MeasureSummary s = MeasureInputs(o);
   // No input read: its error said it all; a line about an empty table would only add noise.
   if (s.inputs_ok > 0) {

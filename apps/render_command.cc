@@ -49,7 +49,16 @@ std::string RenderToFiles(const RenderCommandOptions& o) {
     }
   }
   if (o.lag_commanded.empty()) {
-    vision::RenderSequence(o.scene, o.frames, o.fps, o.out, truth);
+    vision::SceneParams scene = o.scene;
+    if (o.drop_pct != 0) {
+      if (!o.scene.frame_width_um.empty() || !(o.drop_pct > -100 && o.drop_pct < 100))
+        throw std::invalid_argument("--drop-pct: must be in (−100, 100) % (and without --lag-*)");
+      for (int i = 0; i < o.frames; ++i) {
+        scene.frame_width_um.push_back(scene.strand_width_um *
+                                       (i / o.fps >= o.drop_at_s ? 1 + o.drop_pct / 100 : 1.0));
+      }
+    }
+    vision::RenderSequence(scene, o.frames, o.fps, o.out, truth);
     return truth;
   }
   // The strand's width follows the lagged outlet flow at each frame's time (frame i at i / fps).
@@ -172,6 +181,15 @@ int RunRender(int argc, char** argv) {
   app.add_option("--knurl", knurl,
                  "DEPTH,PITCH,START (px): knurl marks on the strand's left edge below START");
   std::string lag_form = "moves";
+  app.add_option("--drop-pct", o.drop_pct,
+                 "Clog sequence: the strand narrows by this % (negative) at --drop-at-s");
+  app.add_option("--drop-at-s", o.drop_at_s, "When the strand narrows (frame time)");
+  app.add_option("--purge-at-s", s.purge_start_s, "A purge blob hangs from the tip from then");
+  app.add_option("--purge-s", s.purge_duration_s, "…for this long")->capture_default_str();
+  app.add_option("--occlude-at-s", s.occlusion_start_s,
+                 "Something passes in front of the strand at these times");
+  app.add_option("--occlude-s", s.occlusion_duration_s, "…for this long each")
+      ->capture_default_str();
   app.add_option("--lag-commanded", o.lag_commanded,
                  "Flow profile CSV (time_s, flow_mm3_s): the width follows its first-order lag");
   app.add_option("--lag-k-s", o.lag_k_s, "Lag K of the outlet flow")->capture_default_str();

@@ -17,6 +17,7 @@ packages=(
   libavformat-dev libavcodec-dev libavutil-dev libswscale-dev  # video decoding straight to luma
   ffmpeg                 # codec libraries for OpenCV's FFmpeg backend; ffmpeg CLI for decode benchmarks
   gnuplot-nox            # plots (optional at run time)
+  libcpp-httplib-dev     # `watch --http`: /status, /metrics, /frame.jpg
 )
 if [ "${1:-}" = "--fuzz" ]; then
   packages+=(clang-14 libclang-rt-14-dev)  # libFuzzer with ASan/UBSan

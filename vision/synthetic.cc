@@ -400,6 +400,20 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
   const double* tn = p.colour ? p.nozzle_tint : kGrey;
   const double corner2 = centre.x * centre.x + centre.y * centre.y;
 
+  // Live-watch events in front of the scene at this frame's time.
+  std::vector<render::ClutterObject> events;
+  if (p.purge_start_s >= 0 && truth.time_s >= p.purge_start_s &&
+      truth.time_s < p.purge_start_s + p.purge_duration_s) {
+    const double r = p.purge_radius_px > 0 ? p.purge_radius_px : 1.5 * w;
+    events.push_back({p.tip_x_px + d_strand.x * r, p.tip_y_px + d_strand.y * r, r, p.strand_level});
+  }
+  for (double t0 : p.occlusion_start_s) {
+    if (truth.time_s >= t0 && truth.time_s < t0 + p.occlusion_duration_s) {
+      events.push_back({p.tip_x_px + d_strand.x * 3 * w, p.tip_y_px + d_strand.y * 3 * w, 3 * w,
+                        p.background_level < 128 ? 5.0 : 250.0});
+      break;
+    }
+  }
   std::vector<cv::Mat> radiance(nc);
   for (auto& r : radiance) r.create(p.height_px, p.width_px, CV_64F);
   // Rows are independent: render them on all cores.
@@ -474,6 +488,10 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
           double v = bg * tb[c] * (1 - cov) + front * ts[c];
           v = v * (1 - bed_a) + p.bed_level * tb[c] * bed_a;
           v = v * (1 - nozzle_a) + p.nozzle_level * tn[c] * nozzle_a;
+          for (const auto& o : events) {
+            const double a = o.Coverage(x, y, sigma);
+            if (a > 0) v = v * (1 - a) + o.level * tb[c] * a;
+          }
           radiance[c].ptr<double>(y)[x] = v * gain;
         }
       }

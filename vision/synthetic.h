@@ -118,6 +118,14 @@ struct SceneParams {
   double nozzle_tint[3] = {0.45, 0.75, 1.0};
   int bit_depth = 8;  // 8 or 16
   uint64_t seed = 1;
+  // Live-watch events, by frame time (frame_index / frame_rate_hz): a purge blob of molten
+  // plastic hanging from the tip (a disc at strand_level, purge_radius_px, its top at the tip) from
+  // purge_start_s for purge_duration_s; occluders (a dark disc of three strand widths' radius over
+  // the strand below the tip, as a tool or a hand passing) from each occlusion_start_s for
+  // occlusion_duration_s. Negative start / empty list: none. Truth stays the strand's.
+  double purge_start_s = -1, purge_duration_s = 2, purge_radius_px = 0;  // radius 0: 1.5 widths
+  std::vector<double> occlusion_start_s;
+  double occlusion_duration_s = 0.5;
 
   // True when the parameters make a renderable scene; otherwise says why.
   bool Validate(std::string* why) const;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <memory>
@@ -43,6 +44,25 @@ struct VideoDecoder::Impl {
   int64_t start_pts = 0;
   bool flushing = false;
   bool finished = false;
+  // Live streams: blocking FFmpeg calls give up past the deadline or when *stop turns true.
+  const std::atomic<bool>* stop = nullptr;
+  std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
+  bool interrupted = false;
+
+  void ArmDeadline(double seconds) {
+    deadline = seconds > 0 ? std::chrono::steady_clock::now() +
+                                 std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                     std::chrono::duration<double>(seconds))
+                           : std::chrono::steady_clock::time_point::max();
+  }
+  static int Interrupt(void* opaque) {
+    auto* d = static_cast<Impl*>(opaque);
+    if ((d->stop && d->stop->load()) || std::chrono::steady_clock::now() > d->deadline) {
+      d->interrupted = true;
+      return 1;
+    }
+    return 0;
+  }
 
   ~Impl() {
     sws_freeContext(sws);
@@ -125,16 +145,43 @@ int CountedGetBuffer(AVCodecContext* codec, AVFrame* frame, int flags) {
 }  // namespace
 
 VideoDecoder::VideoDecoder(const std::string& path, int threads)
+    : VideoDecoder(path, VideoDecoderOptions{threads}) {}
+
+VideoDecoder::VideoDecoder(const std::string& path, const VideoDecoderOptions& options)
     : impl_(std::make_unique<Impl>()), path_(path) {
   av_log_set_level(AV_LOG_QUIET);
   std::string why;
-  if (path.find("://") == std::string::npos && !IsRegularFile(path, &why))
+  const bool url = path.find("://") != std::string::npos;
+  if (!url && !IsRegularFile(path, &why))
     throw std::invalid_argument(path + ": " + why);  // a FIFO would block FFmpeg's open
   Impl& d = *impl_;
-  int err = avformat_open_input(&d.format, path.c_str(), nullptr, nullptr);
-  if (err < 0) throw std::invalid_argument(path + ": cannot open as video (" + AvError(err) + ")");
+  if (url) avformat_network_init();
+  d.format = avformat_alloc_context();
+  d.stop = options.stop;
+  d.format->interrupt_callback = {&Impl::Interrupt, &d};
+  AVDictionary* open_options = nullptr;
+  if (options.low_latency) {
+    // Probe briefly and hand packets on as they arrive: a live view wants the newest frame.
+    av_dict_set(&open_options, "fflags", "nobuffer", 0);
+    av_dict_set(&open_options, "analyzeduration", "500000", 0);
+    av_dict_set(&open_options, "probesize", "500000", 0);
+  }
+  d.ArmDeadline(options.open_timeout_s);
+  int err = avformat_open_input(&d.format, path.c_str(), nullptr, &open_options);
+  av_dict_free(&open_options);
+  const auto opening_failed = [&](const std::string& what) {
+    if (d.interrupted && d.stop && d.stop->load()) return path + ": stopped while opening";
+    if (d.interrupted)
+      return fmt::format("{}: no stream within {:g} s (--open-timeout-s)", path,
+                         options.open_timeout_s);
+    return path + ": " + what + " (" + AvError(err) + ")";
+  };
+  if (err < 0) throw std::invalid_argument(opening_failed("cannot open as video"));
   err = avformat_find_stream_info(d.format, nullptr);
-  if (err < 0) throw std::invalid_argument(path + ": unreadable container (" + AvError(err) + ")");
+  if (err < 0) throw std::invalid_argument(opening_failed("unreadable container"));
+  d.ArmDeadline(0);
+  const int threads = options.low_latency ? 1 : options.threads;
+  read_timeout_s_ = options.read_timeout_s;
   const AVCodec* codec = nullptr;
   d.stream = av_find_best_stream(d.format, AVMEDIA_TYPE_VIDEO, -1, -1, &codec, 0);
   if (d.stream < 0 || !codec) throw std::invalid_argument(path + ": no decodable video stream");
@@ -170,6 +217,8 @@ VideoDecoder::VideoDecoder(const std::string& path, int threads)
 }
 
 VideoDecoder::~VideoDecoder() = default;
+
+bool VideoDecoder::interrupted() const { return impl_->interrupted; }
 
 int VideoDecoder::width() const { return impl_->codec->width; }
 int VideoDecoder::height() const { return impl_->codec->height; }
@@ -247,6 +296,7 @@ bool VideoDecoder::Read(DecodedFrame* out) {
     }
     // Feed the next packet of our stream.
     while (true) {
+      d.ArmDeadline(read_timeout_s_);
       err = av_read_frame(d.format, d.packet);
       if (err < 0) {
         avcodec_send_packet(d.codec, nullptr);  // drain

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <atomic>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <string>
@@ -15,12 +16,24 @@ struct DecodedFrame {
   bool corrupt = false;  // the decoder reported damage in this frame's data
 };
 
-// Reads video files through libavformat/libavcodec (FFmpeg from Debian).
+// How a decoder opens and reads: for live streams, limits on how long it may wait and a flag that
+// interrupts it.
+struct VideoDecoderOptions {
+  int threads = 0;            // decoder threads, 0 = FFmpeg's choice
+  double open_timeout_s = 0;  // opening and probing the stream may take this long; 0: no limit
+  double read_timeout_s = 0;  // each read may wait this long for data; 0: no limit
+  const std::atomic<bool>* stop = nullptr;  // when set and true, blocking calls return at once
+  bool low_latency = false;  // live: short probing, no input buffering, one decoder thread
+};
+
+// Reads video files and streams (any URL FFmpeg reads) through libavformat/libavcodec (FFmpeg
+// from Debian).
 class VideoDecoder {
  public:
-  // Throws std::invalid_argument naming the path when it cannot be opened or has no video stream.
-  // threads: decoder threads, 0 = FFmpeg's choice.
+  // Throws std::invalid_argument naming the path when it cannot be opened (or opening timed out)
+  // or has no video stream. threads: decoder threads, 0 = FFmpeg's choice.
   explicit VideoDecoder(const std::string& path, int threads = 0);
+  VideoDecoder(const std::string& path, const VideoDecoderOptions& options);
   ~VideoDecoder();
   VideoDecoder(const VideoDecoder&) = delete;
   VideoDecoder& operator=(const VideoDecoder&) = delete;
@@ -38,6 +51,8 @@ class VideoDecoder {
   int width() const;
   int height() const;
   int corrupt_packets() const { return corrupt_packets_; }
+  // After Read() returned false: the read timed out or was stopped rather than reaching the end.
+  bool interrupted() const;
   const std::string& path() const { return path_; }
 
  private:
@@ -48,6 +63,7 @@ class VideoDecoder {
   double duration_s_ = 0;
   int frame_count_ = -1;
   int next_index_ = 0;
+  double read_timeout_s_ = 0;
   int corrupt_packets_ = 0;
   double skip_before_s_ = -1;  // after a seek: drop frames earlier than this
 };

@@ -1,0 +1,176 @@
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <csignal>
+#include <stdexcept>
+
+#include "apps/cli_util.h"
+#include "apps/commands.h"
+#include "apps/measure_options.h"
+#include "apps/watch_outputs.h"
+#include "pipeline/experiment.h"
+
+namespace clogscope::apps {
+namespace {
+
+std::atomic<bool> g_stop_watch{false};
+
+extern "C" void OnWatchSignal(int) {
+  // A second Ctrl-C while the watch winds down ends it at once.
+  if (g_stop_watch.exchange(true)) _exit(130);
+}
+
+}  // namespace
+
+WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* stop,
+                        const std::function<void(int)>& on_started) {
+  MeasureCommandOptions m = options.measure;
+  m.ResolveBand();
+  pipeline::LiveWatchOptions live = options.live;
+  live.strand = m.strand;
+  live.conversion = m.calibration       ? m.calibration
+                    : m.scale_um_per_px ? std::optional(pipeline::PlainScale(*m.scale_um_per_px))
+                                        : std::nullopt;
+  if (!options.extruder.empty()) {
+    live.extruder = LoadExtruderWithOverrides(options.extruder, options.set);
+    live.temperature_c =
+        options.temperature_c.value_or(live.extruder->Get(model::Param::kReferenceTemperatureC));
+  } else if (options.temperature_c || !options.set.empty()) {
+    throw std::invalid_argument("--temperature-c and --set go with --extruder");
+  }
+  std::string why;
+  if (!live.Validate(&why)) throw std::invalid_argument(why);
+
+  LineLog log(options.log_path);
+  pipeline::WatchBoard board;
+  std::optional<WatchHttpServer> http;
+  if (!options.http.empty()) http.emplace(options.http, &board, live.conversion);
+  std::optional<AlertCommand> alert;
+  if (!options.on_alert.empty()) alert.emplace(options.on_alert);
+  WatchReport report;
+  report.http_port = http ? http->port() : 0;
+  if (http) spdlog::info("serving /status, /metrics and /frame.jpg on {}", options.http);
+  if (on_started) on_started(report.http_port);
+
+  pipeline::LiveWatchEvents events;
+  std::string last_line;
+  events.on_line = [&](const std::string& line) {
+    log.Write(line);
+    last_line = line;
+  };
+  events.on_level_change = [&](const pipeline::WatchStatus& s,
+                               const std::optional<pipeline::ClogIndex>& clog) {
+    spdlog::log(s.level == pipeline::WatchLevel::kOk ? spdlog::level::info : spdlog::level::warn,
+                "{:.1f} s: {} → {}: {}", s.time_s, pipeline::WatchLevelName(s.previous_level),
+                pipeline::WatchLevelName(s.level), s.reason);
+    if (!alert) return;
+    std::string no_start;
+    if (!alert->Run(s, clog, live.source, last_line, &no_start)) {
+      spdlog::error("{}", no_start);
+      report.alert_failures.push_back(no_start);
+    }
+    for (const std::string& f : alert->Reap()) {
+      spdlog::warn("{}", f);
+      report.alert_failures.push_back(f);
+    }
+  };
+  events.on_warning = [](const std::string& message) { spdlog::warn("{}", message); };
+  report.summary = pipeline::RunLiveWatch(live, events, &board, stop);
+  if (alert) {
+    for (const std::string& f : alert->Reap(/*wait=*/true)) {
+      spdlog::warn("{}", f);
+      report.alert_failures.push_back(f);
+    }
+  }
+  return report;
+}
+
+int RunWatch(int argc, char** argv) {
+  CLI::App app{
+      "Watch a nozzle live: the effective diameter from a camera, stream, video file or folder, "
+      "its drift from a baseline, a clog index and alert levels (ok, warn, clog, not_extruding, "
+      "no_view) as JSON lines, over HTTP and through a command.",
+      "clogscope watch"};
+  WatchCommandOptions o;
+  MeasureCliText text;
+  pipeline::LiveWatchOptions& live = o.live;
+  pipeline::WatchOptions& w = live.watch;
+  app.add_option("source", live.source,
+                 "/dev/videoN, a stream URL (http://…/?action=stream, rtsp://, tcp://, udp://), a "
+                 "video file, or a folder a camera writes images into")
+      ->required();
+  AddMeasurementOptions(app, &o.measure, &text);
+  app.add_flag("--realtime", live.source_options.realtime,
+               "Video file: deliver frames at their timestamps (replays, tests)");
+  app.add_option("--open-timeout-s", live.source_options.open_timeout_s,
+                 "A stream must deliver its first frame within this")
+      ->capture_default_str();
+  app.add_option("--read-timeout-s", live.source_options.read_timeout_s,
+                 "A stream silent this long has dropped: reopen it")
+      ->capture_default_str();
+  app.add_option("--window-s", w.window_s, "Rolling statistics over the last window")
+      ->capture_default_str();
+  app.add_option("--alert-window-s", w.alert_window_s,
+                 "The alert levels test the drift of the last this-many seconds")
+      ->capture_default_str();
+  app.add_option("--baseline-s", w.baseline_s, "Baseline: the first seconds of valid frames")
+      ->capture_default_str();
+  app.add_option("--baseline-um", w.baseline_um, "Or a given baseline diameter (needs a scale)");
+  app.add_option("--warn-pct", w.warn_drift_pct, "Drift that raises warn")->capture_default_str();
+  app.add_option("--clog-pct", w.clog_drift_pct, "Drift that raises clog")->capture_default_str();
+  app.add_option("--hysteresis-pct", w.hysteresis_pct,
+                 "A drift level is left this far back above its threshold")
+      ->capture_default_str();
+  app.add_option("--hold-s", w.hold_s, "A level's condition must hold this long")
+      ->capture_default_str();
+  app.add_option("--min-valid-fraction", w.min_valid_fraction,
+                 "Fewer valid frames than this in the window: not_extruding or no_view")
+      ->capture_default_str();
+  app.add_option("--extruder", o.extruder,
+                 "Preset or YAML: attach the predictor (back-pressure ratio, vibration increase)");
+  app.add_option("--set", o.set, "name=value overrides of the extruder's parameters");
+  app.add_option("--temperature-c", o.temperature_c,
+                 "Nozzle temperature for the clog index (default: the extruder's reference)");
+  app.add_option("--log", o.log_path, "Append the JSON lines here (default: standard output)");
+  app.add_option("--report-s", live.report_every_s,
+                 "A status line every this-many seconds (default: --window-s)");
+  app.add_option("--http", o.http, "HOST:PORT to serve /status, /metrics and /frame.jpg");
+  app.add_option("--on-alert", o.on_alert,
+                 "Shell command run on every level change (state in CLOGSCOPE_* variables)");
+  app.add_option("--duration-s", live.duration_s, "Stop after this long (default: until Ctrl-C)");
+  app.footer(
+      "Examples:\n"
+      "  clogscope watch http://printer.local/webcam/?action=stream --calib calib.yaml \\\n"
+      "      --http 0.0.0.0:8090 --log watch.jsonl\n"
+      "  clogscope watch /dev/video0 --scale-um-per-px 3 --extruder direct-pla --temperature-c "
+      "210\n"
+      "  clogscope watch replay.mp4 --realtime --scale-um-per-px 3 --on-alert \\\n"
+      "      'curl -s -X POST http://printer.local/printer/print/pause'\n"
+      "Exit status: 0 after Ctrl-C, the file's end or --duration-s; 1 when nothing could be "
+      "watched.");
+  if (!ParseCommandLine(app, argc, argv)) return 0;
+  ApplyMeasurementOptions(app, text, &o.measure);
+  g_stop_watch.store(false);
+  std::signal(SIGINT, OnWatchSignal);
+  std::signal(SIGTERM, OnWatchSignal);
+  WatchReport r;
+  try {
+    r = WatchNozzle(o, &g_stop_watch);
+  } catch (...) {
+    std::signal(SIGINT, SIG_DFL);
+    std::signal(SIGTERM, SIG_DFL);
+    throw;
+  }
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+  const pipeline::LiveWatchSummary& s = r.summary;
+  spdlog::info(
+      "watch ended ({}): {} frames, {} valid, {} skipped, {} reconnect(s), {} level change(s), "
+      "final level {}; latency median {:.1f} ms, p95 {:.1f} ms",
+      s.ended_because, s.frames, s.valid_frames, s.skipped_frames, s.reconnects, s.level_changes,
+      pipeline::WatchLevelName(s.final_level), s.latency_median_ms, s.latency_p95_ms);
+  return 0;
+}
+
+}  // namespace clogscope::apps

@@ -1,0 +1,61 @@
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "pipeline/live_watch.h"
+
+namespace clogscope::apps {
+
+// The watch's JSON lines: to standard output, or appended to a file. Each line goes out in one
+// write(2) on a file opened for appending, so a crash leaves every complete line intact.
+class LineLog {
+ public:
+  // Empty path: standard output. Throws std::invalid_argument naming --log when it cannot open.
+  explicit LineLog(const std::string& path);
+  ~LineLog();
+  void Write(const std::string& line);
+
+ private:
+  int fd_ = 1;
+  bool own_ = false;
+};
+
+// --on-alert: runs `sh -c COMMAND` on every level change without waiting for it, the state in
+// CLOGSCOPE_* environment variables (LEVEL, PREVIOUS_LEVEL, TIME_S, REASON, DIAMETER_UM,
+// DRIFT_PCT, DRIFT_CI95_PCT, BASELINE_UM, BACK_PRESSURE_RATIO, VIBRATION_INCREASE_PCT, SOURCE,
+// STATUS_JSON).
+class AlertCommand {
+ public:
+  explicit AlertCommand(std::string command) : command_(std::move(command)) {}
+  ~AlertCommand();  // waits (up to 10 s) for the commands still running
+  // Starts the command; false with *why when it could not be started.
+  bool Run(const pipeline::WatchStatus& status, const std::optional<pipeline::ClogIndex>& clog,
+           const std::string& source, const std::string& status_json, std::string* why);
+  // Collects finished commands; returns lines about those that failed.
+  std::vector<std::string> Reap(bool wait = false);
+
+ private:
+  std::string command_;
+  std::vector<int> running_;  // pids
+};
+
+// --http HOST:PORT: /status (JSON), /metrics (Prometheus text), /frame.jpg (the latest overlay).
+class WatchHttpServer {
+ public:
+  // Binds at once: throws std::invalid_argument naming --http when the address is malformed or the
+  // port cannot be bound (in use, no permission). Serves on its own threads from then on.
+  WatchHttpServer(const std::string& host_port, const pipeline::WatchBoard* board,
+                  std::optional<calib::ScaleCalibration> conversion);
+  ~WatchHttpServer();  // stops serving
+  int port() const { return port_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  int port_ = 0;
+};
+
+}  // namespace clogscope::apps

@@ -1,0 +1,248 @@
+// `clogscope watch` end to end: a rendered clog sequence read from a file and served as a real
+// HTTP MJPEG stream by FFmpeg, the JSON lines, /status, /metrics, /frame.jpg, the alert command,
+// and bad input.
+#include <arpa/inet.h>
+#include <gtest/gtest.h>
+#include <httplib.h>
+#include <netinet/in.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "apps/commands.h"
+#include "tests/apps/cli_test_util.h"
+#include "vision/synthetic.h"
+
+extern char** environ;
+
+namespace clogscope::apps {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::FreshDir;
+using testing::RunCli;
+
+constexpr double kDropAtS = 12.0;  // the strand narrows by 3 % here
+constexpr double kSeconds = 20.0;
+
+// A listening TCP socket on a free loopback port (closed at destruction).
+struct Listener {
+  int fd = -1;
+  int port = 0;
+  Listener() {
+    fd = socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof(a));
+    listen(fd, 4);
+    socklen_t len = sizeof(a);
+    getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
+    port = ntohs(a.sin_port);
+  }
+  ~Listener() { close(fd); }
+};
+
+int FreePort() { return Listener().port; }
+
+class WatchCommandTest : public ::testing::Test {
+ protected:
+  // 20 s at 25 frames/s of a 400 µm strand (3 µm/px, 2 µm jitter per frame) on 640×360 frames:
+  // a purge blob at 3 s for 2 s, something passing in front at 7 s for 0.5 s, and a 3 % narrowing
+  // at 12 s.
+  static void SetUpTestSuite() {
+    dir_ = new fs::path(FreshDir("clogscope_watch_" + std::to_string(getpid())));
+    vision::SceneParams s;
+    s.width_px = 640;
+    s.height_px = 360;
+    s.tip_x_px = 320;
+    s.tip_y_px = 80;
+    s.width_jitter_um = 2.0;
+    s.purge_start_s = 3;
+    s.occlusion_start_s = {7};
+    s.seed = 5;
+    const int frames = static_cast<int>(kSeconds * 25);
+    for (int i = 0; i < frames; ++i)
+      s.frame_width_um.push_back(i / 25.0 >= kDropAtS ? 388.0 : 400.0);
+    vision::RenderSequence(s, frames, 25, Video(), (*dir_ / "seq.truth.json").string());
+  }
+  static void TearDownTestSuite() {
+    fs::remove_all(*dir_);
+    delete dir_;
+  }
+  static std::string Video() { return (*dir_ / "seq.avi").string(); }
+
+  static WatchCommandOptions Options(const std::string& source) {
+    WatchCommandOptions o;
+    o.live.source = source;
+    o.measure.scale_um_per_px = 3.0;
+    o.live.report_every_s = 1.0;
+    return o;
+  }
+  static std::vector<nlohmann::json> Lines(const fs::path& log) {
+    std::vector<nlohmann::json> out;
+    std::ifstream in(log);
+    for (std::string line; std::getline(in, line);) out.push_back(nlohmann::json::parse(line));
+    return out;
+  }
+  static fs::path* dir_;
+};
+fs::path* WatchCommandTest::dir_ = nullptr;
+
+TEST_F(WatchCommandTest, AFileRaisesWarnWithinFiveSecondsOfAThreePercentDropAndRunsTheCommand) {
+  const fs::path log = *dir_ / "file.jsonl", alerts = *dir_ / "alerts.txt";
+  WatchCommandOptions o = Options(Video());
+  o.log_path = log.string();
+  o.extruder = "direct-pla";
+  o.on_alert = "echo \"$CLOGSCOPE_LEVEL $CLOGSCOPE_PREVIOUS_LEVEL $CLOGSCOPE_DRIFT_PCT\" >> " +
+               alerts.string();
+  std::atomic<bool> stop{false};
+  const WatchReport r = WatchNozzle(o, &stop);
+  EXPECT_EQ(r.summary.ended_because, "the file ended");
+  EXPECT_EQ(r.summary.frames, 500);
+  EXPECT_TRUE(r.alert_failures.empty());
+  // Exactly one level change, to warn, 2–5 s after the drop (the hold is 2 s): the purge blob and
+  // the occlusion raised nothing.
+  const auto lines = Lines(log);
+  std::vector<nlohmann::json> changes;
+  for (const auto& j : lines)
+    if (j["event"] == "level") changes.push_back(j);
+  ASSERT_EQ(changes.size(), 1u);
+  EXPECT_EQ(changes[0]["level"], "warn");
+  const double t = changes[0]["time_s"];
+  EXPECT_GT(t, kDropAtS + 2.0);
+  EXPECT_LE(t, kDropAtS + 5.0);
+  // The last line: the drift of the narrowed strand within its CI of −3 %, and the clog index.
+  const nlohmann::json& last = lines.back();
+  EXPECT_EQ(last["event"], "stop");
+  EXPECT_NEAR(last["baseline"]["um"].get<double>(), 400.0, 1.0);
+  const double drift = last["drift"]["recent_pct"], ci = last["drift"]["recent_ci95_pct"];
+  EXPECT_NEAR(drift, -3.0, std::max(ci, 0.3));
+  EXPECT_GT(last["clog_index"]["back_pressure_ratio"].get<double>(), 1.0);
+  EXPECT_GT(lines.size(), 18u);  // a status line every second
+  // The alert command ran once with the state in its environment.
+  std::ifstream in(alerts);
+  std::string level, previous;
+  double env_drift = 0;
+  in >> level >> previous >> env_drift;
+  EXPECT_EQ(level, "warn");
+  EXPECT_EQ(previous, "ok");
+  EXPECT_LT(env_drift, -2.0);
+}
+
+TEST_F(WatchCommandTest, AnHttpMjpegStreamFromFfmpegIsWatchedAndServed) {
+  // FFmpeg serves the sequence at its frame rate as multipart JPEG over HTTP, as mjpg-streamer
+  // and ustreamer do; it starts sending when the watch connects.
+  const int stream_port = FreePort();
+  const std::string url = "http://127.0.0.1:" + std::to_string(stream_port) + "/stream.mjpg";
+  std::vector<std::string> args = {"ffmpeg", "-nostdin", "-loglevel", "error", "-re", "-i",
+                                   Video(),  "-c:v",     "mjpeg",     "-q:v",  "2",   "-f",
+                                   "mpjpeg", "-listen",  "1",         url};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t ffmpeg = 0;
+  ASSERT_EQ(posix_spawnp(&ffmpeg, "ffmpeg", nullptr, nullptr, argv.data(), environ), 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));  // until it listens
+
+  const fs::path log = *dir_ / "stream.jsonl";
+  WatchCommandOptions o = Options(url);
+  o.log_path = log.string();
+  o.http = "127.0.0.1:0";
+  o.live.duration_s = kSeconds + 5;  // past the stream's end: the source drops
+  o.live.source_options.read_timeout_s = 2;
+  std::atomic<bool> stop{false};
+  std::atomic<int> http_port{0};
+  WatchReport report;
+  std::thread watch([&] { report = WatchNozzle(o, &stop, [&](int port) { http_port = port; }); });
+  while (http_port == 0) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+
+  // A real HTTP client polls /status until the watch says warn, then reads the rest.
+  httplib::Client client("127.0.0.1", http_port);
+  std::set<std::string> seen;
+  nlohmann::json warn_status;
+  std::string metrics, jpeg;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (std::chrono::steady_clock::now() < deadline && metrics.empty()) {
+    if (auto res = client.Get("/status"); res && res->status == 200) {
+      const auto j = nlohmann::json::parse(res->body);
+      seen.insert(j["level"].get<std::string>());
+      if (j["level"] == "warn") {
+        warn_status = j;
+        if (auto m = client.Get("/metrics")) metrics = m->body;
+        if (auto f = client.Get("/frame.jpg"); f && f->status == 200) jpeg = f->body;
+      }
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  watch.join();
+  kill(ffmpeg, SIGTERM);
+  waitpid(ffmpeg, nullptr, 0);
+
+  EXPECT_TRUE(seen.count("ok"));
+  ASSERT_FALSE(warn_status.is_null()) << "never saw warn on /status";
+  EXPECT_EQ(warn_status["source_kind"], "stream");
+  EXPECT_NEAR(warn_status["baseline"]["um"].get<double>(), 400.0, 1.5);
+  EXPECT_NE(metrics.find("clogscope_level{level=\"warn\"} 1"), std::string::npos) << metrics;
+  EXPECT_NE(metrics.find("# TYPE clogscope_frames_total counter"), std::string::npos);
+  ASSERT_GT(jpeg.size(), 1000u);
+  EXPECT_EQ(static_cast<unsigned char>(jpeg[0]), 0xFF);
+  EXPECT_EQ(static_cast<unsigned char>(jpeg[1]), 0xD8);
+  // The warn came within 5 s of the drop on the stream's clock (it starts within a second of
+  // the watch's), and once the stream ended the watch said no_view while trying to reconnect.
+  const auto lines = Lines(log);
+  double warn_t = -1;
+  for (const auto& j : lines)
+    if (j["event"] == "level" && j["level"] == "warn" && warn_t < 0) warn_t = j["time_s"];
+  EXPECT_GT(warn_t, kDropAtS + 2.0);
+  EXPECT_LE(warn_t, kDropAtS + 5.0 + 1.0);
+  EXPECT_EQ(report.summary.final_level, pipeline::WatchLevel::kNoView);
+  EXPECT_EQ(lines.back()["reason"], "the source is down (reconnecting)");
+  EXPECT_GT(report.summary.frames, 450);
+  std::cout << "stream: " << report.summary.frames << " frames, latency median "
+            << report.summary.latency_median_ms << " ms, p95 " << report.summary.latency_p95_ms
+            << " ms, warn at " << warn_t << " s\n";
+}
+
+TEST_F(WatchCommandTest, BadInputGetsOneLineNamingTheProblem) {
+  const fs::path d = *dir_;
+  auto r = RunCli("watch /nonexistent/video.avi --scale-um-per-px 3", d);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("/nonexistent/video.avi"), std::string::npos) << r.err;
+  // Nothing listens on the port: refused at once.
+  r = RunCli("watch http://127.0.0.1:" + std::to_string(FreePort()) + "/x --open-timeout-s 2", d);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("cannot open"), std::string::npos) << r.err;
+  {
+    // Something listens but never sends a frame.
+    Listener silent;
+    r = RunCli("watch tcp://127.0.0.1:" + std::to_string(silent.port) + " --open-timeout-s 1.5", d);
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.err.find("--open-timeout-s"), std::string::npos) << r.err;
+    // The HTTP port is taken.
+    r = RunCli("watch " + Video() + " --http 127.0.0.1:" + std::to_string(silent.port), d);
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.err.find("--http"), std::string::npos) << r.err;
+  }
+  r = RunCli("watch " + Video() + " --warn-pct -3 --clog-pct -2", d);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--clog-pct"), std::string::npos) << r.err;
+  r = RunCli("watch " + Video() + " --baseline-um 400", d);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--baseline-um"), std::string::npos) << r.err;
+  r = RunCli("watch " + Video() + " --extruder direct-pla", d);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--extruder"), std::string::npos) << r.err;
+  for (const std::string& line : {r.err}) EXPECT_EQ(std::count(line.begin(), line.end(), '\n'), 1);
+}
+
+}  // namespace
+}  // namespace clogscope::apps
