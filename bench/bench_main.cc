@@ -493,12 +493,14 @@ void BenchSlip() {
 
 }  // namespace
 
+void BenchWatch();  // watch_bench.cc
+
 int main(int argc, char** argv) {
   const std::string what = argc > 1 ? argv[1] : "all";
   if (what != "all" && what != "measure" && what != "accuracy" && what != "video" &&
-      what != "experiment" && what != "lag" && what != "speed") {
-    std::fprintf(stderr,
-                 "usage: clogscope_bench [measure|accuracy|video|experiment|lag|speed|all]\n");
+      what != "experiment" && what != "lag" && what != "speed" && what != "watch") {
+    std::fprintf(
+        stderr, "usage: clogscope_bench [measure|accuracy|video|experiment|lag|speed|watch|all]\n");
     return 2;
   }
   fmt::print("# clogscope benchmarks ({} hardware threads)\n", std::thread::hardware_concurrency());
@@ -511,5 +513,6 @@ int main(int argc, char** argv) {
     BenchFeedSpeed();
     BenchSlip();
   }
+  if (what == "all" || what == "watch") BenchWatch();
   return 0;
 }

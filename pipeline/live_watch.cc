@@ -194,15 +194,21 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
                               WatchBoard* board, std::atomic<bool>* stop) {
   std::string why;
   if (!options.Validate(&why)) throw std::invalid_argument(why);
+  return RunLiveWatch(options, events, board, stop,
+                      vision::LiveSource::Open(options.source, options.source_options, stop));
+}
+
+LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEvents& events,
+                              WatchBoard* board, std::atomic<bool>* stop,
+                              std::unique_ptr<vision::LiveSource> source) {
+  std::string why;
+  if (!options.Validate(&why)) throw std::invalid_argument(why);
   WatchState state(options.watch, options.conversion);
   vision::StrandTracker tracker(options.strand);
   vision::SceneMemory memory(options.strand.target);
   const auto started = Clock::now();
 
-  Reader reader{
-      options, events, vision::LiveSource::Open(options.source, options.source_options, stop),
-      nullptr, stop,   {true},
-      {0},     {}};
+  Reader reader{options, events, std::move(source), nullptr, stop, {true}, {0}, {}};
   const bool live = reader.source->live();
   FrameQueue queue(2, /*drop_oldest=*/live || options.source_options.realtime);
   reader.queue = &queue;

@@ -80,5 +80,10 @@ struct LiveWatchSummary {
 // return (the reader thread ends with it).
 LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEvents& events,
                               WatchBoard* board, std::atomic<bool>* stop);
+// The same on a source already open (benchmarks and tests feed their own); a drop reopens
+// options.source.
+LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEvents& events,
+                              WatchBoard* board, std::atomic<bool>* stop,
+                              std::unique_ptr<vision::LiveSource> source);
 
 }  // namespace clogscope::pipeline
