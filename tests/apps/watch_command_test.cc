@@ -60,6 +60,10 @@ class WatchCommandTest : public ::testing::Test {
   // at 12 s.
   static void SetUpTestSuite() {
     dir_ = new fs::path(FreshDir("clogscope_watch_" + std::to_string(getpid())));
+  }
+  static std::string Video() {
+    const fs::path video = *dir_ / "seq.avi";
+    if (fs::exists(video)) return video.string();
     vision::SceneParams s;
     s.width_px = 640;
     s.height_px = 360;
@@ -72,13 +76,25 @@ class WatchCommandTest : public ::testing::Test {
     const int frames = static_cast<int>(kSeconds * 25);
     for (int i = 0; i < frames; ++i)
       s.frame_width_um.push_back(i / 25.0 >= kDropAtS ? 388.0 : 400.0);
-    vision::RenderSequence(s, frames, 25, Video(), (*dir_ / "seq.truth.json").string());
+    vision::RenderSequence(s, frames, 25, video.string(), (*dir_ / "seq.truth.json").string());
+    return video.string();
+  }
+  // Ten small frames: enough for the options to be checked against a real file.
+  static std::string TinyVideo() {
+    const fs::path video = *dir_ / "tiny.avi";
+    vision::SceneParams s;
+    s.width_px = 160;
+    s.height_px = 120;
+    s.tip_x_px = 80;
+    s.tip_y_px = 30;
+    s.strand_width_um = 120;
+    vision::RenderSequence(s, 10, 25, video.string(), (*dir_ / "tiny.truth.json").string());
+    return video.string();
   }
   static void TearDownTestSuite() {
     fs::remove_all(*dir_);
     delete dir_;
   }
-  static std::string Video() { return (*dir_ / "seq.avi").string(); }
 
   static WatchCommandOptions Options(const std::string& source) {
     WatchCommandOptions o;
@@ -214,6 +230,7 @@ TEST_F(WatchCommandTest, AnHttpMjpegStreamFromFfmpegIsWatchedAndServed) {
 
 TEST_F(WatchCommandTest, BadInputGetsOneLineNamingTheProblem) {
   const fs::path d = *dir_;
+  const std::string video = TinyVideo();
   auto r = RunCli("watch /nonexistent/video.avi --scale-um-per-px 3", d);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("/nonexistent/video.avi"), std::string::npos) << r.err;
@@ -228,17 +245,17 @@ TEST_F(WatchCommandTest, BadInputGetsOneLineNamingTheProblem) {
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.err.find("--open-timeout-s"), std::string::npos) << r.err;
     // The HTTP port is taken.
-    r = RunCli("watch " + Video() + " --http 127.0.0.1:" + std::to_string(silent.port), d);
+    r = RunCli("watch " + video + " --http 127.0.0.1:" + std::to_string(silent.port), d);
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.err.find("--http"), std::string::npos) << r.err;
   }
-  r = RunCli("watch " + Video() + " --warn-pct -3 --clog-pct -2", d);
+  r = RunCli("watch " + video + " --warn-pct -3 --clog-pct -2", d);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--clog-pct"), std::string::npos) << r.err;
-  r = RunCli("watch " + Video() + " --baseline-um 400", d);
+  r = RunCli("watch " + video + " --baseline-um 400", d);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--baseline-um"), std::string::npos) << r.err;
-  r = RunCli("watch " + Video() + " --extruder direct-pla", d);
+  r = RunCli("watch " + video + " --extruder direct-pla", d);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--extruder"), std::string::npos) << r.err;
   for (const std::string& line : {r.err}) EXPECT_EQ(std::count(line.begin(), line.end(), '\n'), 1);
