@@ -365,7 +365,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     }
     const StraightRun run = FindStraightRun(m->calipers, so);
     m->rough_calipers = run.rough;
-    if (run.sections > 0) {
+    if (run.sections > 0 || run.end - run.begin < n_cal) {
       run_begin = run.begin;
       run_end = run.end;
       cal_widths.clear();

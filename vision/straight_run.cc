@@ -134,7 +134,9 @@ StraightRun FindStraightRun(const std::vector<Caliper>& calipers,
   // A part ends at its last straight caliper, not at the rough section's first.
   while (run.end > run.begin && state[run.end - 1] != 1) --run.end;
   while (run.begin < run.end && state[run.begin] != 1) ++run.begin;
-  if (run.sections == 0) {
+  // No rough section: the whole band, unless the preferred range was kept (then the band may be
+  // just that range and its margins, as tracking measures it).
+  if (run.sections == 0 && best.first == 0) {
     run.begin = 0;
     run.end = n;
   }

@@ -16,7 +16,8 @@ namespace {
 constexpr size_t kMaxFallbacks = 2;             // runner-up pairs measured after the chosen one
 constexpr double kMinFallbackScoreRatio = 0.5;  // of the chosen pair's score
 // A second guess must be clearly strand-like: weak short pairs are what clutter makes.
-constexpr double kMinFallbackScoreFactor = 3.0;  // times the scene's minimum score
+constexpr double kMinFallbackScoreFactor = 3.0;    // times the scene's minimum score
+constexpr double kStraightPartMarginCalipers = 6;  // tracking a filament: calipers beside its part
 
 // Statuses that say the pair was not the strand, rather than that the frame is poor.
 bool RejectsPair(FrameStatus s) {
@@ -206,8 +207,20 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
                            g.end_is_object ? "an object" : "the frame or ROI edge", g.s_end);
     return m;
   }
+  // Tracking a filament: only the straight part measured last, with a margin wide enough for its
+  // end calipers' straightness windows and for the rough calipers beyond it, on the same caliper
+  // grid as the whole stretch. (The whole stretch costs a caliper fit every few px of it.)
+  double s0 = band_s0, s1 = band_s1;
+  if (opt.target == MeasureTarget::kFilament && g.precise && g.straight_s1_px > g.straight_s0_px) {
+    const double step = opt.caliper_spacing_px;
+    const double margin = kStraightPartMarginCalipers * step;
+    s0 = band_s0 + std::max(0.0, std::floor((g.straight_s0_px - margin - band_s0) / step)) * step;
+    s1 =
+        std::min(band_s1, band_s0 + std::ceil((g.straight_s1_px + margin - band_s0) / step) * step);
+    if (s1 - s0 < min_band) s0 = band_s0, s1 = band_s1;
+  }
   const GreyImage img{channel, channel.depth() == CV_16U};
-  MeasureCalipers(img, data_max, g, band_s0, band_s1, opt, &m);
+  MeasureCalipers(img, data_max, g, s0, s1, opt, &m);
   return m;
 }
 

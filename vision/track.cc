@@ -3,9 +3,21 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "vision/straight_run.h"
+
 namespace clogscope::vision {
 namespace {
 constexpr double kTipHysteresisPx = 1.5;  // tip moves smaller than this keep the band in place
+
+// True when a filament's width came from (part of) the straight part measured before, as
+// FindStraightRun keeps it while it has enough straight calipers.
+bool KeptStraightPart(const StrandMeasurement& m, const StrandGeometry& before, double spacing_px) {
+  constexpr double kSlackPx = 0.5;
+  return m.valid() && m.straight_start_px >= before.straight_s0_px - kSlackPx &&
+         m.straight_end_px <= before.straight_s1_px + kSlackPx &&
+         m.straight_end_px - m.straight_start_px >=
+             StraightRunOptions{}.min_kept_calipers * spacing_px - kSlackPx;
+}
 }  // namespace
 
 StrandTracker::StrandTracker(const StrandMeasureOptions& options) : options_(options) {
@@ -68,6 +80,13 @@ bool StrandTracker::Follow(const cv::Mat& frame, StrandMeasurement* out) {
   }
   StrandMeasurement m =
       MeasureInScene(channel, data_max, FrameStatus::kValid, "", g, roi, options_);
+  if (options_.target == MeasureTarget::kFilament && g.straight_s1_px > g.straight_s0_px &&
+      !KeptStraightPart(m, g, options_.caliper_spacing_px)) {
+    // A filament is measured on its last straight part only (MeasureInScene); when that part no
+    // longer holds, the whole stretch is looked at for the longest straight part again.
+    g.straight_s0_px = g.straight_s1_px = 0;
+    m = MeasureInScene(channel, data_max, FrameStatus::kValid, "", g, roi, options_);
+  }
   // A frame that does not measure like the last one is looked at afresh.
   if (!m.valid() || std::abs(m.width_px - width_px_) > std::max(2.0, 0.03 * width_px_))
     return false;
