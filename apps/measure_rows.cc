@@ -69,18 +69,7 @@ std::vector<std::string> SpeedFields(const vision::FeedSpeedSample& v,
 }
 
 GearAndSlip GearAndSlipOf(const Row& r, const calib::ScaleCalibration& conv, double radius_mm) {
-  GearAndSlip g;
-  if (!r.gear.valid) return g;
-  const double vg = std::abs(r.gear.RadPerS()) * radius_mm;
-  g.gear_mm_s = vg;
-  g.gear_sigma_mm_s = r.gear.SigmaRadPerS() * radius_mm;
-  // A gear that does not turn measurably (under 3σ) has no slip to speak of.
-  if (!r.speed.valid || !(vg > 3 * *g.gear_sigma_mm_s && vg > 1e-9)) return g;
-  const double mm_per_px = conv.scale_um_per_px * 1e-3;
-  const double vf = r.speed.SpeedPxPerS() * mm_per_px, sf = r.speed.SigmaPxPerS() * mm_per_px;
-  g.slip_pct = 100 * (1 - vf / vg);
-  g.slip_sigma_pct = 100 * std::hypot(sf / vg, vf * *g.gear_sigma_mm_s / (vg * vg));
-  return g;
+  return vision::GearAndSlipOf(r.speed, r.gear, conv.scale_um_per_px * 1e-3, radius_mm);
 }
 
 // "; gear 2.00 ± 0.01 mm/s …; slip 10.0 ± 0.5 % per frame pair (mean ± …, 95 %), N of M pairs".

@@ -43,10 +43,8 @@ std::string StraightPartSummary(const std::vector<Row>& rows);
 std::vector<std::string> SpeedFields(const vision::FeedSpeedSample& v,
                                      const calib::ScaleCalibration& conv);
 
-// The gear's surface speed |ω|·R and the slip 1 − v_filament / v_gear (%), each with its σ.
-struct GearAndSlip {
-  std::optional<double> gear_mm_s, gear_sigma_mm_s, slip_pct, slip_sigma_pct;
-};
+// The row's gear surface speed and slip (vision::GearAndSlipOf).
+using vision::GearAndSlip;
 GearAndSlip GearAndSlipOf(const Row& r, const calib::ScaleCalibration& conv, double radius_mm);
 
 // "; gear 2.00 ± 0.01 mm/s …; slip 10.0 ± 0.5 % per frame pair (mean ± …, 95 %), N of M pairs".

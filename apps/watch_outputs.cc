@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "common/csv.h"
 #include "vision/overlay.h"
 
 extern char** environ;
@@ -45,14 +46,6 @@ void LineLog::Write(const std::string& line) {
   }
 }
 
-namespace {
-
-std::string Num(double v, int digits) {
-  return std::isfinite(v) ? fmt::format("{:.{}f}", v, digits) : std::string();
-}
-
-}  // namespace
-
 bool AlertCommand::Run(const pipeline::WatchStatus& s,
                        const std::optional<pipeline::ClogIndex>& clog, const std::string& source,
                        const std::string& status_json, std::string* why) {
@@ -65,14 +58,14 @@ bool AlertCommand::Run(const pipeline::WatchStatus& s,
   };
   add("LEVEL", pipeline::WatchLevelName(s.level));
   add("PREVIOUS_LEVEL", pipeline::WatchLevelName(s.previous_level));
-  add("TIME_S", Num(s.time_s, 3));
+  add("TIME_S", CsvNumber(s.time_s, 3));
   add("REASON", s.reason);
-  add("DIAMETER_UM", s.has_diameter ? Num(s.diameter_um, 3) : "");
-  add("DRIFT_PCT", s.has_recent ? Num(s.recent_drift_pct, 3) : "");
-  add("DRIFT_CI95_PCT", s.has_recent ? Num(s.recent_drift_ci95_pct, 3) : "");
-  add("BASELINE_UM", s.baseline_ready ? Num(s.baseline_um, 3) : "");
-  add("BACK_PRESSURE_RATIO", clog ? Num(clog->back_pressure_ratio, 5) : "");
-  add("VIBRATION_INCREASE_PCT", clog ? Num(clog->vibration_increase_pct, 3) : "");
+  add("DIAMETER_UM", s.has_diameter ? CsvNumber(s.diameter_um, 3) : "");
+  add("DRIFT_PCT", s.has_recent ? CsvNumber(s.recent_drift_pct, 3) : "");
+  add("DRIFT_CI95_PCT", s.has_recent ? CsvNumber(s.recent_drift_ci95_pct, 3) : "");
+  add("BASELINE_UM", s.baseline_ready ? CsvNumber(s.baseline_um, 3) : "");
+  add("BACK_PRESSURE_RATIO", clog ? CsvNumber(clog->back_pressure_ratio, 5) : "");
+  add("VIBRATION_INCREASE_PCT", clog ? CsvNumber(clog->vibration_increase_pct, 3) : "");
   add("SOURCE", source);
   add("STATUS_JSON", status_json);
   std::vector<char*> envp;

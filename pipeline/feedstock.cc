@@ -99,12 +99,9 @@ FeedstockResult MeasureFeedstock(const std::string& video, double start_s, doubl
       if (gear) g = gear->Next(f.grey, f.time_s);
       if (in_pair == 1 && conversion) {
         if (v.valid) speeds.push_back(v.SpeedPxPerS() * mm_per_px);
-        if (g.valid) {
-          const double vg = std::abs(g.RadPerS()) * o.gear_radius_mm;
-          gears.push_back(vg);
-          if (v.valid && vg > 3 * g.SigmaRadPerS() * o.gear_radius_mm && vg > 1e-9)
-            slips.push_back(100 * (1 - v.SpeedPxPerS() * mm_per_px / vg));
-        }
+        const vision::GearAndSlip gs = vision::GearAndSlipOf(v, g, mm_per_px, o.gear_radius_mm);
+        if (gs.gear_mm_s) gears.push_back(*gs.gear_mm_s);
+        if (gs.slip_pct) slips.push_back(*gs.slip_pct);
       }
       ++in_pair;
     }

@@ -89,13 +89,9 @@ struct Reader {
   }
 
   bool Wait(double seconds) const {
-    const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                          std::chrono::duration<double>(seconds));
-    while (Clock::now() < until) {
-      if (stop->load()) return false;
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    return !stop->load();
+    return vision::SleepUnlessStopped(Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                                         std::chrono::duration<double>(seconds)),
+                                      stop);
   }
 
   void Run() {
@@ -185,6 +181,14 @@ void WatchBoard::Publish(WatchSnapshot snapshot) {
   latest_ = std::move(snapshot);
 }
 
+void WatchBoard::PublishState(const WatchStatus& status, const std::optional<ClogIndex>& clog,
+                              const WatchCounters& counters) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  latest_.status = status;
+  latest_.clog = clog;
+  latest_.counters = counters;
+}
+
 WatchSnapshot WatchBoard::Read() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return latest_;
@@ -248,8 +252,8 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
     if (!next_report_s) next_report_s = t + report_every;
     if (t >= *next_report_s) {
       emit("status");
-      *next_report_s +=
-          report_every * std::max(1.0, std::floor((t - *next_report_s) / report_every) + 1);
+      // The next slot on the same grid after t (frames may skip slots).
+      *next_report_s += report_every * (std::floor((t - *next_report_s) / report_every) + 1);
     }
   };
 
@@ -274,11 +278,7 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
       const double t = Seconds(Clock::now() - started);
       const bool changed = state.Tick(t);
       after_update(changed, t);
-      WatchSnapshot snap = board ? board->Read() : WatchSnapshot{};
-      snap.status = state.status();
-      snap.clog = clog;
-      snap.counters = counters;
-      if (board) board->Publish(std::move(snap));
+      if (board) board->PublishState(state.status(), clog, counters);
       continue;
     }
     // Measure; a frame that cannot be measured is a frame without a view, never a stop.
@@ -308,22 +308,12 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
     const double t = live ? Seconds(frame.arrival - started) : frame.time_s;
     state.SetSourceUp(true);
     const bool changed = state.Add(t, view, m.width_px);
-    ++summary.frames;
     ++counters.frames_total;
-    if (view == FrameView::kStrand) {
-      ++summary.valid_frames;
-      ++counters.frames_valid_total;
-    }
+    counters.frames_valid_total += view == FrameView::kStrand;
     after_update(changed, t);
     if (board) {
-      WatchSnapshot snap;
-      snap.status = state.status();
-      snap.clog = clog;
-      snap.counters = counters;
-      snap.frame = std::move(frame.image);
-      snap.measurement = std::move(m);
-      snap.sequence = summary.frames;
-      board->Publish(std::move(snap));
+      board->Publish({state.status(), clog, counters, std::move(frame.image), std::move(m),
+                      counters.frames_total});
     }
     // Arrival (decoded, in hand) to the state published: what a reader of /status waits for.
     latency.Add(1e3 * Seconds(Clock::now() - frame.arrival));
@@ -334,6 +324,8 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
   reading.join();
   update_counters();
   emit("stop");
+  summary.frames = counters.frames_total;
+  summary.valid_frames = counters.frames_valid_total;
   summary.skipped_frames = queue.skipped();
   summary.reconnects = reader.reconnects;
   summary.level_changes = state.status().level_changes;

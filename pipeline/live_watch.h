@@ -44,6 +44,9 @@ struct WatchSnapshot {
 class WatchBoard {
  public:
   void Publish(WatchSnapshot snapshot);
+  // The state without a new frame (time passing while none arrive): the latest frame stays.
+  void PublishState(const WatchStatus& status, const std::optional<ClogIndex>& clog,
+                    const WatchCounters& counters);
   WatchSnapshot Read() const;  // a copy (the frame is shared, never written again)
 
  private:

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "common/robust.h"
 #include "pipeline/statistics.h"
 
 namespace clogscope::pipeline {
@@ -25,13 +26,6 @@ void Track(std::optional<double>* since, bool holds, double time_s) {
 
 bool Held(const std::optional<double>& since, double time_s, double hold_s) {
   return since && time_s - *since >= hold_s - 1e-9;
-}
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return NAN;
-  const size_t m = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + m, v.end());
-  return v[m];
 }
 
 }  // namespace

@@ -118,4 +118,19 @@ GearSpeedSample GearSpeedTracker::Next(const cv::Mat& frame, double time_s) {
   return out;
 }
 
+GearAndSlip GearAndSlipOf(const FeedSpeedSample& filament, const GearSpeedSample& gear,
+                          double mm_per_px, double radius_mm) {
+  GearAndSlip g;
+  if (!gear.valid) return g;
+  const double vg = std::abs(gear.RadPerS()) * radius_mm;
+  g.gear_mm_s = vg;
+  g.gear_sigma_mm_s = gear.SigmaRadPerS() * radius_mm;
+  // A gear that does not turn measurably (under 3σ) has no slip to speak of.
+  if (!filament.valid || !(vg > 3 * *g.gear_sigma_mm_s && vg > 1e-9)) return g;
+  const double vf = filament.SpeedPxPerS() * mm_per_px, sf = filament.SigmaPxPerS() * mm_per_px;
+  g.slip_pct = 100 * (1 - vf / vg);
+  g.slip_sigma_pct = 100 * std::hypot(sf / vg, vf * *g.gear_sigma_mm_s / (vg * vg));
+  return g;
+}
+
 }  // namespace clogscope::vision

@@ -8,6 +8,8 @@
 #include <optional>
 #include <string>
 
+#include "vision/feed_speed.h"
+
 namespace clogscope::vision {
 
 struct GearSpeedOptions {
@@ -36,6 +38,15 @@ struct GearSpeedSample {
   double RadPerS() const { return rotation_rad / dt_s; }
   double SigmaRadPerS() const { return sigma_rad / dt_s; }
 };
+
+// The gear's surface speed |ω|·R and the slip 1 − v_filament / v_gear (%), each with its σ, from
+// one frame pair's two speeds (mm_per_px converts the filament's). The slip only where the gear
+// turns measurably (over 3σ) and the filament's speed is valid.
+struct GearAndSlip {
+  std::optional<double> gear_mm_s, gear_sigma_mm_s, slip_pct, slip_sigma_pct;
+};
+GearAndSlip GearAndSlipOf(const FeedSpeedSample& filament, const GearSpeedSample& gear,
+                          double mm_per_px, double radius_mm);
 
 // The gear's angular profile in one frame (empty when the ROI leaves the frame).
 std::vector<double> GearAngularProfile(const cv::Mat& grey, const GearSpeedOptions& options);

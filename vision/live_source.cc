@@ -28,16 +28,6 @@ double SecondsSince(Clock::time_point t0) {
 
 bool Stopped(const std::atomic<bool>* stop) { return stop && stop->load(); }
 
-// Sleeps until `until` in short slices so a raised stop flag is seen within 20 ms.
-bool SleepUntil(Clock::time_point until, const std::atomic<bool>* stop) {
-  while (Clock::now() < until) {
-    if (Stopped(stop)) return false;
-    std::this_thread::sleep_for(
-        std::min<Clock::duration>(until - Clock::now(), std::chrono::milliseconds(20)));
-  }
-  return !Stopped(stop);
-}
-
 // Files and streams, decoded by FFmpeg to grey.
 class DecodedSource : public LiveSource {
  public:
@@ -86,7 +76,7 @@ class DecodedSource : public LiveSource {
       if (!first_time_s_) first_time_s_ = f.time_s;
       const auto due = opened_ + std::chrono::duration_cast<Clock::duration>(
                                      std::chrono::duration<double>(f.time_s - *first_time_s_));
-      if (!SleepUntil(due, stop_)) return LiveRead::kStopped;
+      if (!SleepUnlessStopped(due, stop_)) return LiveRead::kStopped;
     }
     out->arrival = Clock::now();
     out->image = std::move(f.grey);
@@ -194,9 +184,10 @@ class FolderSource : public LiveSource {
         sizes_.clear();
         sizes_[e.path] = e.size;  // take it at the next poll if it holds
       }
-      if (!SleepUntil(Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                         std::chrono::duration<double>(options_.folder_poll_s)),
-                      stop_))
+      if (!SleepUnlessStopped(
+              Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                 std::chrono::duration<double>(options_.folder_poll_s)),
+              stop_))
         break;
     }
     return LiveRead::kStopped;
@@ -230,6 +221,15 @@ class FolderSource : public LiveSource {
 };
 
 }  // namespace
+
+bool SleepUnlessStopped(Clock::time_point until, const std::atomic<bool>* stop) {
+  while (Clock::now() < until) {
+    if (Stopped(stop)) return false;
+    std::this_thread::sleep_for(
+        std::min<Clock::duration>(until - Clock::now(), std::chrono::milliseconds(20)));
+  }
+  return !Stopped(stop);
+}
 
 const char* LiveSourceKindName(LiveSourceKind kind) {
   switch (kind) {

@@ -68,4 +68,8 @@ class LiveSource {
   LiveSourceKind kind_;
 };
 
+// Sleeps until `until` in slices of at most 20 ms, so that a raised stop flag is seen soon.
+// Returns false when stopped.
+bool SleepUnlessStopped(std::chrono::steady_clock::time_point until, const std::atomic<bool>* stop);
+
 }  // namespace clogscope::vision
