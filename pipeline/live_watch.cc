@@ -281,6 +281,9 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
       if (board) board->PublishState(state.status(), clog, counters);
       continue;
     }
+    // A file read as fast as it decodes is read ahead by design: its frames' wait in the queue is
+    // no latency anyone sees, so theirs counts from here.
+    if (!live && !options.source_options.realtime) frame.arrival = Clock::now();
     // Measure; a frame that cannot be measured is a frame without a view, never a stop.
     vision::StrandMeasurement m;
     FrameView view = FrameView::kNothing;
