@@ -1,5 +1,5 @@
 // clogscope_bench: the speed and accuracy figures quoted in issue closing notes.
-//   clogscope_bench [measure|accuracy|video|experiment|lag|speed|all]   (default all)
+//   clogscope_bench [measure|accuracy|video|experiment|lag|speed|watch|adversarial|all] (default all)
 // Prints Markdown tables. Timings are wall-clock on this machine; run on an idle machine.
 #include <fmt/format.h>
 
@@ -494,13 +494,15 @@ void BenchSlip() {
 }  // namespace
 
 void BenchWatch();  // watch_bench.cc
+void BenchAdversarial(int argc, char** argv);  // adversarial_bench.cc
 
 int main(int argc, char** argv) {
   const std::string what = argc > 1 ? argv[1] : "all";
   if (what != "all" && what != "measure" && what != "accuracy" && what != "video" &&
-      what != "experiment" && what != "lag" && what != "speed" && what != "watch") {
+      what != "experiment" && what != "lag" && what != "speed" && what != "watch" &&
+      what != "adversarial") {
     std::fprintf(
-        stderr, "usage: clogscope_bench [measure|accuracy|video|experiment|lag|speed|watch|all]\n");
+        stderr, "usage: clogscope_bench [measure|accuracy|video|experiment|lag|speed|watch|adversarial [SCENES_PER_CLASS [--list]]|all]\n");
     return 2;
   }
   fmt::print("# clogscope benchmarks ({} hardware threads)\n", std::thread::hardware_concurrency());
@@ -514,5 +516,6 @@ int main(int argc, char** argv) {
     BenchSlip();
   }
   if (what == "all" || what == "watch") BenchWatch();
+  if (what == "all" || what == "adversarial") BenchAdversarial(argc, argv);
   return 0;
 }

@@ -1,0 +1,111 @@
+#include "synthetic/adversarial_matrix.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "vision/strand_measure.h"
+
+namespace clogscope::synthetic {
+namespace {
+
+constexpr int kStatusCount = static_cast<int>(vision::FrameStatus::kAmbiguous) + 1;
+
+void Add(ClassSummary* s, const FrameRecord& r) {
+  if (s->refusals.empty()) s->refusals.assign(kStatusCount, 0);
+  ++s->frames;
+  if (r.status == vision::FrameStatus::kValid)
+    ++s->valid;
+  else
+    ++s->refusals[static_cast<int>(r.status)];
+  if (r.wrong) ++s->wrong;
+}
+
+// Bias and spread over the valid, not-wrong frames of one class (all classes when trouble < 0).
+void Moments(const std::vector<FrameRecord>& frames, int trouble, ClassSummary* s) {
+  double sum = 0, sum2 = 0;
+  int n = 0;
+  for (const auto& r : frames) {
+    if (trouble >= 0 && static_cast<int>(r.trouble) != trouble) continue;
+    if (r.status != vision::FrameStatus::kValid || r.wrong || !r.strand) continue;
+    const double e = r.width_px - r.truth_px;
+    sum += e;
+    sum2 += e * e;
+    ++n;
+  }
+  if (n == 0) return;
+  s->bias_px = sum / n;
+  s->sd_px = n > 1 ? std::sqrt(std::max(0.0, (sum2 - sum * sum / n) / (n - 1))) : 0.0;
+}
+
+}  // namespace
+
+MatrixResult RunAdversarialMatrix(const MatrixOptions& o) {
+  const std::string temp =
+      o.temp_dir.empty() ? std::filesystem::temp_directory_path().string() : o.temp_dir;
+  MatrixResult out;
+  for (int c = 0; c < kTroubleClassCount; ++c) {
+    const auto trouble = static_cast<TroubleClass>(c);
+    for (int k = 0; k < o.scenes_per_class; ++k) {
+      const uint64_t seed = o.first_seed + k;
+      const AdversarialScene scene = RandomAdversarialScene(trouble, seed);
+      AdversarialTruth truth;
+      const std::vector<cv::Mat> frames =
+          RenderAdversarial(scene, o.frames_per_scene, temp, &truth);
+      vision::StrandMeasureOptions mo;
+      const vision::BandPx band =
+          vision::DefaultBand(vision::MeasureTarget::kStrand, scene.scale_um_per_px);
+      mo.band_start_px = band.start_px;
+      mo.band_height_px = band.height_px;
+      for (int i = 0; i < static_cast<int>(frames.size()); ++i) {
+        const vision::StrandMeasurement m = vision::MeasureStrand(frames[i], mo);
+        FrameRecord r;
+        r.trouble = trouble;
+        r.seed = seed;
+        r.frame = i;
+        r.status = m.status;
+        r.detail = m.detail;
+        r.truth_px = truth.width_px;
+        r.width_px = m.width_px;
+        r.sigma_px = m.width_sigma_px;
+        r.strand = truth.strand;
+        if (m.valid()) {
+          r.wrong = !truth.strand || std::abs(m.width_px - truth.width_px) >
+                                         std::max(kWrongPx, kWrongFraction * truth.width_px);
+        }
+        r.scene = Describe(scene);
+        Add(&out.classes[c], r);
+        Add(&out.all, r);
+        out.frames.push_back(std::move(r));
+      }
+    }
+    Moments(out.frames, c, &out.classes[c]);
+  }
+  Moments(out.frames, -1, &out.all);
+  return out;
+}
+
+std::string MatrixTable(const MatrixResult& r) {
+  std::string t =
+      "| class | frames | valid % | confident-wrong % | bias px | σ px | refused as |\n"
+      "|---|---|---|---|---|---|---|\n";
+  const auto row = [&](const std::string& name, const ClassSummary& s) {
+    std::string why;
+    for (int k = 0; k < static_cast<int>(s.refusals.size()); ++k) {
+      if (s.refusals[k] == 0) continue;
+      why +=
+          fmt::format("{}{} {}", why.empty() ? "" : ", ",
+                      vision::FrameStatusName(static_cast<vision::FrameStatus>(k)), s.refusals[k]);
+    }
+    t += fmt::format("| {} | {} | {:.1f} | {:.2f} | {:+.3f} | {:.3f} | {} |\n", name, s.frames,
+                     s.frames ? 100.0 * s.valid / s.frames : 0.0,
+                     s.frames ? 100.0 * s.wrong / s.frames : 0.0, s.bias_px, s.sd_px, why);
+  };
+  for (int c = 0; c < kTroubleClassCount; ++c)
+    row(TroubleClassName(static_cast<TroubleClass>(c)), r.classes[c]);
+  row("**all**", r.all);
+  return t;
+}
+
+}  // namespace clogscope::synthetic

@@ -1,0 +1,54 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "synthetic/adversarial.h"
+#include "vision/frame_status.h"
+
+namespace clogscope::synthetic {
+
+// Renders adversarial scenes of every class and measures them with the production measurement
+// (vision::MeasureStrand, default options at the scene's scale), judging each frame against the
+// render's truth.
+struct MatrixOptions {
+  int scenes_per_class = 20;
+  int frames_per_scene = 4;
+  uint64_t first_seed = 1;
+  std::string temp_dir;  // for H.264 round trips; empty: the system's temporary directory
+};
+
+// A valid width is confidently wrong when it is off by more than max(0.3 px, 0.5 %).
+inline constexpr double kWrongPx = 0.3, kWrongFraction = 0.005;
+
+struct FrameRecord {
+  TroubleClass trouble = TroubleClass::kPlain;
+  uint64_t seed = 0;
+  int frame = 0;
+  vision::FrameStatus status = vision::FrameStatus::kNoStrand;
+  std::string detail;
+  double truth_px = 0, width_px = 0, sigma_px = 0;
+  bool strand = false;
+  bool wrong = false;  // valid and confidently wrong (or a width where there is no strand)
+  std::string scene;   // Describe() of the scene
+};
+
+struct ClassSummary {
+  int frames = 0, valid = 0, wrong = 0;
+  double bias_px = 0, sd_px = 0;  // of the valid frames that are not wrong
+  std::vector<int> refusals;      // count per FrameStatus
+};
+
+struct MatrixResult {
+  std::vector<FrameRecord> frames;
+  ClassSummary classes[kTroubleClassCount];
+  ClassSummary all;
+};
+
+MatrixResult RunAdversarialMatrix(const MatrixOptions& options);
+
+// A Markdown table of the result, one row per class and one for all.
+std::string MatrixTable(const MatrixResult& result);
+
+}  // namespace clogscope::synthetic
