@@ -6,9 +6,11 @@
 
 namespace clogscope::vision {
 
-bool GatherEdgeSamples(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
-                       double u1, double data_max, std::vector<EdgeSample>* out, int* saturated) {
-  out->clear();
+namespace {
+
+// The slab's pixel bounds; false when it leaves the image.
+bool SlabBounds(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
+                double u1, int* x_lo, int* x_hi, int* y_lo, int* y_hi) {
   double xmin = 1e30, xmax = -1e30, ymin = 1e30, ymax = -1e30;
   for (double s : {s0, s1}) {
     for (double u : {u0, u1}) {
@@ -18,10 +20,65 @@ bool GatherEdgeSamples(const GreyImage& img, const AxisFrame& f, double s0, doub
       ymax = std::max(ymax, f.ImageY(s, u));
     }
   }
-  const int x_lo = static_cast<int>(std::ceil(xmin)), x_hi = static_cast<int>(std::floor(xmax));
-  const int y_lo = static_cast<int>(std::ceil(ymin)), y_hi = static_cast<int>(std::floor(ymax));
-  if (x_lo < 0 || y_lo < 0 || x_hi >= img.m.cols || y_hi >= img.m.rows) return false;
-  const float top = static_cast<float>(data_max);
+  *x_lo = static_cast<int>(std::ceil(xmin));
+  *x_hi = static_cast<int>(std::floor(xmax));
+  *y_lo = static_cast<int>(std::ceil(ymin));
+  *y_hi = static_cast<int>(std::floor(ymax));
+  return *x_lo >= 0 && *y_lo >= 0 && *x_hi < img.m.cols && *y_hi < img.m.rows;
+}
+
+}  // namespace
+
+ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
+                          double u1, double data_max) {
+  ClipLevels clip{0.0f, static_cast<float>(data_max)};
+  int x_lo, x_hi, y_lo, y_hi;
+  if (!SlabBounds(img, f, s0, s1, u0, u1, &x_lo, &x_hi, &y_lo, &y_hi)) return clip;
+  // 256 bins over the data's range; only the outer 4 % on each side is looked at.
+  constexpr int kBins = 256, kEdgeBins = 10, kBelow = 4;
+  std::array<int, kBins> h{};
+  const double scale = (kBins - 1) / data_max;
+  int n = 0;
+  for (int y = y_lo; y <= y_hi; ++y) {
+    const double ry = y - f.oy;
+    for (int x = x_lo; x <= x_hi; ++x) {
+      const double rx = x - f.ox;
+      const double s = rx * f.dx + ry * f.dy, u = rx * f.dy - ry * f.dx;
+      if (s < s0 || s >= s1 || u < u0 || u > u1) continue;
+      ++h[std::clamp(static_cast<int>(std::lround(img.At(x, y) * scale)), 0, kBins - 1)];
+      ++n;
+    }
+  }
+  // A spike: the fullest bin of the outer tenth, well above the bins just inside it.
+  const auto spike = [&](int from, int to, int inward) {
+    int best = -1;
+    for (int b = from; b != to; b += inward) {
+      if (best < 0 || h[b] > h[best]) best = b;
+    }
+    double inside = 0;
+    for (int k = 1; k <= kBelow; ++k) inside += h[std::clamp(best + inward * k, 0, kBins - 1)];
+    // Little beyond a clip level (a codec's ringing): an unclipped plateau has its noise on both
+    // sides.
+    double beyond = 0;
+    for (int b = best - inward; b >= 0 && b < kBins; b -= inward) beyond += h[b];
+    const bool is_spike = h[best] >= 0.02 * n && h[best] >= 5.0 * (inside / kBelow) &&
+                          beyond <= 0.5 * h[best] && h[best] > 8;
+    return is_spike ? best : -1;
+  };
+  const int top = spike(kBins - 1, kBins - 1 - kEdgeBins, -1);
+  const int bottom = spike(0, kEdgeBins, +1);
+  // Half a bin inward, so that every value of the spike's bin counts.
+  if (top >= 0) clip.high = static_cast<float>((top - 0.5) / scale);
+  if (bottom >= 0) clip.low = static_cast<float>((bottom + 0.5) / scale);
+  return clip;
+}
+
+bool GatherEdgeSamples(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
+                       double u1, const ClipLevels& clip, std::vector<EdgeSample>* out,
+                       int* saturated) {
+  out->clear();
+  int x_lo, x_hi, y_lo, y_hi;
+  if (!SlabBounds(img, f, s0, s1, u0, u1, &x_lo, &x_hi, &y_lo, &y_hi)) return false;
   for (int y = y_lo; y <= y_hi; ++y) {
     const double ry = y - f.oy;
     for (int x = x_lo; x <= x_hi; ++x) {
@@ -31,7 +88,7 @@ bool GatherEdgeSamples(const GreyImage& img, const AxisFrame& f, double s0, doub
       const double u = rx * f.dy - ry * f.dx;
       if (u < u0 || u > u1) continue;
       const float v = img.At(x, y);
-      if (v <= 0.0f || v >= top) ++*saturated;
+      if (v <= clip.low || v >= clip.high) ++*saturated;
       out->push_back({static_cast<float>(u), v});
     }
   }

@@ -95,8 +95,8 @@ EdgeLines FitEdgeLines(const std::vector<CaliperFit>& fits, double band_s0, doub
 // cylinder_fit.h): shared centre, radius, blur and shading, so the interior's curvature fixes the
 // shading that a per-edge fit trades against its edge. A caliper whose cylinder does not fit, or
 // whose silhouettes leave their windows, is dropped rather than mixed with per-edge widths.
-void RefitAsCylinders(const GreyImage& img, const AxisFrame& f, double data_max, double band_s0,
-                      double spacing, const EdgeLines& lines, double sigma_px,
+void RefitAsCylinders(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
+                      double band_s0, double spacing, const EdgeLines& lines, double sigma_px,
                       std::vector<CaliperFit>* fits) {
   const double outer = std::max(10.0, 3.0 * sigma_px + 2.5);
   std::vector<EdgeSample> samples;
@@ -108,7 +108,7 @@ void RefitAsCylinders(const GreyImage& img, const AxisFrame& f, double data_max,
     const double l = lines.left_u0 + lines.slope * sc, r = lines.right_u0 + lines.slope * sc;
     int clipped = 0;
     CylinderFit cyl;
-    if (GatherEdgeSamples(img, f, s0, s0 + spacing, l - outer, r + outer, data_max, &samples,
+    if (GatherEdgeSamples(img, f, s0, s0 + spacing, l - outer, r + outer, clip, &samples,
                           &clipped)) {
       // Deep inside, the profile only tells the shading's amplitudes, which vary slowly: every
       // fourth sample there does, and the fit costs a third.
@@ -178,6 +178,11 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     left_guess = 0.5 * (la + lb) - slope_guess * 0.5 * (sa + sb);
     right_guess = 0.5 * (ra + rb) - slope_guess * 0.5 * (sa + sb);
   }
+  // Saturation is judged on the decoded frame: where a codec put the clipped plateau.
+  const double mid_s = 0.5 * (band_s0 + band_s1), reach_px = 12.0;
+  const ClipLevels clip =
+      FindClipLevels(img, f, band_s0, band_s1, left_guess + slope_guess * mid_s - reach_px,
+                     right_guess + slope_guess * mid_s + reach_px, data_max);
   int total_samples = 0, total_saturated = 0, per_edge_consistent = 0;
   bool border = false;
   // A filament's band is its whole visible stretch, parts of which a drive gear or a guide may
@@ -208,7 +213,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
         const double e0 = (side == 0 ? left_guess : right_guess) + slope_guess * sc;
         const double u0 = side == 0 ? e0 - outer : e0 - inner;
         const double u1 = side == 0 ? e0 + inner : e0 + outer;
-        if (!GatherEdgeSamples(img, f, s0, s1, u0, u1, data_max, &samples, &cf.saturated)) {
+        if (!GatherEdgeSamples(img, f, s0, s1, u0, u1, clip, &samples, &cf.saturated)) {
           cf.inside_roi = false;
           break;
         }
@@ -305,7 +310,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     lines.left_u0 = left_guess;
     lines.right_u0 = right_guess;
     lines.slope = slope_guess;
-    RefitAsCylinders(img, f, data_max, band_s0, opt.caliper_spacing_px, lines, sigma_guess, &fits);
+    RefitAsCylinders(img, f, clip, band_s0, opt.caliper_spacing_px, lines, sigma_guess, &fits);
     lines = FitEdgeLines(fits, band_s0, opt.caliper_spacing_px);
     if (lines.calipers >= 2) {
       left_guess = lines.left_u0;
@@ -456,7 +461,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
         const double u0 = side == 0 ? e0 - outer : e0 - inner;
         const double u1 = side == 0 ? e0 + inner : e0 + outer;
         int clipped = 0;
-        ok = GatherEdgeSamples(img, f, s0, s1, u0, u1, data_max, &samples, &clipped);
+        ok = GatherEdgeSamples(img, f, s0, s1, u0, u1, clip, &samples, &clipped);
         if (!ok) break;
         const EdgeFit fit = shade[side] == 1
                                 ? FitShadedStep(samples, e0, sigma_guess, e0, side == 0 ? 1 : -1)
