@@ -340,7 +340,8 @@ AdversarialScene RandomAdversarialScene(TroubleClass trouble, uint64_t seed) {
     }
     case TroubleClass::kDieSwell:
       p.swell_ratio = uni(1.1, 1.5);
-      p.swell_length_um = uni(30, 150);
+      // Relaxing over a fraction of a diameter (~100 µm for a 400 µm strand).
+      p.swell_length_um = std::max(20.0, uni(0.1, 0.4) * p.width_um);
       widest_um = p.width_um * p.swell_ratio;
       break;
     case TroubleClass::kSaturated:

@@ -295,6 +295,36 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   }
   if (border)
     return fail(FrameStatus::kTouchesBorder, "edge windows reach the frame or ROI border");
+  // A strand's edges may curve out of windows placed on straight lines near the tip (die swell):
+  // from the bottom up, a caliper that found no edge looks again where the two below point.
+  if (!filament) {
+    const double outer = std::max(6.5, 3.0 * sigma_guess + 2.5) + (shade[0] || shade[1] ? 3.5 : 0);
+    const double inner = std::min(outer, std::max(4.0, 0.3 * width0));
+    for (int k = n_cal - 3; k >= 0; --k) {
+      CaliperFit& cf = fits[k];
+      const CaliperFit& b1 = fits[k + 1];
+      const CaliperFit& b2 = fits[k + 2];
+      if ((cf.left.converged && cf.right.converged) || !cf.inside_roi) continue;
+      if (!(b1.left.converged && b1.right.converged && b2.left.converged && b2.right.converged))
+        continue;
+      const double s0 = band_s0 + k * opt.caliper_spacing_px, s1 = s0 + opt.caliper_spacing_px;
+      for (int side = 0; side < 2; ++side) {
+        EdgeFit& fit = side == 0 ? cf.left : cf.right;
+        if (fit.converged) continue;
+        const double e1 = (side == 0 ? b1.left : b1.right).edge_px;
+        const double e2 = (side == 0 ? b2.left : b2.right).edge_px;
+        const double e0 = 2 * e1 - e2;
+        const double u0 = side == 0 ? e0 - outer : e0 - inner;
+        const double u1 = side == 0 ? e0 + inner : e0 + outer;
+        int clipped = 0;
+        if (!GatherEdgeSamples(img, f, s0, s1, u0, u1, clip, &samples, &clipped)) break;
+        const EdgeFit again = shade[side] == 1
+                                  ? FitShadedStep(samples, e0, sigma_guess, e0, side == 0 ? 1 : -1)
+                                  : FitBlurredStep(samples, e0, sigma_guess, e0);
+        if (UsableFit(again, u0, u1, side == 0 ? g.left_sign : g.right_sign)) fit = again;
+      }
+    }
+  }
   if (total_samples > 0 && total_saturated > opt.max_saturated_fraction * total_samples) {
     return fail(FrameStatus::kSaturated,
                 fmt::format("{} of {} edge pixels clipped", total_saturated, total_samples));
@@ -395,10 +425,19 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   const double tol = std::max(4.0 * 1.4826 * mad, 0.1);
   double sum = 0, sum2 = 0;
   int used = 0;
+  // A strand relaxing from die swell is wider at the band's top and narrows steadily down it:
+  // those calipers are the strand too, kept while each is no wider than the one above it.
+  bool relaxing = !filament;
+  double above = 1e30;
   for (int k = run_begin; k < run_end; ++k) {
     Caliper& c = m->calipers[k];
     if (!c.fitted) continue;
     c.inlier = std::abs(c.width_px - med) <= tol;
+    if (!c.inlier && relaxing && c.width_px > med && c.width_px <= above + tol)
+      c.inlier = true;
+    else
+      relaxing = false;
+    above = c.width_px;
     if (!c.inlier) continue;
     sum += c.width_px;
     sum2 += c.width_px * c.width_px;
@@ -425,7 +464,8 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     // A disc's chord w(s) ≈ 2R − s²/R bends with |w''|/2 = 1/R ≈ 2/w; a strand's slow changes
     // (or a filament's along a long stretch) bend hundreds of widths more gently.
     const double sag = std::abs(coef[2]) * half * half;
-    if (sag > kMaxSagPx && std::abs(coef[2]) > kMaxBend / med) {
+    // Only a width bulging in the middle: a swell relaxing down the band bends the other way.
+    if (coef[2] < 0 && sag > kMaxSagPx && std::abs(coef[2]) > kMaxBend / med) {
       return fail(FrameStatus::kNoStrand,
                   fmt::format("the edges curve: the width changes by {:.1f} px over the band (a "
                               "disc or bend, not a straight strand)",
@@ -473,7 +513,18 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     }
     if (elsewhere.size() >= 3) {
       const double ref = Median(elsewhere);
-      if (std::abs(m->width_px - ref) > std::max(3.0, 0.04 * ref)) {
+      // Wider in the band than below it, narrowing steadily down the band toward it: die swell
+      // relaxing, not an object over one edge.
+      const Caliper* first = nullptr;
+      const Caliper* last = nullptr;
+      for (const Caliper& c : m->calipers) {
+        if (!c.inlier) continue;
+        if (!first) first = &c;
+        last = &c;
+      }
+      const bool relaxes = first && last && m->width_px > ref && first->width_px > last->width_px &&
+                           first->width_px - last->width_px > 0.5 * (m->width_px - ref);
+      if (!relaxes && std::abs(m->width_px - ref) > std::max(3.0, 0.04 * ref)) {
         return fail(FrameStatus::kOccluded,
                     fmt::format("width in the band {:.1f} px disagrees with the strand's {:.1f} px "
                                 "further down",

@@ -9,6 +9,7 @@
 
 #include "common/robust.h"
 #include "vision/edge_segments.h"
+#include "vision/tip.h"
 
 namespace clogscope::vision {
 namespace {
@@ -63,7 +64,9 @@ bool MakeCandidate(const EdgeSegment& a, const EdgeSegment& b, double noise_full
   const double w0 = lb.U(s0) - la.U(s0), w1 = lb.U(s1) - la.U(s1);
   const double width = 0.5 * (w0 + w1);
   if (width < o.min_width_px || width > 0.9 * roi_width) return false;
-  if (std::abs(w1 - w0) > std::max(2.0, 0.03 * width)) return false;  // not parallel enough
+  // Not parallel enough; a long pair may open by 0.6° (a curved end, such as a swell below the
+  // nozzle, tilts a segment's fitted line).
+  if (std::abs(w1 - w0) > std::max({2.0, 0.03 * width, 0.01 * len})) return false;
   const EdgeSegment& L = li == 0 ? a : b;
   const EdgeSegment& R = li == 0 ? b : a;
   const Polarity pol = PairPolarity(L.sign, R.sign);
@@ -213,7 +216,12 @@ std::vector<PairCandidate> PairSegments(const Detection& d, const std::vector<Ed
     EdgeSegment el, er;
     if (!ExtendPair(d, edges[seeds[k].left], edges[seeds[k].right], &el, &er)) continue;
     PairCandidate c;
-    if (!MakeCandidate(el, er, noise_full, roi_width, o.min_length_px, o, &c)) continue;
+    // Extended lines that are no longer parallel took in a curve (a strand swelling below the
+    // nozzle): the seed's own segments stand.
+    if (!MakeCandidate(el, er, noise_full, roi_width, o.min_length_px, o, &c) &&
+        !MakeCandidate(edges[seeds[k].left], edges[seeds[k].right], noise_full, roi_width,
+                       o.min_length_px, o, &c))
+      continue;
     c.left = seeds[k].left;
     c.right = seeds[k].right;
     // Seeds along the same two lines end up as one candidate: keep it once.
@@ -454,13 +462,20 @@ bool FollowPair(const GreyImage& img, const SceneOptions& o, const PairCandidate
                  : "the edges run to the frame or ROI top: no nozzle tip in view";
       return false;
     }
+    // The walk followed straight lines; the outline followed as curves ends at the nozzle also
+    // when the strand swells below it (tip.h). It starts a little below where the walks ended.
+    const double s_from = std::max(up_l.s, up_r.s) + std::max(4.0, 0.1 * c.width_px);
+    const TipTrace trace = TraceToNozzle(img, a, c.left_u0, c.right_u0, c.edge_slope, left_sign,
+                                         right_sign, ref_l, ref_r, std::min(s_from, bottom));
     // A nozzle face ends both edges together (a strand hanging up to ~8° off the nozzle axis).
     const double mismatch = std::abs(up_l.s - up_r.s);
-    if (mismatch > std::max(4.0, 0.14 * c.width_px)) {
+    if (!trace.found && mismatch > std::max(4.0, 0.14 * c.width_px)) {
       *why = fmt::format("the edges end {:.0f} px apart: no common nozzle tip", mismatch);
       return false;
     }
     s_origin = 0.5 * (up_l.s + up_r.s);
+    if (trace.found && trace.s_tip_px < s_origin) s_origin = trace.s_tip_px;
+    g->tip_width_px = trace.found ? trace.widest_px : c.width_px;
   } else {
     // Where both edges are still there; but when one edge's walk stops at an object while the
     // other runs on to the border, where the other ends: an object beside the filament (a gear's

@@ -56,6 +56,8 @@ struct StrandGeometry {
   int left_sign = 0, right_sign = 0;
   Polarity polarity = Polarity::kAuto;
   bool has_tip = false;
+  // Strand: the widest width between the tip and the straight part (die swell), px.
+  double tip_width_px = 0;
   bool precise = false;  // edge lines from fitted calipers (tracking), not from the gradient
   // Edge model per side: −1 decide from the calipers, 0 plain blurred step, 1 shaded (tracking
   // keeps the first frame's decision).

@@ -221,6 +221,8 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
   }
   const GreyImage img{channel, channel.depth() == CV_16U};
   MeasureCalipers(img, data_max, g, s0, s1, opt, &m);
+  if (m.valid() && opt.target == MeasureTarget::kStrand && g.tip_width_px > 0)
+    m.swell_ratio = std::max(1.0, g.tip_width_px / m.width_px);
   return m;
 }
 

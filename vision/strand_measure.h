@@ -84,6 +84,9 @@ struct StrandMeasurement {
   // rough (knurl marks) over part of its stretch, its longest straight part (straight_run.h).
   double straight_start_px = 0, straight_end_px = 0;
   int rough_calipers = 0;  // filament: calipers whose edges are not straight
+  // Strand: the widest width between the tip and the band over width_px (die swell; 1 when the
+  // strand is no wider there).
+  double swell_ratio = 1;
   std::vector<Caliper> calipers;
 };
 
