@@ -70,6 +70,12 @@ ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, d
   // Half a bin inward, so that every value of the spike's bin counts.
   if (top >= 0) clip.high = static_cast<float>((top - 0.5) / scale);
   if (bottom >= 0) clip.low = static_cast<float>((bottom + 0.5) / scale);
+  int clipped = 0;
+  for (int b = 0; b < kBins; ++b) {
+    const double v = b / scale;
+    if (v <= clip.low || v >= clip.high) clipped += h[b];
+  }
+  clip.clipped_fraction = n > 0 ? static_cast<double>(clipped) / n : 0.0;
   return clip;
 }
 

@@ -146,7 +146,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   const AxisFrame& f = g.axis;
   const double min_contrast = opt.min_contrast_fraction * data_max;
   const double width0 = g.width_px;
-  const int n_cal = static_cast<int>((band_s1 - band_s0) / opt.caliper_spacing_px);
+  const int n_cal = static_cast<int>((band_s1 - band_s0) / opt.caliper_spacing_px + 1e-9);
   m->band_start_px = band_s0;
   m->band_end_px = band_s0 + n_cal * opt.caliper_spacing_px;
   m->calipers_total = n_cal;
@@ -328,6 +328,12 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   if (total_samples > 0 && total_saturated > opt.max_saturated_fraction * total_samples) {
     return fail(FrameStatus::kSaturated,
                 fmt::format("{} of {} edge pixels clipped", total_saturated, total_samples));
+  }
+  // The shading model reads the strand's lit interior: clipped there, it cannot be fitted.
+  if ((shade[0] == 1 || shade[1] == 1) && clip.clipped_fraction > opt.max_saturated_fraction) {
+    return fail(FrameStatus::kSaturated,
+                fmt::format("{:.0f} % of the band clipped: its shading cannot be fitted",
+                            100 * clip.clipped_fraction));
   }
   // A lit object on both sides (a front-lit strand or filament): one cylinder per caliper.
   // Only on an object the per-edge fits already saw as one (enough consistent calipers): a wrong

@@ -268,9 +268,11 @@ void SuppressNested(std::vector<PairCandidate>* cands) {
       const double sj = c[i].axis.S(c[j].axis.ox, c[j].axis.oy);
       const double overlap = std::min(sj + c[j].length_px, c[i].length_px) - std::max(sj, 0.0);
       if (overlap < 0.5 * c[j].length_px) continue;
-      // A highlight stripe on a shaded strand can outscore the strand's own soft silhouette.
-      const bool same_kind = c[i].polarity == c[j].polarity;
-      if (c[i].score >= (same_kind ? 0.3 : 0.8) * c[j].score) {
+      // Inside an outer silhouette (bright or dark), edges never make the strand: a stripe or a
+      // lens's core is part of the object whatever its contrast. A mixed outer pair (brighter on
+      // one side, darker on the other) is a weaker hypothesis of an object.
+      const bool mixed_outer = c[i].polarity == Polarity::kMixed;
+      if (c[i].score >= (mixed_outer ? 0.8 : 0.3) * c[j].score) {
         c[j].verdict = fmt::format("inside a wider pair ({:.1f} px)", c[i].width_px);
         c[j].suppressed_by = static_cast<int>(i);
       }
@@ -280,11 +282,14 @@ void SuppressNested(std::vector<PairCandidate>* cands) {
 
 // Whether a pair's inside is one object: a pair made of the outer edges of two strands side by
 // side holds the background between them. Samples the inside at the detection scale and counts
-// how much of it sits at the background's level (within a quarter of the step).
+// how much of it sits at the background's level (within a quarter of the step). A transparent
+// strand on a backlight is a lens: its core shows the backlight too, but as one band centred
+// between two dark rims of equal width, and it is one object.
 bool InsideIsOneObject(const Detection& d, const PairCandidate& c) {
   const cv::Mat& img = d.image;  // CV_32F
   const double f = d.factor, off = 0.5 * (d.factor - 1), gap = 2.0 * d.factor + 2.0;
-  std::vector<double> inside, outside, rim;
+  std::vector<double> outside, rim;
+  std::vector<std::vector<double>> rows(5);
   for (int i = 1; i <= 5; ++i) {
     const double s = c.length_px * i / 6.0;
     const double ul = c.left_u0 + c.edge_slope * s, ur = c.right_u0 + c.edge_slope * s;
@@ -302,17 +307,37 @@ bool InsideIsOneObject(const Detection& d, const PairCandidate& c) {
     at(ur + gap, &outside);
     at(ul + gap, &rim);
     at(ur - gap, &rim);
-    for (double u = ul + gap; u <= ur - gap; u += f) at(u, &inside);
+    for (double u = ul + gap; u <= ur - gap; u += f) at(u, &rows[i - 1]);
   }
-  if (inside.size() < 10 || outside.size() < 2 || rim.size() < 2) return true;
+  size_t inside = 0;
+  for (const auto& r : rows) inside += r.size();
+  if (inside < 10 || outside.size() < 2 || rim.size() < 2) return true;
   // The object's level just inside its edges; the background's just outside them.
   const double background = Median(outside), body = Median(rim);
   const double step = std::abs(body - background);
   if (step <= 0) return true;
-  int at_background = 0;
-  for (double v : inside) at_background += std::abs(v - background) < 0.25 * step;
-
-  return at_background < 0.2 * inside.size();
+  int at_background = 0, lens_rows = 0;
+  for (const auto& r : rows) {
+    int first = -1, last = -1, here = 0;
+    for (int k = 0; k < static_cast<int>(r.size()); ++k) {
+      if (std::abs(r[k] - background) >= 0.25 * step) continue;
+      ++here;
+      if (first < 0) first = k;
+      last = k;
+    }
+    at_background += here;
+    // A lens's core: one band (nearly all of it at the backlight's level), centred (rims of
+    // equal width within a tenth of the width), 10–70 % of the width.
+    const double n = static_cast<double>(r.size());
+    if (first >= 0 && here >= 0.8 * (last - first + 1) &&
+        std::abs(first - (n - 1 - last)) <= 0.1 * n && (last - first + 1) >= 0.1 * n &&
+        (last - first + 1) <= 0.7 * n)
+      ++lens_rows;
+  }
+  // Only a dark silhouette on a backlight can be a lens (its core transmits the backlight); a
+  // lit pair with the background between its edges is two objects.
+  if (c.polarity == Polarity::kDarkOnBright && lens_rows >= 4) return true;
+  return at_background < 0.2 * inside;
 }
 
 // Edge contrast across the line u(s) at s: positive when the edge is there with its sign.

@@ -2,12 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
+
+#include "vision/edge_fit.h"
 
 namespace clogscope::vision {
 namespace {
 
 constexpr double kOffsetPx = 2.0;  // contrast is read this far either side of the edge
-constexpr double kSearchPx = 2.0;  // how far an edge may move from where it was heading, per px
+constexpr double kSearchPx = 3.0;  // how far an edge may move from where it was heading, per px
 constexpr double kSearchStepPx = 0.25;
 constexpr int kWeakSteps = 3;  // an edge ends after this many weak px in a row
 
@@ -49,13 +52,45 @@ Curve Follow(const GreyImage& img, const AxisFrame& a, double u_start, double sl
     }
     weak = 0;
     // Smooth the heading: one noisy px must not turn the curve.
-    velocity = 0.7 * velocity + 0.3 * (best_u - u);
+    velocity = 0.5 * velocity + 0.5 * (best_u - u);
     u = best_u;
     out.s_end = s;
     out.u.resize(i, u);
     out.u[i - 1] = u;
   }
   return out;
+}
+
+// The nozzle's face beside the strand: just outside the outline on each side, the profile along
+// the axis steps from the nozzle to the background at the face. A blurred step fitted there puts
+// the tip to a fraction of a px, where the end of a followed edge is only good to the blur.
+bool FaceBesideStrand(const GreyImage& img, const AxisFrame& a, double s_guess, double half_px,
+                      double min_contrast, double* s_face) {
+  constexpr double kReachPx = 10.0, kColumnsPx = 4.0;
+  double sum = 0;
+  int sides = 0;
+  std::vector<EdgeSample> samples;
+  for (int side : {-1, 1}) {
+    samples.clear();
+    for (double du = 0; du <= kColumnsPx; du += 1.0) {
+      const double u = side * (half_px + 3.0 + du);
+      for (double s = s_guess - kReachPx; s <= s_guess + kReachPx; s += 0.5) {
+        const double x = a.ImageX(s, u), y = a.ImageY(s, u);
+        if (!img.InsideForBilinear(x, y)) continue;
+        samples.push_back({static_cast<float>(s), static_cast<float>(img.Bilinear(x, y))});
+      }
+    }
+    if (samples.size() < 60) continue;
+    const EdgeFit fit = FitBlurredStep(samples, s_guess, 1.5, s_guess);
+    if (!fit.converged || std::abs(fit.step) < min_contrast ||
+        std::abs(fit.edge_px - s_guess) > kReachPx - 2.0 || fit.sigma_px > 6.0)
+      continue;
+    sum += fit.edge_px;
+    ++sides;
+  }
+  if (sides == 0) return false;
+  *s_face = sum / sides;
+  return true;
 }
 
 }  // namespace
@@ -77,6 +112,17 @@ TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0,
   t.widest_px = width;
   const size_t n = std::min(l.u.size(), r.u.size());
   for (size_t i = 0; i < n; ++i) t.widest_px = std::max(t.widest_px, r.u[i] - l.u[i]);
+  // The followed edges end within the blur of the face; the face itself, where the nozzle shows
+  // beside the strand, is sharper.
+  double s_face = 0;
+  const double axis_u = 0.5 * (left_u0 + right_u0) + slope * t.s_tip_px;
+  AxisFrame centred = a;
+  centred.ox = a.ImageX(0, axis_u);
+  centred.oy = a.ImageY(0, axis_u);
+  if (FaceBesideStrand(img, centred, t.s_tip_px, 0.5 * t.widest_px, 0.25 * std::min(ref_l, ref_r),
+                       &s_face) &&
+      std::abs(s_face - t.s_tip_px) <= 6.0)
+    t.s_tip_px = s_face;
   return t;
 }
 

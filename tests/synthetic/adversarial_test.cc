@@ -1,0 +1,106 @@
+// Scenes from the adversarial renderer (synthetic/adversarial.h) built around one trouble each,
+// measured with the default options and judged against the render's geometric truth.
+#include "synthetic/adversarial.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "vision/strand_measure.h"
+
+namespace clogscope::synthetic {
+namespace {
+
+vision::StrandMeasurement Measure(const cv::Mat& frame, double scale_um_per_px) {
+  vision::StrandMeasureOptions o;
+  const vision::BandPx band = vision::DefaultBand(vision::MeasureTarget::kStrand, scale_um_per_px);
+  o.band_start_px = band.start_px;
+  o.band_height_px = band.height_px;
+  return vision::MeasureStrand(frame, o);
+}
+
+double Tolerance(double truth_px) { return std::max(0.3, 0.005 * truth_px); }
+
+std::string Temp() { return std::filesystem::temp_directory_path().string(); }
+
+TEST(AdversarialTest, RendererKeepsTheGeometricWidthOfAPlainStrand) {
+  // The renderer's own honesty: a flat strand, no noise, lossless, measured within 0.05 px.
+  AdversarialScene p = RandomAdversarialScene(TroubleClass::kPlain, 3);
+  p.noise_sigma = 0;
+  p.codec = Codec::kPng;
+  p.shading_ambient = 1;
+  p.background_texture = 0;
+  p.background_slope = 0;
+  p.blur_sigma_px = 1.2;
+  AdversarialTruth t;
+  const cv::Mat f = RenderAdversarial(p, 1, Temp(), &t)[0];
+  const vision::StrandMeasurement m = Measure(f, p.scale_um_per_px);
+  ASSERT_TRUE(m.valid()) << m.detail << " " << Describe(p);
+  EXPECT_NEAR(m.width_px, t.width_px, 0.05) << Describe(p);
+  EXPECT_NEAR(m.tip_y_px, t.tip_y_px, 1.5);
+}
+
+TEST(AdversarialTest, BacklitLensIsMeasuredAtItsOuterSilhouette) {
+  // A transparent strand on a backlight: dark rims, a bright core of 15–50 % of the width. The
+  // core, or one rim, is never the strand; the outer silhouette is.
+  int valid = 0;
+  for (uint64_t seed = 1; seed <= 6; ++seed) {
+    const AdversarialScene p = RandomAdversarialScene(TroubleClass::kBacklitLens, seed);
+    AdversarialTruth t;
+    const cv::Mat f = RenderAdversarial(p, 1, Temp(), &t)[0];
+    const vision::StrandMeasurement m = Measure(f, p.scale_um_per_px);
+    if (!m.valid()) continue;
+    ++valid;
+    EXPECT_EQ(m.polarity, vision::Polarity::kDarkOnBright) << Describe(p);
+    EXPECT_NEAR(m.width_px, t.width_px, Tolerance(t.width_px)) << Describe(p);
+  }
+  EXPECT_GE(valid, 5);
+}
+
+TEST(AdversarialTest, DieSwellPutsTheTipAtTheNozzleAndReportsTheSwell) {
+  for (uint64_t seed = 1; seed <= 6; ++seed) {
+    const AdversarialScene p = RandomAdversarialScene(TroubleClass::kDieSwell, seed);
+    AdversarialTruth t;
+    const cv::Mat f = RenderAdversarial(p, 1, Temp(), &t)[0];
+    const vision::StrandMeasurement m = Measure(f, p.scale_um_per_px);
+    ASSERT_TRUE(m.valid()) << m.detail << " " << Describe(p);
+    // Where the edges become parallel lies 0.2–1 widths below the tip: within 3 px here.
+    EXPECT_LT(std::hypot(m.tip_x_px - t.tip_x_px, m.tip_y_px - t.tip_y_px), 3.0) << Describe(p);
+    // These scenes carry up to 12 grey levels of noise on contrasts down to 40: a little more
+    // room than the matrix's confident-wrong line.
+    EXPECT_NEAR(m.width_px, t.width_px, std::max(0.45, 0.0075 * t.width_px)) << Describe(p);
+    // The swell itself where the optics resolve it: relaxing over at least four blur widths.
+    if (p.swell_length_um / p.scale_um_per_px >= 4 * p.blur_sigma_px) {
+      EXPECT_NEAR(m.swell_ratio, t.swell_ratio, 0.15 * (t.swell_ratio - 1) + 0.03) << Describe(p);
+    }
+  }
+}
+
+TEST(AdversarialTest, ClippedStrandThroughH264IsSaturatedNotMeasured) {
+  // H.264 in TV range decodes a clipped plateau at ~252 of 255: still saturation.
+  for (uint64_t seed : {3, 7, 11, 14}) {
+    AdversarialScene p = RandomAdversarialScene(TroubleClass::kSaturated, seed);
+    p.codec = Codec::kH264;
+    AdversarialTruth t;
+    const cv::Mat f = RenderAdversarial(p, 1, Temp(), &t)[0];
+    const vision::StrandMeasurement m = Measure(f, p.scale_um_per_px);
+    EXPECT_FALSE(m.valid() && std::abs(m.width_px - t.width_px) > Tolerance(t.width_px))
+        << m.width_px << " px, truth " << t.width_px << ": " << Describe(p);
+    if (!m.valid()) {
+      EXPECT_EQ(m.status, vision::FrameStatus::kSaturated) << m.detail;
+    }
+  }
+}
+
+TEST(AdversarialTest, NozzleAloneNeverGivesAWidth) {
+  for (uint64_t seed = 1; seed <= 6; ++seed) {
+    const AdversarialScene p = RandomAdversarialScene(TroubleClass::kNoStrand, seed);
+    const cv::Mat f = RenderAdversarial(p, 1, Temp(), nullptr)[0];
+    const vision::StrandMeasurement m = Measure(f, p.scale_um_per_px);
+    EXPECT_FALSE(m.valid()) << m.width_px << " px: " << Describe(p);
+  }
+}
+
+}  // namespace
+}  // namespace clogscope::synthetic
