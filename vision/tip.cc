@@ -12,7 +12,8 @@ namespace {
 constexpr double kOffsetPx = 2.0;  // contrast is read this far either side of the edge
 constexpr double kSearchPx = 3.0;  // how far an edge may move from where it was heading, per px
 constexpr double kSearchStepPx = 0.25;
-constexpr int kWeakSteps = 3;  // an edge ends after this many weak px in a row
+constexpr int kWeakSteps = 3;      // an edge ends after this many weak px in a row
+constexpr double kInsidePx = 4.0;  // the object's level is read this far inside its edge
 
 // sign·(I(u + d) − I(u − d)) across the axis at s; false outside the image.
 bool Contrast(const GreyImage& img, const AxisFrame& a, double s, double u, int sign, double* c) {
@@ -28,12 +29,27 @@ struct Curve {
   std::vector<double> u;  // u at s_from − i
 };
 
+// The object's level just inside an edge (object_side: +1 the object lies at +u).
+bool InsideLevel(const GreyImage& img, const AxisFrame& a, double s, double u, int object_side,
+                 double* level) {
+  const double ui = u + object_side * kInsidePx;
+  const double x = a.ImageX(s, ui), y = a.ImageY(s, ui);
+  if (!img.InsideForBilinear(x, y)) return false;
+  *level = img.Bilinear(x, y);
+  return true;
+}
+
 Curve Follow(const GreyImage& img, const AxisFrame& a, double u_start, double slope, int sign,
-             double ref, double s_from, double max_steps) {
+             int object_side, double ref, double s_from, double max_steps) {
   Curve out;
   out.s_end = s_from;
   double u = u_start, velocity = -slope;  // du per px going up
   int weak = 0;
+  // The strand's own level inside the edge: where it changes, the edge belongs to another
+  // object (the nozzle's outline carries on from the strand's when the nozzle, like the strand,
+  // is darker or brighter than the background).
+  double inside_ref = 0;
+  if (!InsideLevel(img, a, s_from, u_start, object_side, &inside_ref)) return out;
   for (int i = 1; i <= max_steps; ++i) {
     const double s = s_from - i;
     const double heading = u + velocity;
@@ -46,7 +62,9 @@ Curve Follow(const GreyImage& img, const AxisFrame& a, double u_start, double sl
         best_u = heading + du;
       }
     }
-    if (best_c < 0.5 * ref) {
+    double inside = inside_ref;
+    InsideLevel(img, a, s, best_u, object_side, &inside);
+    if (best_c < 0.5 * ref || std::abs(inside - inside_ref) > 0.3 * ref) {
       if (++weak >= kWeakSteps) return out;
       continue;  // keep heading the same way over a weak px
     }
@@ -67,26 +85,32 @@ Curve Follow(const GreyImage& img, const AxisFrame& a, double u_start, double sl
 bool FaceBesideStrand(const GreyImage& img, const AxisFrame& a, double s_guess, double half_px,
                       double min_contrast, double* s_face) {
   constexpr double kReachPx = 10.0, kColumnsPx = 4.0;
+  // Columns from just outside the outline outward: near the face a swollen strand may still
+  // be wider than the outline followed, and the profile there crosses it too.
+  constexpr double kOffsetsPx[] = {3.0, 9.0, 15.0, 21.0};
   double sum = 0;
   int sides = 0;
   std::vector<EdgeSample> samples;
   for (int side : {-1, 1}) {
-    samples.clear();
-    for (double du = 0; du <= kColumnsPx; du += 1.0) {
-      const double u = side * (half_px + 3.0 + du);
-      for (double s = s_guess - kReachPx; s <= s_guess + kReachPx; s += 0.5) {
-        const double x = a.ImageX(s, u), y = a.ImageY(s, u);
-        if (!img.InsideForBilinear(x, y)) continue;
-        samples.push_back({static_cast<float>(s), static_cast<float>(img.Bilinear(x, y))});
+    for (double offset : kOffsetsPx) {
+      samples.clear();
+      for (double du = 0; du <= kColumnsPx; du += 1.0) {
+        const double u = side * (half_px + offset + du);
+        for (double s = s_guess - kReachPx; s <= s_guess + kReachPx; s += 0.5) {
+          const double x = a.ImageX(s, u), y = a.ImageY(s, u);
+          if (!img.InsideForBilinear(x, y)) continue;
+          samples.push_back({static_cast<float>(s), static_cast<float>(img.Bilinear(x, y))});
+        }
       }
+      if (samples.size() < 60) break;
+      const EdgeFit fit = FitBlurredStep(samples, s_guess, 1.5, s_guess);
+      if (!fit.converged || std::abs(fit.step) < min_contrast ||
+          std::abs(fit.edge_px - s_guess) > kReachPx - 2.0 || fit.sigma_px > 6.0)
+        continue;
+      sum += fit.edge_px;
+      ++sides;
+      break;
     }
-    if (samples.size() < 60) continue;
-    const EdgeFit fit = FitBlurredStep(samples, s_guess, 1.5, s_guess);
-    if (!fit.converged || std::abs(fit.step) < min_contrast ||
-        std::abs(fit.edge_px - s_guess) > kReachPx - 2.0 || fit.sigma_px > 6.0)
-      continue;
-    sum += fit.edge_px;
-    ++sides;
   }
   if (sides == 0) return false;
   *s_face = sum / sides;
@@ -102,9 +126,9 @@ TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0,
   const double width = right_u0 - left_u0;
   const double max_steps = std::max(20.0, 2.0 * width);
   const Curve l =
-      Follow(img, a, left_u0 + slope * s_from, slope, left_sign, ref_l, s_from, max_steps);
+      Follow(img, a, left_u0 + slope * s_from, slope, left_sign, +1, ref_l, s_from, max_steps);
   const Curve r =
-      Follow(img, a, right_u0 + slope * s_from, slope, right_sign, ref_r, s_from, max_steps);
+      Follow(img, a, right_u0 + slope * s_from, slope, right_sign, -1, ref_r, s_from, max_steps);
   // A nozzle face ends both edges together; a hair or a flank that one edge ran into does not.
   if (std::abs(l.s_end - r.s_end) > std::max(4.0, 0.14 * width)) return t;
   t.found = true;
@@ -119,10 +143,16 @@ TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0,
   AxisFrame centred = a;
   centred.ox = a.ImageX(0, axis_u);
   centred.oy = a.ImageY(0, axis_u);
-  if (FaceBesideStrand(img, centred, t.s_tip_px, 0.5 * t.widest_px, 0.25 * std::min(ref_l, ref_r),
-                       &s_face) &&
-      std::abs(s_face - t.s_tip_px) <= 6.0)
-    t.s_tip_px = s_face;
+  // Looked for from the edge that got furthest, then from both ends' middle: an edge that
+  // stopped short in noise leaves the other's end nearer the face.
+  for (double s_guess : {std::min(l.s_end, r.s_end), t.s_tip_px}) {
+    if (FaceBesideStrand(img, centred, s_guess, 0.5 * t.widest_px, 0.25 * std::min(ref_l, ref_r),
+                         &s_face) &&
+        std::abs(s_face - s_guess) <= 6.0) {
+      t.s_tip_px = s_face;
+      break;
+    }
+  }
   return t;
 }
 
