@@ -490,8 +490,9 @@ bool FollowPair(const GreyImage& img, const SceneOptions& o, const PairCandidate
     // The walk followed straight lines; the outline followed as curves ends at the nozzle also
     // when the strand swells below it (tip.h). It starts a little below where the walks ended.
     const double s_from = std::max(up_l.s, up_r.s) + std::max(4.0, 0.1 * c.width_px);
-    const TipTrace trace = TraceToNozzle(img, a, c.left_u0, c.right_u0, c.edge_slope, left_sign,
-                                         right_sign, ref_l, ref_r, std::min(s_from, bottom));
+    const TipTrace trace =
+        TraceToNozzle(img, a, c.left_u0, c.right_u0, c.edge_slope, left_sign, right_sign, ref_l,
+                      ref_r, std::min(s_from, bottom), o.min_contrast);
     // A nozzle face ends both edges together (a strand hanging up to ~8° off the nozzle axis).
     const double mismatch = std::abs(up_l.s - up_r.s);
     if (!trace.found && mismatch > std::max(4.0, 0.14 * c.width_px)) {
@@ -501,6 +502,7 @@ bool FollowPair(const GreyImage& img, const SceneOptions& o, const PairCandidate
     s_origin = 0.5 * (up_l.s + up_r.s);
     if (trace.found && trace.s_tip_px < s_origin) s_origin = trace.s_tip_px;
     g->tip_width_px = trace.found ? trace.widest_px : c.width_px;
+    g->tip_face_sides = trace.found ? trace.face_sides : 0;
   } else {
     // Where both edges are still there; but when one edge's walk stops at an object while the
     // other runs on to the border, where the other ends: an object beside the filament (a gear's
@@ -575,7 +577,23 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
     const auto [cl, cr] = Interval(c, b.axis);
     const bool disjoint = !shares && (cr < bl || cl > br);
     // Two strands in one view look alike; a gap between objects (a mixed pair) is another thing.
-    if (disjoint && c.polarity == b.polarity && c.score >= o.ambiguity_ratio * b.score) {
+    const bool alike = disjoint && c.polarity == b.polarity;
+    // Two strand-like objects: the one hanging from the nozzle's face (the nozzle on both its
+    // sides) is the strand; a hair that ends at a flank, or in the open, is not.
+    if (alike && o.target == MeasureTarget::kStrand &&
+        (r.geometry.tip_face_sides == 2) != (g.tip_face_sides == 2)) {
+      if (g.tip_face_sides == 2) {
+        r.candidates[r.chosen].verdict = "its top is not at the nozzle's face";
+        r.runners_up.clear();
+        r.chosen = i;
+        r.geometry = g;
+        c.verdict = "chosen";
+      } else {
+        c.verdict = "its top is not at the nozzle's face";
+      }
+      continue;
+    }
+    if (alike && c.score >= o.ambiguity_ratio * b.score) {
       c.verdict = "as likely as the chosen pair";
       r.status = FrameStatus::kAmbiguous;
       r.detail = fmt::format("two strand-like pairs of similar score: {} and {}", Describe(b),

@@ -45,6 +45,7 @@ Curve Follow(const GreyImage& img, const AxisFrame& a, double u_start, double sl
   out.s_end = s_from;
   double u = u_start, velocity = -slope;  // du per px going up
   int weak = 0;
+  double strong_c = ref, first_weak_c = 0;
   // The strand's own level inside the edge: where it changes, the edge belongs to another
   // object (the nozzle's outline carries on from the strand's when the nozzle, like the strand,
   // is darker or brighter than the background).
@@ -65,10 +66,17 @@ Curve Follow(const GreyImage& img, const AxisFrame& a, double u_start, double sl
     double inside = inside_ref;
     InsideLevel(img, a, s, best_u, object_side, &inside);
     if (best_c < 0.5 * ref || std::abs(inside - inside_ref) > 0.3 * ref) {
-      if (++weak >= kWeakSteps) return out;
+      if (weak == 0) first_weak_c = best_c;
+      if (++weak >= kWeakSteps) {
+        // The half-contrast crossing between the last strong px and the first weak one.
+        if (first_weak_c < 0.5 * ref && strong_c > first_weak_c)
+          out.s_end -= std::clamp((strong_c - 0.5 * ref) / (strong_c - first_weak_c), 0.0, 1.0);
+        return out;
+      }
       continue;  // keep heading the same way over a weak px
     }
     weak = 0;
+    strong_c = best_c;
     // Smooth the heading: one noisy px must not turn the curve.
     velocity = 0.5 * velocity + 0.5 * (best_u - u);
     u = best_u;
@@ -82,14 +90,14 @@ Curve Follow(const GreyImage& img, const AxisFrame& a, double u_start, double sl
 // The nozzle's face beside the strand: just outside the outline on each side, the profile along
 // the axis steps from the nozzle to the background at the face. A blurred step fitted there puts
 // the tip to a fraction of a px, where the end of a followed edge is only good to the blur.
-bool FaceBesideStrand(const GreyImage& img, const AxisFrame& a, double s_guess, double half_px,
-                      double min_contrast, double* s_face) {
-  constexpr double kReachPx = 10.0, kColumnsPx = 4.0;
+// Returns on how many sides (0–2) the face was found; with two, they agree within 3 px.
+int FaceBesideStrand(const GreyImage& img, const AxisFrame& a, double s_guess, double half_px,
+                     double min_contrast, double* s_face) {
+  constexpr double kReachPx = 10.0, kColumnsPx = 4.0, kAgreePx = 3.0;
   // Columns from just outside the outline outward: near the face a swollen strand may still
   // be wider than the outline followed, and the profile there crosses it too.
   constexpr double kOffsetsPx[] = {3.0, 9.0, 15.0, 21.0};
-  double sum = 0;
-  int sides = 0;
+  std::vector<double> found;
   std::vector<EdgeSample> samples;
   for (int side : {-1, 1}) {
     for (double offset : kOffsetsPx) {
@@ -107,21 +115,25 @@ bool FaceBesideStrand(const GreyImage& img, const AxisFrame& a, double s_guess, 
       if (!fit.converged || std::abs(fit.step) < min_contrast ||
           std::abs(fit.edge_px - s_guess) > kReachPx - 2.0 || fit.sigma_px > 6.0)
         continue;
-      sum += fit.edge_px;
-      ++sides;
+      found.push_back(fit.edge_px);
       break;
     }
   }
-  if (sides == 0) return false;
-  *s_face = sum / sides;
-  return true;
+  if (found.empty()) return 0;
+  if (found.size() == 2 && std::abs(found[0] - found[1]) > kAgreePx) {
+    // Not one face across the strand (a flank on one side): the end nearer the guess.
+    *s_face = std::abs(found[0] - s_guess) < std::abs(found[1] - s_guess) ? found[0] : found[1];
+    return 1;
+  }
+  *s_face = found.size() == 2 ? 0.5 * (found[0] + found[1]) : found[0];
+  return static_cast<int>(found.size());
 }
 
 }  // namespace
 
 TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0, double right_u0,
                        double slope, int left_sign, int right_sign, double ref_l, double ref_r,
-                       double s_from) {
+                       double s_from, double min_face_step) {
   TipTrace t;
   const double width = right_u0 - left_u0;
   const double max_steps = std::max(20.0, 2.0 * width);
@@ -146,10 +158,11 @@ TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0,
   // Looked for from the edge that got furthest, then from both ends' middle: an edge that
   // stopped short in noise leaves the other's end nearer the face.
   for (double s_guess : {std::min(l.s_end, r.s_end), t.s_tip_px}) {
-    if (FaceBesideStrand(img, centred, s_guess, 0.5 * t.widest_px, 0.25 * std::min(ref_l, ref_r),
-                         &s_face) &&
-        std::abs(s_face - s_guess) <= 6.0) {
+    const int sides =
+        FaceBesideStrand(img, centred, s_guess, 0.5 * t.widest_px, min_face_step, &s_face);
+    if (sides > 0 && std::abs(s_face - s_guess) <= 6.0) {
       t.s_tip_px = s_face;
+      t.face_sides = sides;
       break;
     }
   }

@@ -12,13 +12,18 @@ struct TipTrace {
   bool found = false;    // both edges followed up to a common end
   double s_tip_px = 0;   // the common end, along the axis (the caller's frame)
   double widest_px = 0;  // the widest separation of the two curves between the tip and s_from
+  // On how many sides of the strand the nozzle's face shows (0–2): a strand hangs from the face,
+  // with the nozzle on both sides; a hair behind a nozzle's flank ends at it on one side at most.
+  int face_sides = 0;
 };
 
 // Follows the edges u = left_u0 + slope·s and right_u0 + slope·s of axis frame `a` upward (−s)
 // from s_from, each re-found every px within ±2 px of where its curve is heading, until its
-// contrast (sign·step, `ref_*` the edge's usual contrast) stays below half for three px.
+// contrast (sign·step, `ref_*` the edge's usual contrast) stays below half for three px, or the
+// level inside it changes; then refines the end on the nozzle's face beside the strand where
+// that face steps by at least min_face_step.
 TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0, double right_u0,
                        double slope, int left_sign, int right_sign, double ref_l, double ref_r,
-                       double s_from);
+                       double s_from, double min_face_step);
 
 }  // namespace clogscope::vision
