@@ -70,9 +70,10 @@ TEST(AdversarialTest, DieSwellPutsTheTipAtTheNozzleAndReportsTheSwell) {
     // These scenes carry up to 12 grey levels of noise on contrasts down to 40: a little more
     // room than the matrix's confident-wrong line.
     EXPECT_NEAR(m.width_px, t.width_px, std::max(0.45, 0.0075 * t.width_px)) << Describe(p);
-    // The swell itself where the optics resolve it: relaxing over at least four blur widths.
+    // The swell itself where the optics resolve it (relaxing over at least four blur widths), to
+    // a third of its excess: the widest part lies right at the face, inside the blur.
     if (p.swell_length_um / p.scale_um_per_px >= 4 * p.blur_sigma_px) {
-      EXPECT_NEAR(m.swell_ratio, t.swell_ratio, 0.15 * (t.swell_ratio - 1) + 0.03) << Describe(p);
+      EXPECT_NEAR(m.swell_ratio, t.swell_ratio, 0.3 * (t.swell_ratio - 1) + 0.03) << Describe(p);
     }
   }
 }
@@ -91,6 +92,30 @@ TEST(AdversarialTest, ClippedStrandThroughH264IsSaturatedNotMeasured) {
       EXPECT_EQ(m.status, vision::FrameStatus::kSaturated) << m.detail;
     }
   }
+}
+
+TEST(AdversarialTest, AHairBesideTheStrandIsNeverMeasuredAsIt) {
+  // Stringers 10–50 µm beside the strand, hanging from the nozzle or from above (behind the
+  // nozzle's flank), the nozzle often barely visible: the strand or a refusal, never the hair.
+  int valid = 0;
+  for (uint64_t seed = 1; seed <= 12; ++seed) {
+    const AdversarialScene p = RandomAdversarialScene(TroubleClass::kStringer, seed);
+    AdversarialTruth t;
+    const cv::Mat f = RenderAdversarial(p, 1, Temp(), &t)[0];
+    const vision::StrandMeasurement m = Measure(f, p.scale_um_per_px);
+    if (!m.valid()) continue;
+    ++valid;
+    EXPECT_NEAR(m.width_px, t.width_px, std::max(0.45, 0.0075 * t.width_px)) << Describe(p);
+  }
+  // Seed 4's hair comes from above and ends at the nozzle's flank: the strand hangs from the
+  // face. (Ambiguous before the face decided.)
+  const AdversarialScene p = RandomAdversarialScene(TroubleClass::kStringer, 4);
+  AdversarialTruth t;
+  const vision::StrandMeasurement m =
+      Measure(RenderAdversarial(p, 1, Temp(), &t)[0], p.scale_um_per_px);
+  ASSERT_TRUE(m.valid()) << m.detail;
+  EXPECT_NEAR(m.width_px, t.width_px, Tolerance(t.width_px));
+  EXPECT_GE(valid, 8);
 }
 
 TEST(AdversarialTest, NozzleAloneNeverGivesAWidth) {
