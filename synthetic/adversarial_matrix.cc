@@ -20,6 +20,7 @@ void Add(ClassSummary* s, const FrameRecord& r) {
   else
     ++s->refusals[static_cast<int>(r.status)];
   if (r.wrong) ++s->wrong;
+  if (r.wrong_beyond_sigma) ++s->wrong_beyond_sigma;
 }
 
 // Bias and spread over the valid, not-wrong frames of one class (all classes when trouble < 0).
@@ -71,8 +72,10 @@ MatrixResult RunAdversarialMatrix(const MatrixOptions& o) {
         r.sigma_px = m.width_sigma_px;
         r.strand = truth.strand;
         if (m.valid()) {
-          r.wrong = !truth.strand || std::abs(m.width_px - truth.width_px) >
-                                         std::max(kWrongPx, kWrongFraction * truth.width_px);
+          const double err = std::abs(m.width_px - truth.width_px);
+          r.wrong = !truth.strand || err > std::max(kWrongPx, kWrongFraction * truth.width_px);
+          r.wrong_beyond_sigma =
+              r.wrong && (!truth.strand || err > kCoveredSigmas * m.width_sigma_px);
         }
         r.scene = Describe(scene);
         Add(&out.classes[c], r);
@@ -88,8 +91,9 @@ MatrixResult RunAdversarialMatrix(const MatrixOptions& o) {
 
 std::string MatrixTable(const MatrixResult& r) {
   std::string t =
-      "| class | frames | valid % | confident-wrong % | bias px | σ px | refused as |\n"
-      "|---|---|---|---|---|---|---|\n";
+      "| class | frames | valid % | confident-wrong % | of them beyond 4σ | bias px | σ px | "
+      "refused as |\n"
+      "|---|---|---|---|---|---|---|---|\n";
   const auto row = [&](const std::string& name, const ClassSummary& s) {
     std::string why;
     for (int k = 0; k < static_cast<int>(s.refusals.size()); ++k) {
@@ -98,9 +102,10 @@ std::string MatrixTable(const MatrixResult& r) {
           fmt::format("{}{} {}", why.empty() ? "" : ", ",
                       vision::FrameStatusName(static_cast<vision::FrameStatus>(k)), s.refusals[k]);
     }
-    t += fmt::format("| {} | {} | {:.1f} | {:.2f} | {:+.3f} | {:.3f} | {} |\n", name, s.frames,
+    t += fmt::format("| {} | {} | {:.1f} | {:.2f} | {} | {:+.3f} | {:.3f} | {} |\n", name, s.frames,
                      s.frames ? 100.0 * s.valid / s.frames : 0.0,
-                     s.frames ? 100.0 * s.wrong / s.frames : 0.0, s.bias_px, s.sd_px, why);
+                     s.frames ? 100.0 * s.wrong / s.frames : 0.0, s.wrong_beyond_sigma, s.bias_px,
+                     s.sd_px, why);
   };
   for (int c = 0; c < kTroubleClassCount; ++c)
     row(TroubleClassName(static_cast<TroubleClass>(c)), r.classes[c]);

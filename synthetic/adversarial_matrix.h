@@ -19,8 +19,9 @@ struct MatrixOptions {
   std::string temp_dir;  // for H.264 round trips; empty: the system's temporary directory
 };
 
-// A valid width is confidently wrong when it is off by more than max(0.3 px, 0.5 %).
-inline constexpr double kWrongPx = 0.3, kWrongFraction = 0.005;
+// A valid width is confidently wrong when it is off by more than max(0.3 px, 0.5 %); its σ is
+// honest about it when the error is within 4 σ.
+inline constexpr double kWrongPx = 0.3, kWrongFraction = 0.005, kCoveredSigmas = 4.0;
 
 struct FrameRecord {
   TroubleClass trouble = TroubleClass::kPlain;
@@ -31,11 +32,13 @@ struct FrameRecord {
   double truth_px = 0, width_px = 0, sigma_px = 0;
   bool strand = false;
   bool wrong = false;  // valid and confidently wrong (or a width where there is no strand)
-  std::string scene;   // Describe() of the scene
+  bool wrong_beyond_sigma = false;  // and off by more than 4 of its own σ too
+  std::string scene;                // Describe() of the scene
 };
 
 struct ClassSummary {
   int frames = 0, valid = 0, wrong = 0;
+  int wrong_beyond_sigma = 0;  // of the wrong ones, those whose σ does not cover the error either
   double bias_px = 0, sd_px = 0;  // of the valid frames that are not wrong
   std::vector<int> refusals;      // count per FrameStatus
 };

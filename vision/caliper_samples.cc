@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 
 namespace clogscope::vision {
 
@@ -99,6 +100,65 @@ bool GatherEdgeSamples(const GreyImage& img, const AxisFrame& f, double s0, doub
     }
   }
   return true;
+}
+
+double InnerEdgeDistance(const GreyImage& img, const AxisFrame& f, double s0, double s1,
+                         double edge_u, int inward, double max_depth_px, double min_step) {
+  constexpr double kStepPx = 0.5, kBehindPx = 4.0, kStepReachPx = 3.0;
+  constexpr int kRows = 12;
+  const int n = static_cast<int>((max_depth_px + kBehindPx) / kStepPx) + 1;
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  if (n < 8 || n > 4096) return kNone;
+  // The median over rows: a blob over part of the band is not an edge along the object.
+  std::vector<double> profile(n, 0.0), column;
+  for (int i = 0; i < n; ++i) {
+    const double u = edge_u + inward * (i * kStepPx - kBehindPx);
+    column.clear();
+    for (int r = 0; r < kRows; ++r) {
+      const double s = s0 + (s1 - s0) * (r + 0.5) / kRows;
+      const double x = f.ImageX(s, u), y = f.ImageY(s, u);
+      if (img.InsideForBilinear(x, y)) column.push_back(img.Bilinear(x, y));
+    }
+    if (column.size() < kRows / 2) return kNone;
+    std::nth_element(column.begin(), column.begin() + column.size() / 2, column.end());
+    profile[i] = column[column.size() / 2];
+  }
+  // The gradient along the inward direction, over 1 px, signed like the silhouette's: an inner
+  // edge turns back (a bright stripe or core in a dark strand, a lens's core after its rim). A lit
+  // strand's shading ramp, brightening inward like its silhouette, never does.
+  const int edge_i = static_cast<int>(kBehindPx / kStepPx);
+  const double sign =
+      profile[std::min(n - 1, edge_i + 6)] >= profile[std::max(0, edge_i - 6)] ? 1.0 : -1.0;
+  std::vector<double> g(n, 0.0);
+  for (int i = 1; i + 1 < n; ++i) g[i] = -sign * (profile[i + 1] - profile[i - 1]);
+  std::vector<double> along(n, 0.0);
+  for (int i = 1; i + 1 < n; ++i) along[i] = sign * (profile[i + 1] - profile[i - 1]);
+  // The edge's own peak near the edge; then an opposite peak, an edge in its own right: at least
+  // a quarter of the silhouette's gradient and a step of min_step across it.
+  const int reach = static_cast<int>(kStepReachPx / kStepPx);
+  // The profile's own noise (medians of noisy rows): an inner edge stands well above it.
+  // Differences 1 px apart, their median: the few across real edges do not move it.
+  std::vector<double> diffs;
+  for (int i = edge_i + reach; i + 2 < n; ++i)
+    diffs.push_back(std::abs(profile[i + 2] - profile[i]));
+  double noise = 0;
+  if (diffs.size() >= 5) {
+    std::nth_element(diffs.begin(), diffs.begin() + diffs.size() / 2, diffs.end());
+    noise = 1.4826 * diffs[diffs.size() / 2] / std::sqrt(2.0);
+  }
+  min_step = std::max(min_step, 8.0 * noise);
+  int peak = edge_i;
+  for (int i = std::max(1, edge_i - 6); i <= std::min(n - 2, edge_i + 6); ++i)
+    if (along[i] > along[peak]) peak = i;
+  // Past the silhouette's own step (the ±3 px the step is read over).
+  for (int i = peak + reach + 1; i + 1 < n; ++i) {
+    const bool local_max = g[i] > 0 && g[i] >= g[i - 1] && g[i] >= g[i + 1];
+    if (!local_max || g[i] < 0.25 * along[peak]) continue;
+    const double step =
+        std::abs(profile[std::min(n - 1, i + reach)] - profile[std::max(0, i - reach)]);
+    if (step >= min_step) return (i - edge_i) * kStepPx;
+  }
+  return kNone;
 }
 
 double RefineEdgeGuess(const GreyImage& img, const AxisFrame& f, double s, double u_guess,

@@ -29,6 +29,15 @@ bool GatherEdgeSamples(const GreyImage& img, const AxisFrame& f, double s0, doub
                        double u1, const ClipLevels& clip, std::vector<EdgeSample>* out,
                        int* saturated);
 
+// How far inside the object, from an edge at edge_u (the object toward `inward`, ±1), the next
+// edge lies: a stripe, a lens's core, a clear strand's inner line. Read from the profile across
+// the axis averaged over the band s0..s1: past the edge's own gradient peak the gradient falls,
+// then turns back at ≥ 25 % of the edge's gradient with a step of at least min_step across it, in
+// the median over the band's rows (a blob over part of the band does not count). Looks as deep as
+// max_depth_px; returns infinity when nothing is there.
+double InnerEdgeDistance(const GreyImage& img, const AxisFrame& f, double s0, double s1,
+                         double edge_u, int inward, double max_depth_px, double min_step);
+
 // Sub-pixel start for an edge fit: along the normal at s, from u_guess - half to u_guess + half in
 // half-pixel steps, the crossing of the local mid-level (between the profile's extremes) nearest to
 // u_guess. Returns u_guess when the profile has no clear step (extremes closer than min_step).

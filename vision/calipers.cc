@@ -26,13 +26,19 @@ constexpr int kReferenceCalipers = 5;
 // Curvature of the width along the band: more than 1 px of sag, bending like a disc (|w''|/2 above
 // 0.25/w, i.e. a chord of a circle less than 4 widths in radius).
 constexpr double kMaxSagPx = 1.0, kMaxBend = 0.25;  // outside the band, for the occlusion check
-bool ShadingEvident(const std::vector<double>& f) {
-  if (f.empty()) return false;
+// The mean capped F statistic in its own σ units above 1.
+double ShadingEvidenceSigmas(const std::vector<double>& f) {
+  if (f.empty()) return 0;
   double sum = 0;
   for (double x : f) sum += std::min(x, 50.0);
   const double n = static_cast<double>(f.size());
-  return sum / n > 1.0 + 6.0 * std::sqrt(2.0 / n) + 10.0 / n;
+  return (sum / n - 1.0 - 10.0 / n) / std::sqrt(2.0 / n);
 }
+bool ShadingEvident(const std::vector<double>& f) { return ShadingEvidenceSigmas(f) > 6.0; }
+// Below the decision but this far above chance, a side taken as plain may still be shaded: the
+// width's σ then carries the shaded fit's outward shift as the model's doubt (so it does when
+// both sides move out under the shading model).
+constexpr double kShadingDoubtSigmas = 2.0;
 
 struct CaliperFit {
   EdgeFit left, right;
@@ -155,6 +161,8 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   // Per side (left, right): −1 undecided, 0 plain blurred step, 1 shaded step.
   int shade[2] = {opt.shading ? g.shading_left : 0, opt.shading ? g.shading_right : 0};
   std::vector<double> shade_evidence[2], shade_shift[2];
+  double shading_doubt_px[2] = {0, 0};  // per side: how far out a shaded edge would lie
+  double shading_shift_px[2] = {0, 0};  // the same for every side judged plain
   std::vector<EdgeSample> samples;
   samples.reserve(512);
   double sigma_guess = 1.5;
@@ -178,6 +186,18 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     left_guess = 0.5 * (la + lb) - slope_guess * 0.5 * (sa + sb);
     right_guess = 0.5 * (ra + rb) - slope_guess * 0.5 * (sa + sb);
   }
+  // Edges inside the object near its silhouette (a stripe, a lens's core) must stay out of the
+  // edge windows: how deep inside each side's window may reach.
+  double inner_edge_px[2];
+  for (int side = 0; side < 2; ++side) {
+    const double mid = 0.5 * (band_s0 + band_s1);
+    const double e = (side == 0 ? left_guess : right_guess) + slope_guess * mid;
+    inner_edge_px[side] = InnerEdgeDistance(img, f, band_s0, band_s1, e, side == 0 ? 1 : -1,
+                                            std::min(0.45 * width0, 40.0), min_contrast);
+  }
+  const auto inner_reach = [&](int side, double inner, double sigma) {
+    return std::min(inner, std::max(3.0, inner_edge_px[side] - 2.5 * sigma - 1.0));
+  };
   // Saturation is judged on the decoded frame: where a codec put the clipped plateau.
   const double mid_s = 0.5 * (band_s0 + band_s1), reach_px = 12.0;
   const ClipLevels clip =
@@ -211,8 +231,9 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       cf = CaliperFit{};
       for (int side = 0; side < 2; ++side) {
         const double e0 = (side == 0 ? left_guess : right_guess) + slope_guess * sc;
-        const double u0 = side == 0 ? e0 - outer : e0 - inner;
-        const double u1 = side == 0 ? e0 + inner : e0 + outer;
+        const double in = inner_reach(side, inner, sigma_guess);
+        const double u0 = side == 0 ? e0 - outer : e0 - in;
+        const double u1 = side == 0 ? e0 + in : e0 + outer;
         if (!GatherEdgeSamples(img, f, s0, s1, u0, u1, clip, &samples, &cf.saturated)) {
           cf.inside_roi = false;
           break;
@@ -261,8 +282,11 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     // After the first pass each undecided side settles on one model for all its calipers.
     for (int side = 0; side < 2; ++side) {
       if (shade[side] >= 0) continue;
-      shade[side] =
-          ShadingEvident(shade_evidence[side]) && Median(shade_shift[side]) > kMinShadingShiftPx;
+      const double shift = Median(shade_shift[side]);
+      shade[side] = ShadingEvident(shade_evidence[side]) && shift > kMinShadingShiftPx;
+      if (shade[side] == 0) shading_shift_px[side] = shift;
+      if (shade[side] == 0 && ShadingEvidenceSigmas(shade_evidence[side]) > kShadingDoubtSigmas)
+        shading_doubt_px[side] = std::max(0.0, shift);
       if (shade[side] == 0) continue;
       for (auto& cf : fits)
         (side == 0 ? cf.left : cf.right) = side == 0 ? cf.left_shaded : cf.right_shaded;
@@ -314,8 +338,9 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
         const double e1 = (side == 0 ? b1.left : b1.right).edge_px;
         const double e2 = (side == 0 ? b2.left : b2.right).edge_px;
         const double e0 = 2 * e1 - e2;
-        const double u0 = side == 0 ? e0 - outer : e0 - inner;
-        const double u1 = side == 0 ? e0 + inner : e0 + outer;
+        const double in = inner_reach(side, inner, sigma_guess);
+        const double u0 = side == 0 ? e0 - outer : e0 - in;
+        const double u1 = side == 0 ? e0 + in : e0 + outer;
         int clipped = 0;
         if (!GatherEdgeSamples(img, f, s0, s1, u0, u1, clip, &samples, &clipped)) break;
         const EdgeFit again = shade[side] == 1
@@ -486,6 +511,16 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     const auto& k = fits[0];
     m->width_sigma_px = std::hypot(k.left.edge_sigma_px, k.right.edge_sigma_px);
   }
+  // The model's doubt: a side judged plain on weak evidence of shading would be this much wider
+  // if shaded; half of it (both sides together) counts as one σ.
+  // Both sides moving out under the shading model is itself a sign of weak shading that a few
+  // noisy calipers cannot decide.
+  if (shading_shift_px[0] > kMinShadingShiftPx && shading_shift_px[1] > kMinShadingShiftPx) {
+    shading_doubt_px[0] = shading_shift_px[0];
+    shading_doubt_px[1] = shading_shift_px[1];
+  }
+  m->model_sigma_px = 0.5 * (shading_doubt_px[0] + shading_doubt_px[1]);
+  m->width_sigma_px = std::hypot(m->width_sigma_px, m->model_sigma_px);
 
   // The same calipers further down the strand, outside the band: a blob covering one edge over
   // the band makes the band's edges agree with each other but not with the strand. (A filament's
@@ -504,8 +539,9 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       bool ok = true;
       for (int side = 0; side < 2 && ok; ++side) {
         const double e0 = (side == 0 ? left_guess : right_guess) + slope_guess * sc;
-        const double u0 = side == 0 ? e0 - outer : e0 - inner;
-        const double u1 = side == 0 ? e0 + inner : e0 + outer;
+        const double in = inner_reach(side, inner, sigma_guess);
+        const double u0 = side == 0 ? e0 - outer : e0 - in;
+        const double u1 = side == 0 ? e0 + in : e0 + outer;
         int clipped = 0;
         ok = GatherEdgeSamples(img, f, s0, s1, u0, u1, clip, &samples, &clipped);
         if (!ok) break;

@@ -63,7 +63,9 @@ struct StrandMeasurement {
   bool valid() const { return status == FrameStatus::kValid; }
 
   double width_px = 0;
-  double width_sigma_px = 0;  // standard error of width_px from the calipers' spread
+  // Standard error of width_px: the calipers' spread, and the model's doubt (model_sigma_px).
+  double width_sigma_px = 0;
+  double model_sigma_px = 0;  // the part from an edge model chosen on weak evidence (shading)
   double angle_deg = 0;       // strand axis from image vertical, + leaning to +x going down
   double contrast = 0;        // median edge step, grey levels of the frame's bit depth
   double blur_px = 0;         // median PSF sigma, pixel footprint removed
