@@ -24,8 +24,10 @@ constexpr double kMinPieceSigmaPx = 0.002;
 // A line farther than kChanceSpacings from where its lattice puts it may be there by chance; two
 // lattices whose spacings differ by less than kSameSpacing are one, bent by lens distortion.
 constexpr double kChanceSpacings = 0.05, kSameSpacing = 0.03;
-// Lattices tried from the periodogram: its highest peaks.
+// Lattices tried from the periodogram: its highest peaks; at most kMaxPeriodogramTerms terms
+// (marks × frequencies) for it.
 constexpr size_t kPeaks = 6;
+constexpr double kMaxPeriodogramTerms = 1e8;
 
 double Median(std::vector<double> v) {
   if (v.empty()) return 0;
@@ -40,6 +42,7 @@ struct Slot {
   std::vector<int> marks;
   bool operator==(const Slot& o) const { return line == o.line && marks == o.marks; }
 };
+
 // A lattice x = a + b·k and the marks on it.
 struct Lattice {
   double a = 0, b = 0;
@@ -70,6 +73,10 @@ Lattice FitFrom(const std::vector<LineMark>& m, double b0, double a0, double tol
   for (int iter = 0; iter < 20; ++iter) {
     lat.slots.clear();
     lat.off_mark.assign(m.size(), false);
+    if (!(lat.b >= kMinGapPx)) {  // no lattice: marks closer are pieces of one line
+      lat.off_mark.assign(m.size(), true);
+      break;
+    }
     std::map<int, std::vector<int>> in_slot;
     for (size_t i = 0; i < m.size(); ++i) {
       const double t = (m[i].position_px - lat.a) / lat.b;
@@ -169,8 +176,10 @@ Search FindLattice(const std::vector<LineMark>& m, double tol, double min_ratio,
   const double gap = spacing_px > 0 ? spacing_px : Median(gaps);
   const double mean = std::accumulate(x.begin(), x.end(), 0.0) / x.size();
   const double span = std::max(x.back() - x.front(), gap);
-  // Frequency steps of an eighth of the peak's width (1/span): no peak is missed.
-  const double f_lo = 1 / (max_ratio * gap), f_hi = 1 / (min_ratio * gap), df = 1 / (8 * span);
+  // Frequency steps of an eighth of the peak's width (1/span): no peak is missed. Coarser steps
+  // bound the work for absurdly many marks (noise): the fit from a peak refines a rough start.
+  const double f_lo = 1 / (max_ratio * gap), f_hi = 1 / (min_ratio * gap);
+  const double df = std::max(1 / (8 * span), (f_hi - f_lo) * x.size() / kMaxPeriodogramTerms);
   const int n = static_cast<int>((f_hi - f_lo) / df) + 1;
   auto sum = [&](double f) {
     std::complex<double> s = 0;
