@@ -272,12 +272,19 @@ const char* LatticeStatusName(LatticeStatus s) {
 }
 
 std::string LatticeIndexing::LeftOutSummary() const {
-  if (shared_slot == 0 && too_short == 0)
-    return fmt::format("{} of {} marks left out: off the lattice", left_out(), marks);
-  std::string why = fmt::format("{} off the lattice", off_lattice);
-  if (shared_slot > 0) why += fmt::format(", {} in a slot that holds a longer line", shared_slot);
-  if (too_short > 0) why += fmt::format(", {} too short for a line", too_short);
-  return fmt::format("{} of {} marks left out: {}", left_out(), marks, why);
+  const std::pair<int, const char*> why[] = {{off_lattice, "off the lattice"},
+                                             {shared_slot, "in a slot that holds a longer line"},
+                                             {too_short, "too short for a line"}};
+  std::string text = fmt::format("{} of {} marks left out", left_out(), marks);
+  const int reasons = (off_lattice > 0) + (shared_slot > 0) + (too_short > 0);
+  const char* sep = ": ";
+  for (const auto& [count, reason] : why) {
+    if (count == 0) continue;
+    text += reasons == 1 ? fmt::format("{}{}", sep, reason)
+                         : fmt::format("{}{} {}", sep, count, reason);
+    sep = ", ";
+  }
+  return text;
 }
 
 LatticeIndexing IndexLinesOnLattice(const std::vector<LineMark>& marks, int image,

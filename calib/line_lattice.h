@@ -56,7 +56,7 @@ struct LatticeIndexing {
   int too_short = 0;    // marks far shorter than most, not tried on the lattice
   bool ok() const { return status == LatticeStatus::kOk; }
   int left_out() const { return off_lattice + shared_slot + too_short; }
-  // "N of M marks left out: off the lattice" (or how many for which reason).
+  // "N of M marks left out: off the lattice", or how many for each reason when there are several.
   std::string LeftOutSummary() const;
 };
 

@@ -118,8 +118,8 @@ MicrometerLines FindMicrometerLines(const cv::Mat& image, const MicrometerOption
     centres += found[j].size();
   }
   if (gaps.empty()) {
-    out.reason =
-        fmt::format("found {} line centre(s) in any strip of the image; need at least 3", centres);
+    out.reason = fmt::format(
+        "no strip of the image holds two line centres ({} in all); need at least 3", centres);
     return out;
   }
   const double spacing0 = Median(gaps);
@@ -168,7 +168,9 @@ MicrometerLines FindMicrometerLines(const cv::Mat& image, const MicrometerOption
     open = std::move(next);  // sorted: f is
   }
 
-  // 4. Tilt: the median slope of x against y over the marks crossing three strips or more.
+  // 4. Tilt: the median slope of x against y over the marks crossing three strips or more; marks
+  // leaning more than max_tilt_deg (a fibre) have no say.
+  const double max_slope = std::tan(opt.max_tilt_deg / kRadToDeg);
   std::vector<double> slopes;
   for (const Track& t : tracks) {
     if (t.x.size() < 3) continue;
@@ -182,7 +184,8 @@ MicrometerLines FindMicrometerLines(const cv::Mat& image, const MicrometerOption
       sxy += t.x[i] * y;
     }
     const double det = n * syy - sy * sy;
-    if (det > 0) slopes.push_back((n * sxy - sx * sy) / det);
+    if (det > 0 && std::abs(n * sxy - sx * sy) <= max_slope * det)
+      slopes.push_back((n * sxy - sx * sy) / det);
   }
   const double slope = slopes.empty() ? 0.0 : Median(slopes);
 
