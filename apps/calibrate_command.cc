@@ -11,6 +11,7 @@
 #include "apps/cli_util.h"
 #include "apps/commands.h"
 #include "calib/calibration_file.h"
+#include "calib/line_lattice.h"
 #include "common/atomic_file.h"
 #include "common/csv.h"
 #include "common/plot.h"
@@ -78,6 +79,7 @@ calib::ScaleCalibration CalibrateFromPins(const CalibrateCommandOptions& o,
 calib::ScaleCalibration CalibrateFromMicrometer(const CalibrateCommandOptions& o,
                                                 std::vector<std::string>* inputs) {
   std::vector<calib::LineObservation> all;
+  std::vector<std::string> notes;
   vision::MicrometerOptions mo;
   mo.roi = o.pin_measure.roi;
   for (size_t i = 0; i < o.micrometer_images.size(); ++i) {
@@ -85,25 +87,21 @@ calib::ScaleCalibration CalibrateFromMicrometer(const CalibrateCommandOptions& o
     const auto found = vision::FindMicrometerLines(ReadImageOrThrow(path, "--micrometer"), mo);
     if (!found.ok)
       throw std::invalid_argument(path + ": micrometer lines not found: " + found.reason);
-    std::vector<double> pos, sig;
-    for (const auto& l : found.lines) {
-      pos.push_back(l.position_px);
-      sig.push_back(l.sigma_px);
-    }
-    std::vector<calib::LineObservation> lines;
-    try {
-      lines = calib::IndexLines(pos, sig, static_cast<int>(i));
-    } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument(path + ": " + e.what());
-    }
-    spdlog::info("{}: {} lines, spacing {:.3f} px, tilt {:.2f}°", path, lines.size(),
-                 found.spacing_px, found.angle_deg);
-    all.insert(all.end(), lines.begin(), lines.end());
+    // Numerals, dust and marks between the lines are left out by the lattice, and said so.
+    std::vector<calib::LineMark> marks;
+    for (const auto& l : found.lines) marks.push_back({l.position_px, l.sigma_px, l.length_px});
+    const calib::LatticeIndexing lattice = calib::IndexLinesOnLattice(marks, static_cast<int>(i));
+    if (!lattice.ok()) throw std::invalid_argument(path + ": " + lattice.reason);
+    spdlog::info("{}: {} lines, spacing {:.3f} px, tilt {:.2f}°; {}", path, lattice.lines.size(),
+                 lattice.pitch_px, found.angle_deg, lattice.LeftOutSummary());
+    if (lattice.left_out() > 0) notes.push_back(path + ": " + lattice.LeftOutSummary());
+    all.insert(all.end(), lattice.lines.begin(), lattice.lines.end());
     inputs->push_back(path);
   }
   calib::ScaleFitOptions fo;
   fo.fit_distortion = o.fit_distortion;
   calib::ScaleCalibration cal = calib::FitMicrometerScale(all, o.pitch_um, fo);
+  for (const std::string& note : notes) cal.message += "; " + note;
   const double s = cal.scale_um_per_px;
   if (o.expect_scale_um_per_px && std::abs(s / *o.expect_scale_um_per_px - 1) > 0.25) {
     throw std::invalid_argument(fmt::format(

@@ -145,8 +145,18 @@ int RunRender(int argc, char** argv) {
   app.add_option("--pitch-um", s.pitch_um, "Micrometer line pitch")->capture_default_str();
   app.add_option("--line-width-um", s.line_width_um, "Micrometer line width")
       ->capture_default_str();
+  app.add_option("--tick-length-um", s.tick_length_um,
+                 "Micrometer: finite ticks this long, every 5th 1.5x and every 10th 2x (0: lines "
+                 "across the frame)")
+      ->capture_default_str();
+  app.add_flag("--numerals", s.numerals, "Micrometer: numerals above the long ticks");
+  app.add_option("--dust", s.dust_specks, "Micrometer: dust specks")->capture_default_str();
+  app.add_option("--fibres", s.dust_fibres, "Micrometer: dust fibres")->capture_default_str();
   app.add_flag("--colour,--color", s.colour, "BGR frames with an orange tint");
   app.add_option("--bit-depth", s.bit_depth, "8 or 16 (PNG only)")->capture_default_str();
+  app.add_option("--data-bits", s.data_bits,
+                 "16 bit: the data's significant bits (12: values 0..4095; 0: all 16)")
+      ->capture_default_str();
   app.add_option("--seed", s.seed, "Random seed")->capture_default_str();
   bool no_nozzle = false, no_strand = false;
   std::string strand_tint, background_tint;
@@ -211,7 +221,10 @@ int RunRender(int argc, char** argv) {
       "  clogscope render --out lag.avi --frames 200 --lag-commanded profile.csv --lag-k-s 0.1\n"
       "  clogscope render --target pin --strand-width-um 300 --edge-bias-px 0.4 --out pin300/\n"
       "  clogscope render --target micrometer --pitch-um 100 --tilt-deg 2 --silhouette --out "
-      "micro/");
+      "micro/\n"
+      "  clogscope render --target micrometer --pitch-um 10 --scale-um-per-px 0.5 --line-width-um "
+      "2 --tick-length-um 80 --numerals --dust 12 --fibres 2 --bit-depth 16 --data-bits 12 "
+      "--silhouette --out stage/");
   if (!ParseCommandLine(app, argc, argv)) return 0;  // --help printed
   s.target = vision::ParseTarget(target);
   o.lag_profile_form = model::ParseProfileForm(lag_form);

@@ -13,12 +13,14 @@ struct MicrometerOptions {
   bool Validate(std::string* why) const;
 };
 
-// One line of the scale: its centre across the lines, measured from the image's centre point along
-// the lines' normal, with the fit's standard error.
+// One mark across the scale: a line (a tick of any length) or something line-like (a numeral's
+// stroke, dust). Its centre across the lines, measured from the image's centre point along the
+// lines' normal, with the fit's standard error, and how long it is along the lines.
 struct MicrometerLine {
   double position_px = 0;
   double sigma_px = 0;
   double depth = 0;  // grey levels
+  double length_px = 0;
   int samples = 0;
 };
 
@@ -26,14 +28,17 @@ struct MicrometerLines {
   bool ok = false;
   std::string reason;                 // when not ok
   double angle_deg = 0;               // the lines' direction from image vertical
-  double spacing_px = 0;              // median distance between neighbouring lines
-  std::vector<MicrometerLine> lines;  // sorted by position
+  double spacing_px = 0;              // median distance between neighbouring line centres
+  std::vector<MicrometerLine> lines;  // every mark found, sorted by position
 };
 
-// Finds the lines of a stage micrometer image (dark lines on a bright field or the reverse) to
-// sub-pixel precision: the lines' tilt from line centres tracked across horizontal strips, then
-// each line's centre from a fit of its profile to every pixel near it, at the exact distance across
-// the lines. Lines cut by the image or ROI border are left out. Throws std::invalid_argument for an
+// Finds the marks of a stage micrometer image (dark lines on a bright field or the reverse) to
+// sub-pixel precision: line centres in every horizontal strip, followed from strip to strip into
+// marks (a tick of any length, a numeral's stroke, dust); the tilt from the marks' slopes; then
+// each mark's centre from fits of its profile to the pixels near it, strip by strip over its own
+// rows only, at the exact distance across the lines, leaving out strips whose centre disagrees
+// (dust on the line). Which marks are the lattice's lines is for calib::IndexLinesOnLattice.
+// Strips cut by the image or ROI border are left out. Throws std::invalid_argument for an
 // unsupported pixel type.
 MicrometerLines FindMicrometerLines(const cv::Mat& image, const MicrometerOptions& options);
 

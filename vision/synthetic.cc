@@ -125,7 +125,16 @@ bool SceneParams::Validate(std::string* why) const {
     if (!(line_width_um > 0)) return fail("line_width_um must be positive");
     if (!(pitch_um > 2 * line_width_um)) return fail("pitch_um must exceed twice the line width");
     if (pitch_um / scale_um_per_px < 4) return fail("micrometer lines closer than 4 px");
+    if (!(tick_length_um >= 0)) return fail("tick_length_um must not be negative");
+    if (numerals && tick_length_um == 0) return fail("numerals need tick_length_um");
   }
+  if (dust_specks < 0 || dust_fibres < 0 || dust_specks + dust_fibres > 200)
+    return fail("dust: 0 to 200 specks and fibres");
+  if (target != Target::kMicrometer &&
+      (tick_length_um > 0 || numerals || dust_specks > 0 || dust_fibres > 0))
+    return fail("ticks, numerals and dust go with the micrometer target");
+  if (data_bits != 0 && !(bit_depth == 16 && data_bits >= 9 && data_bits <= 16))
+    return fail("data_bits: 9 to 16, with bit_depth 16");
   if (!(texture_amplitude >= 0 && texture_amplitude <= 100))
     return fail("texture_amplitude must be within 0..100 grey levels");
   if (!(texture_wavelength_px >= 8)) return fail("texture_wavelength_px must be at least 8");
@@ -393,6 +402,24 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
   const SurfaceTexture surface(p.target == Target::kMicrometer ? 0 : p.surface_texture_amplitude,
                                p.seed, sigma, d_strand.x, d_strand.y);
   const DriveGear gear(p, truth.gear_angle_rad, sigma);
+  render::MicrometerMarkParams mp;
+  mp.pitch_px = pitch_px;
+  mp.line_width_px = w;
+  mp.tick_length_px = p.tick_length_um / p.scale_um_per_px;
+  mp.numerals = p.numerals;
+  mp.dust_specks = p.dust_specks;
+  mp.dust_fibres = p.dust_fibres;
+  mp.sigma_px = sigma;
+  mp.nx = n_strand.x;
+  mp.ny = n_strand.y;
+  mp.tip_x_px = p.tip_x_px;
+  mp.tip_y_px = p.tip_y_px;
+  mp.image_width = p.width_px;
+  mp.image_height = p.height_px;
+  mp.seed = p.seed;
+  const bool marked = p.target == Target::kMicrometer &&
+                      (p.tick_length_um > 0 || p.dust_specks > 0 || p.dust_fibres > 0);
+  const render::MicrometerMarks marks(mp);
   const int nc = p.colour ? 3 : 1;
   static const double kGrey[3] = {1.0, 1.0, 1.0};
   const double* tb = p.colour ? p.background_tint : kGrey;
@@ -433,7 +460,10 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
           if (a > 0) bg = bg * (1 - a) + level * a;
         }
         double cov, front;  // strand coverage, and the strand's light where it covers
-        if (p.target == Target::kMicrometer) {
+        if (marked) {
+          cov = marks.Coverage(x, y);
+          front = p.strand_level * cov;
+        } else if (p.target == Target::kMicrometer) {
           // The nearest lines only: they are at least 4 px apart and the reach of one is 9 sigma.
           const double u = Dot(n_strand, d);
           const long k0 = std::lround(u / pitch_px);
@@ -498,7 +528,9 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
     }
   });
 
-  const double full_scale = p.bit_depth == 16 ? 65535.0 : 255.0;
+  const double full_scale = p.bit_depth == 8  ? 255.0
+                            : p.data_bits > 0 ? (1 << p.data_bits) - 1.0
+                                              : 65535.0;
   const double level_scale = full_scale / 255.0;
   const int depth = p.bit_depth == 16 ? CV_16U : CV_8U;
   cv::RNG noise_rng(static_cast<uint64_t>(FrameRng(p.seed, frame_index, 2)()));
@@ -559,6 +591,9 @@ std::string TruthToJson(const SceneParams& p, const std::vector<FrameTruth>& tru
       {"edge_bias_px", p.edge_bias_px},
       {"pitch_um", p.pitch_um},
       {"line_width_um", p.line_width_um},
+      {"tick_length_um", p.tick_length_um},
+      {"numerals", p.numerals},
+      {"dust", {p.dust_specks, p.dust_fibres}},
       {"colour", p.colour},
       {"nozzle", p.nozzle},
       {"strand", p.strand},
@@ -572,6 +607,7 @@ std::string TruthToJson(const SceneParams& p, const std::vector<FrameTruth>& tru
       {"strand_tint", {p.strand_tint[0], p.strand_tint[1], p.strand_tint[2]}},
       {"background_tint", {p.background_tint[0], p.background_tint[1], p.background_tint[2]}},
       {"bit_depth", p.bit_depth},
+      {"data_bits", p.data_bits},
       {"seed", p.seed},
   };
   auto frames = nlohmann::ordered_json::array();

@@ -98,6 +98,14 @@ struct SceneParams {
   // point. The pin (kPin) is strand_width_um wide along the axis through the tip point.
   double pitch_um = 100.0;
   double line_width_um = 8.0;
+  // A real micrometer's marks (see render::MicrometerMarks): with tick_length_um > 0 the lines are
+  // ticks ending on a common line tick_length_um below the tip point, short ones tick_length_um
+  // long, every 5th 1.5× and every 10th 2× as long; numerals above the long ticks; dust specks and
+  // fibres anywhere. Truth stays the ticks' lattice.
+  double tick_length_um = 0;  // 0: lines across the whole frame
+  bool numerals = false;      // needs tick_length_um
+  int dust_specks = 0;
+  int dust_fibres = 0;
   // Realism beyond the reference scene (truth stays the geometric width and tip):
   bool nozzle = true;              // false: no nozzle in view (a filament, a needle)
   bool strand = true;              // false: nothing below the nozzle (no-strand tests)
@@ -117,6 +125,9 @@ struct SceneParams {
   double background_tint[3] = {0.45, 0.75, 1.0};
   double nozzle_tint[3] = {0.45, 0.75, 1.0};
   int bit_depth = 8;  // 8 or 16
+  // 16 bit only: the data's significant bits, as a 12-bit camera writes values 0..4095 into a
+  // 16-bit file (grey levels then scale to 2^data_bits − 1); 0: all 16.
+  int data_bits = 0;
   uint64_t seed = 1;
   // Live-watch events, by frame time (frame_index / frame_rate_hz): a purge blob of molten
   // plastic hanging from the tip (a disc at strand_level, purge_radius_px, its top at the tip) from

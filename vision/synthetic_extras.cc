@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <string>
 
 #include "vision/edge_profile.h"
 
@@ -132,6 +133,119 @@ double ShadingProfile::At(double u) const {
   const int i = static_cast<int>(x);
   const double t = x - i;
   return values_[i] * (1 - t) + values_[i + 1] * t;
+}
+
+MicrometerMarks::MicrometerMarks(const MicrometerMarkParams& p) : p_(p) {
+  const double tick = p.tick_length_px;
+  digit_h_ = 0.5 * tick;
+  digit_w_ = 0.6 * digit_h_;
+  digit_gap_ = 0.35 * digit_w_;
+  numeral_bottom_ = -1.25 * tick;  // long ticks reach up to s = −tick
+  std::mt19937_64 rng(p.seed ^ 0xd057u);
+  std::uniform_real_distribution<double> u01(0, 1);
+  for (int i = 0; i < p.dust_specks; ++i) {
+    ClutterObject o;
+    o.cx = u01(rng) * p.image_width;
+    o.cy = u01(rng) * p.image_height;
+    o.radius_px = std::max(1.5, p.line_width_px * (1 + 2 * u01(rng)));
+    specks_.push_back(o);
+  }
+  const double reach = 1 + 6 * p.sigma_px;
+  for (int i = 0; i < p.dust_fibres; ++i) {
+    Fibre f;
+    f.width_px = std::max(1.0, 0.5 * p.line_width_px);
+    double x = u01(rng) * p.image_width, y = u01(rng) * p.image_height;
+    double angle = M_PI * u01(rng);
+    const int segments = 10;
+    const double step = (0.1 + 0.2 * u01(rng)) * std::min(p.image_width, p.image_height) / segments;
+    for (int j = 0; j <= segments; ++j) {
+      f.x.push_back(x);
+      f.y.push_back(y);
+      x += step * std::cos(angle);
+      y += step * std::sin(angle);
+      angle += 0.4 * (u01(rng) - 0.5);
+    }
+    const double r = f.width_px + reach;
+    f.x_min = *std::min_element(f.x.begin(), f.x.end()) - r;
+    f.x_max = *std::max_element(f.x.begin(), f.x.end()) + r;
+    f.y_min = *std::min_element(f.y.begin(), f.y.end()) - r;
+    f.y_max = *std::max_element(f.y.begin(), f.y.end()) + r;
+    fibres_.push_back(f);
+  }
+}
+
+double MicrometerMarks::BoxCoverage(const Box& b, double u, double s) const {
+  const double r = 1 + 6 * p_.sigma_px;
+  if (u < b.u0 - r || u > b.u1 + r || s < b.s0 - r || s > b.s1 + r) return 0;
+  // Across: exact for the pixel's footprint; along: the same with the footprint's other
+  // projection (the product is exact away from the box's corners).
+  const double across = PixelMeanOfBlurredStep(u - b.u0, p_.sigma_px, p_.nx, p_.ny) -
+                        PixelMeanOfBlurredStep(u - b.u1, p_.sigma_px, p_.nx, p_.ny);
+  const double along = PixelMeanOfBlurredStep(s - b.s0, p_.sigma_px, -p_.ny, p_.nx) -
+                       PixelMeanOfBlurredStep(s - b.s1, p_.sigma_px, -p_.ny, p_.nx);
+  return across * along;
+}
+
+double MicrometerMarks::NumeralCoverage(long tick, double du, double s) const {
+  // Seven segments a–g, bit i for segment 'a' + i, for the digits 0–9.
+  static const int kSegments[10] = {0x3f, 0x06, 0x5b, 0x4f, 0x66, 0x6d, 0x7d, 0x07, 0x7f, 0x6f};
+  const std::string label = std::to_string(std::labs(tick));
+  const int n = static_cast<int>(label.size());
+  const double total = n * digit_w_ + (n - 1) * digit_gap_;
+  const double r = 1 + 6 * p_.sigma_px;
+  const double sb = numeral_bottom_, st = sb - digit_h_, sm = 0.5 * (st + sb);
+  if (std::abs(du) > 0.5 * total + r || s < st - r || s > sb + r) return 0;
+  const double t = p_.line_width_px;
+  double clear = 1;
+  for (int i = 0; i < n; ++i) {
+    const double ul = -0.5 * total + i * (digit_w_ + digit_gap_), ur = ul + digit_w_;
+    const Box boxes[7] = {{ul, ur, st, st + t},
+                          {ur - t, ur, st, sm},
+                          {ur - t, ur, sm, sb},
+                          {ul, ur, sb - t, sb},
+                          {ul, ul + t, sm, sb},
+                          {ul, ul + t, st, sm},
+                          {ul, ur, sm - 0.5 * t, sm + 0.5 * t}};
+    const int mask = kSegments[label[i] - '0'];
+    for (int seg = 0; seg < 7; ++seg)
+      if (mask & (1 << seg)) clear *= 1 - BoxCoverage(boxes[seg], du, s);
+  }
+  return 1 - clear;
+}
+
+double MicrometerMarks::Coverage(double x, double y) const {
+  const double dx = x - p_.tip_x_px, dy = y - p_.tip_y_px;
+  const double u = p_.nx * dx + p_.ny * dy, s = -p_.ny * dx + p_.nx * dy;
+  const double pitch = p_.pitch_px, tick = p_.tick_length_px, w = p_.line_width_px;
+  double clear = 1;  // the uncovered fraction: marks overlap as independent coverages
+  const long k0 = std::lround(u / pitch);
+  for (long k = k0 - 2; k <= k0 + 2; ++k) {
+    const double length = k % 10 == 0 ? 2 * tick : k % 5 == 0 ? 1.5 * tick : tick;
+    const double s0 = tick > 0 ? tick - length : -1e9, s1 = tick > 0 ? tick : 1e9;  // 0: lines
+    clear *= 1 - BoxCoverage({k * pitch - 0.5 * w, k * pitch + 0.5 * w, s0, s1}, u, s);
+  }
+  if (p_.numerals) {
+    const long k10 = 10 * std::lround(u / (10 * pitch));
+    clear *= 1 - NumeralCoverage(k10, u - k10 * pitch, s);
+  }
+  for (const auto& o : specks_) {
+    const double a = o.Coverage(x, y, p_.sigma_px);
+    if (a > 0) clear *= 1 - a;
+  }
+  // A fibre's profile across it is a blurred box at the distance to its centre line.
+  const double se = std::sqrt(p_.sigma_px * p_.sigma_px + 1.0 / 12);
+  for (const auto& f : fibres_) {
+    if (x < f.x_min || x > f.x_max || y < f.y_min || y > f.y_max) continue;
+    double d2 = 1e30;
+    for (size_t j = 1; j < f.x.size(); ++j) {
+      const double ax = f.x[j - 1], ay = f.y[j - 1], bx = f.x[j] - ax, by = f.y[j] - ay;
+      const double h = std::clamp(((x - ax) * bx + (y - ay) * by) / (bx * bx + by * by), 0.0, 1.0);
+      d2 = std::min(d2, std::pow(x - ax - h * bx, 2) + std::pow(y - ay - h * by, 2));
+    }
+    const double d = std::sqrt(d2);
+    clear *= 1 - (NormalCdf((d + 0.5 * f.width_px) / se) - NormalCdf((d - 0.5 * f.width_px) / se));
+  }
+  return 1 - clear;
 }
 
 }  // namespace clogscope::vision::render

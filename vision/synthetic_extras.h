@@ -57,4 +57,45 @@ class ShadingProfile {
   std::vector<double> values_;
 };
 
+// A realistic stage micrometer's marks (a perfect lattice is drawn by synthetic.cc itself). Scene
+// frame: u across the lines, s along them (down), both in px from the tip point. Ticks are finite
+// segments of width line_width_px centred at u = k·pitch_px, all ending at s = tick_length_px:
+// short ones tick_length_px long, every 5th 1.5×, every 10th 2×. With numerals, |k| is written in
+// seven-segment digits (half a short tick tall) above each long tick, a quarter tick clear of it.
+// Dust: discs of 1–3 line widths' radius and thin curved fibres anywhere in the image. The ticks'
+// centres stay exactly at k·pitch_px; numerals and dust carry no truth.
+struct MicrometerMarkParams {
+  double pitch_px = 0, line_width_px = 0;
+  double tick_length_px = 0;  // 0: lines across the whole image (dust only)
+  bool numerals = false;
+  int dust_specks = 0, dust_fibres = 0;
+  double sigma_px = 0;    // PSF
+  double nx = 1, ny = 0;  // the u direction in the image (unit)
+  double tip_x_px = 0, tip_y_px = 0;
+  int image_width = 0, image_height = 0;
+  uint64_t seed = 1;
+};
+
+class MicrometerMarks {
+ public:
+  explicit MicrometerMarks(const MicrometerMarkParams& params);
+  // Fraction of pixel (x, y) covered by the marks (ticks, numerals and dust), blurred by the PSF.
+  double Coverage(double x, double y) const;
+
+ private:
+  struct Box {  // u0 < u1, s0 < s1, scene frame
+    double u0, u1, s0, s1;
+  };
+  struct Fibre {
+    std::vector<double> x, y;  // polyline, image px
+    double width_px, x_min, x_max, y_min, y_max;
+  };
+  double BoxCoverage(const Box& b, double u, double s) const;
+  double NumeralCoverage(long tick, double u, double s) const;
+  MicrometerMarkParams p_;
+  double digit_h_ = 0, digit_w_ = 0, digit_gap_ = 0, numeral_bottom_ = 0;
+  std::vector<ClutterObject> specks_;
+  std::vector<Fibre> fibres_;
+};
+
 }  // namespace clogscope::vision::render

@@ -2,10 +2,12 @@
 // bad inputs of the calibration issue: each a one-line error and no calibration file.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "calib/calibration_file.h"
 #include "common/atomic_file.h"
@@ -84,6 +86,54 @@ TEST(CalibrateCommandTest, MicrometerEndToEnd) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NEAR(calib::ReadCalibrationFile((d / "cal.yaml").string()).scale_um_per_px, 3.0,
               3.0 * 2e-4);
+}
+
+// A 10 µm stage micrometer as in issue 22 (ticks of three lengths, numerals, dust), 8 bit and 16
+// bit of 12-bit data: calibrated, the marks that are no lines left out and counted in the report.
+TEST(CalibrateCommandTest, StageMicrometerWithNumeralsAndDust) {
+  const fs::path d = fs::temp_directory_path() / "clogscope_calib_stage";
+  fs::remove_all(d);
+  fs::create_directories(d);
+  const std::string stage =
+      "render --target micrometer --scale-um-per-px 0.5 --line-width-um 2 "
+      "--tick-length-um 80 --numerals --dust 25 --fibres 3 --tip-y-px 380 --tilt-deg -2.5 "
+      "--silhouette --seed 11 ";
+  for (const std::string depth : {"8", "16"}) {
+    const fs::path out = d / ("stage" + depth);
+    ASSERT_EQ(RunCli(stage + "--pitch-um 10 --bit-depth " + depth +
+                         (depth == "16" ? " --data-bits 12" : "") + " --out " + out.string(),
+                     d)
+                  .exit_code,
+              0);
+    const fs::path cal = d / ("cal" + depth + ".yaml");
+    const RunResult r = RunCli("calibrate --micrometer " + (out / "frame_000000.png").string() +
+                                   " --pitch-um 10 --out " + cal.string(),
+                               d);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NEAR(calib::ReadCalibrationFile(cal.string()).scale_um_per_px, 0.5, 0.5 * 2e-4);
+    // The note names the image and says how many marks were left out (only when some were).
+    EXPECT_NE(r.out.find("frame_000000.png: "), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find(" marks left out: "), std::string::npos) << r.out;
+  }
+  // Two micrometers of 10 and 12 µm pitch side by side: refused in one line naming the file.
+  ASSERT_EQ(RunCli(stage + "--pitch-um 12 --out " + (d / "stage12").string(), d).exit_code, 0);
+  const cv::Mat a = cv::imread((d / "stage8" / "frame_000000.png").string(), cv::IMREAD_UNCHANGED);
+  const cv::Mat b = cv::imread((d / "stage12" / "frame_000000.png").string(), cv::IMREAD_UNCHANGED);
+  ASSERT_FALSE(a.empty() || b.empty());
+  cv::Mat mixed = a.clone();
+  b.colRange(640, 1280).copyTo(mixed.colRange(640, 1280));
+  const std::string mixed_path = (d / "mixed.png").string();
+  ASSERT_TRUE(cv::imwrite(mixed_path, mixed));
+  const RunResult r = RunCli(
+      "calibrate --micrometer " + mixed_path + " --pitch-um 10 --out " + (d / "m.yaml").string(),
+      d);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find(mixed_path + ": "), std::string::npos) << r.err;
+  EXPECT_TRUE(r.err.find("not evenly spaced") != std::string::npos ||
+              r.err.find("two lattices fit") != std::string::npos)
+      << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(fs::exists(d / "m.yaml"));
 }
 
 TEST(CalibrateCommandTest, BadInputsWriteNoCalibration) {

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "vision/frame_source.h"
 
@@ -55,6 +56,104 @@ TEST(SyntheticTest, EdgesHoldTheTruthExactly) {
   odd.scale_um_per_px = 2.87;
   odd.tip_x_px = 611.37;
   ExpectRowsHoldTheTruth(odd);
+}
+
+// A stage micrometer's ticks: each holds exactly its line's area at its lattice position, and the
+// ticks are as long as asked (short 40 µm, every 5th 60 µm, every 10th 80 µm).
+TEST(SyntheticTest, MicrometerTicksHoldTheLattice) {
+  SceneParams p;
+  p.target = Target::kMicrometer;
+  p.width_px = 640;
+  p.height_px = 360;
+  p.tip_x_px = 320.3;
+  p.tip_y_px = 180;
+  p.scale_um_per_px = 0.5;
+  p.pitch_um = 10;
+  p.line_width_um = 2;
+  p.tick_length_um = 40;
+  p.tilt_deg = 3;
+  p.noise_sigma = 0;
+  p.bit_depth = 16;
+  p.SetSilhouette();
+  const cv::Mat img = RenderFrame(p, 0, nullptr);
+  const double th = p.tilt_deg * M_PI / 180, pitch = 20, w = 4, tick = 80;
+  // Coverage summed across tick k on the row where the tick's centre line is at s (px below the
+  // tip point, along the lines), and its centroid's offset from the lattice position on that row.
+  auto across = [&](int k, double s, double* offset) {
+    const int y =
+        static_cast<int>(std::lround(p.tip_y_px - k * pitch * std::sin(th) + s * std::cos(th)));
+    const double xc = p.tip_x_px + (k * pitch + (y - p.tip_y_px) * std::sin(th)) / std::cos(th);
+    double sum = 0, moment = 0;
+    for (int x = static_cast<int>(xc - 0.5 * pitch); x <= static_cast<int>(xc + 0.5 * pitch); ++x) {
+      const double cov = (p.background_level - img.at<uint16_t>(y, x) / 257.0) /
+                         (p.background_level - p.strand_level);
+      sum += cov;
+      moment += cov * x;
+    }
+    if (offset) *offset = sum > 0 ? moment / sum - xc : 0;
+    return sum;
+  };
+  for (int k : {-10, 1, 5, 10}) {
+    double offset = 0;
+    EXPECT_NEAR(across(k, 0.5 * tick, &offset), w / std::cos(th), 0.002) << "tick " << k;
+    EXPECT_NEAR(offset, 0, 0.002) << "tick " << k;
+  }
+  EXPECT_NEAR(across(1, -0.25 * tick, nullptr), 0, 0.001);  // above the short ticks
+  EXPECT_NEAR(across(5, -0.25 * tick, nullptr), w / std::cos(th), 0.002);
+  EXPECT_NEAR(across(5, -0.75 * tick, nullptr), 0, 0.001);  // above the medium ones
+  EXPECT_NEAR(across(10, -0.75 * tick, nullptr), w / std::cos(th), 0.002);
+  EXPECT_NEAR(across(10, 1.25 * tick, nullptr), 0, 0.001);  // below the common end
+}
+
+TEST(SyntheticTest, MicrometerNumeralsDustAndTwelveBitData) {
+  SceneParams p;
+  p.target = Target::kMicrometer;
+  p.width_px = 480;
+  p.height_px = 360;
+  p.tip_x_px = 240;
+  p.tip_y_px = 220;
+  p.scale_um_per_px = 0.5;
+  p.pitch_um = 10;
+  p.line_width_um = 2;
+  p.tick_length_um = 40;
+  p.noise_sigma = 0;
+  p.SetSilhouette();
+  const cv::Mat plain = RenderFrame(p, 0, nullptr);
+  p.numerals = true;
+  const cv::Mat numbered = RenderFrame(p, 0, nullptr);
+  // Numerals half a short tick tall (40 px), a quarter tick (20 px) above the long ticks' tops
+  // (80 px above the tip point), and nothing else changes.
+  cv::Mat diff;
+  cv::absdiff(plain, numbered, diff);
+  const cv::Rect changed = cv::boundingRect(diff > 20);
+  EXPECT_GT(changed.area(), 0);
+  EXPECT_GE(changed.y, 220 - 140 - 4);
+  EXPECT_LE(changed.y + changed.height, 220 - 100 + 4);
+  p.dust_specks = 10;
+  p.dust_fibres = 2;
+  const cv::Mat dusty = RenderFrame(p, 0, nullptr);
+  EXPECT_GT(cv::countNonZero(cv::abs(dusty - numbered) > 50), 50);
+  EXPECT_EQ(cv::norm(dusty, RenderFrame(p, 0, nullptr), cv::NORM_INF), 0.0);  // same seed
+  // 16-bit frames of 12-bit data: 0..4095, levels scaled to it.
+  p.bit_depth = 16;
+  p.data_bits = 12;
+  const cv::Mat twelve = RenderFrame(p, 0, nullptr);
+  double lo = 0, hi = 0;
+  cv::minMaxLoc(twelve, &lo, &hi);
+  EXPECT_NEAR(hi, 215 * 4095 / 255.0, 1);
+  EXPECT_NEAR(lo, 55 * 4095 / 255.0, 40);
+  std::string why;
+  p.bit_depth = 8;
+  EXPECT_FALSE(p.Validate(&why));
+  EXPECT_NE(why.find("data_bits"), std::string::npos);
+  p.bit_depth = 16;
+  p.tick_length_um = 0;
+  EXPECT_FALSE(p.Validate(&why));
+  EXPECT_NE(why.find("numerals need tick_length_um"), std::string::npos);
+  SceneParams strand;
+  strand.dust_specks = 3;
+  EXPECT_FALSE(strand.Validate(&why));
+  EXPECT_NE(why.find("micrometer"), std::string::npos);
 }
 
 // A 320x240 scene with a 150 µm strand: fast to render.
