@@ -134,6 +134,19 @@ InspectReport InspectInput(const InspectCommandOptions& o) {
         rep.target == vision::MeasureTarget::kStrand ? "tip" : "stretch top", m.tip_x_px,
         m.tip_y_px, m.band_start_px, m.band_end_px, m.calipers_used, m.calipers_total, m.blur_px,
         m.contrast, m.shading_left ? "shaded" : "plain", m.shading_right ? "shaded" : "plain");
+    if (rep.target == vision::MeasureTarget::kStrand) {
+      const int face = rep.scene.geometry.tip_face_sides;
+      t += fmt::format("  tip: {}; swell ratio {:.2f} (widest below the tip over the width)\n",
+                       face == 2   ? "on the nozzle's face, which shows on both sides"
+                       : face == 1 ? "on the nozzle's face, which shows on one side"
+                                   : "where the edges end (the nozzle's face does not show)",
+                       m.swell_ratio);
+    }
+    if (m.model_sigma_px > 0) {
+      t += fmt::format(
+          "  σ holds {:.3f} px of the edge model's doubt (shading too weak to decide)\n",
+          m.model_sigma_px);
+    }
     if (m.straight_start_px > m.band_start_px || m.straight_end_px < m.band_end_px) {
       t += fmt::format(
           "  the edges are rough (knurl or gear marks) on {} calipers: the width is the straight "

@@ -1,9 +1,11 @@
 #include "synthetic/adversarial_matrix.h"
 
 #include <fmt/format.h>
+#include <stdlib.h>
 
 #include <cmath>
 #include <filesystem>
+#include <stdexcept>
 
 #include "vision/strand_measure.h"
 
@@ -43,8 +45,21 @@ void Moments(const std::vector<FrameRecord>& frames, int trouble, ClassSummary* 
 }  // namespace
 
 MatrixResult RunAdversarialMatrix(const MatrixOptions& o) {
-  const std::string temp =
-      o.temp_dir.empty() ? std::filesystem::temp_directory_path().string() : o.temp_dir;
+  // H.264 round trips go through files: a directory of this run's own, so that two runs (a test
+  // and a bench) never share a name.
+  namespace fs = std::filesystem;
+  std::string own = (fs::temp_directory_path() / "clogscope_adversarial_XXXXXX").string();
+  if (o.temp_dir.empty() && !::mkdtemp(own.data()))
+    throw std::runtime_error("cannot create a temporary directory under " +
+                             fs::temp_directory_path().string());
+  const std::string temp = o.temp_dir.empty() ? own : o.temp_dir;
+  struct Cleanup {
+    std::string dir;
+    ~Cleanup() {
+      std::error_code ec;
+      if (!dir.empty()) fs::remove_all(dir, ec);
+    }
+  } cleanup{o.temp_dir.empty() ? own : std::string()};
   MatrixResult out;
   for (int c = 0; c < kTroubleClassCount; ++c) {
     const auto trouble = static_cast<TroubleClass>(c);
