@@ -12,7 +12,7 @@
 namespace clogscope::synthetic {
 namespace {
 
-constexpr int kStatusCount = static_cast<int>(vision::FrameStatus::kAmbiguous) + 1;
+constexpr int kStatusCount = vision::kFrameStatusCount;
 
 void Add(ClassSummary* s, const FrameRecord& r) {
   if (s->refusals.empty()) s->refusals.assign(kStatusCount, 0);

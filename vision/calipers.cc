@@ -26,6 +26,8 @@ constexpr int kReferenceCalipers = 5;
 // Curvature of the width along the band: more than 1 px of sag, bending like a disc (|w''|/2 above
 // 0.25/w, i.e. a chord of a circle less than 4 widths in radius).
 constexpr double kMaxSagPx = 1.0, kMaxBend = 0.25;  // outside the band, for the occlusion check
+// The self-check: one edge's residuals this many times the other's, and by this many grey levels.
+constexpr double kMaxResidualRatio = 2.0, kMinResidualExcess = 1.5;
 // The mean capped F statistic in its own σ units above 1.
 double ShadingEvidenceSigmas(const std::vector<double>& f) {
   if (f.empty()) return 0;
@@ -571,6 +573,28 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
                     fmt::format("width in the band {:.1f} px disagrees with the strand's {:.1f} px "
                                 "further down",
                                 m->width_px, ref));
+      }
+    }
+  }
+  // Self-check: both silhouettes fit a blurred step against a plain background about as well (the
+  // noise is the frame's on both). One side fitting far worse has something else at its edge: a
+  // bright spot behind it, an object beside it, an inner edge in its window.
+  if (!filament) {
+    std::vector<double> rms[2];
+    for (int k = run_begin; k < run_end; ++k) {
+      if (!m->calipers[k].inlier) continue;
+      rms[0].push_back(fits[k].left.rms);
+      rms[1].push_back(fits[k].right.rms);
+    }
+    if (rms[0].size() >= 3) {
+      const double l = Median(rms[0]), r = Median(rms[1]);
+      const double worse = std::max(l, r), better = std::max(std::min(l, r), 1e-9);
+      if (worse > kMaxResidualRatio * better && worse - better > kMinResidualExcess) {
+        return fail(FrameStatus::kNotSilhouette,
+                    fmt::format("the {} edge fits a silhouette on a plain background {:.1f}× "
+                                "worse than the {} (residuals {:.1f} and {:.1f} grey levels)",
+                                l > r ? "left" : "right", worse / better, l > r ? "right" : "left",
+                                worse, better));
       }
     }
   }

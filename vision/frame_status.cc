@@ -30,6 +30,8 @@ const char* FrameStatusName(FrameStatus status) {
       return "width_outlier";
     case FrameStatus::kAmbiguous:
       return "ambiguous";
+    case FrameStatus::kNotSilhouette:
+      return "not_silhouette";
   }
   return "?";
 }

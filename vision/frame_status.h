@@ -15,10 +15,12 @@ enum class FrameStatus {
   kLowContrast,
   kOutOfFocus,
   kSaturated,
-  kOccluded,      // too few calipers agree
-  kWidthOutlier,  // far from the neighbouring frames' widths (set by FlagWidthOutliers)
-  kAmbiguous,     // two strand-like objects of similar score: no guess
+  kOccluded,       // too few calipers agree
+  kWidthOutlier,   // far from the neighbouring frames' widths (set by FlagWidthOutliers)
+  kAmbiguous,      // two strand-like objects of similar score: no guess
+  kNotSilhouette,  // one edge does not fit a silhouette against a plain background
 };
+inline constexpr int kFrameStatusCount = static_cast<int>(FrameStatus::kNotSilhouette) + 1;
 const char* FrameStatusName(FrameStatus status);
 
 // What is measured: a strand below a nozzle tip (the band is placed from the tip), or a filament,
