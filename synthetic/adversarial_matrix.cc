@@ -69,13 +69,8 @@ MatrixResult RunAdversarialMatrix(const MatrixOptions& o) {
       AdversarialTruth truth;
       const std::vector<cv::Mat> frames =
           RenderAdversarial(scene, o.frames_per_scene, temp, &truth);
-      vision::StrandMeasureOptions mo;
-      const vision::BandPx band =
-          vision::DefaultBand(vision::MeasureTarget::kStrand, scene.scale_um_per_px);
-      mo.band_start_px = band.start_px;
-      mo.band_height_px = band.height_px;
       for (int i = 0; i < static_cast<int>(frames.size()); ++i) {
-        const vision::StrandMeasurement m = vision::MeasureStrand(frames[i], mo);
+        const vision::StrandMeasurement m = MeasureAdversarialFrame(frames[i], scene);
         FrameRecord r;
         r.trouble = trouble;
         r.seed = seed;
@@ -102,6 +97,16 @@ MatrixResult RunAdversarialMatrix(const MatrixOptions& o) {
   }
   Moments(out.frames, -1, &out.all);
   return out;
+}
+
+vision::StrandMeasurement MeasureAdversarialFrame(const cv::Mat& frame,
+                                                  const AdversarialScene& scene) {
+  vision::StrandMeasureOptions o;
+  const vision::BandPx band =
+      vision::DefaultBand(vision::MeasureTarget::kStrand, scene.scale_um_per_px);
+  o.band_start_px = band.start_px;
+  o.band_height_px = band.height_px;
+  return vision::MeasureStrand(frame, o);
 }
 
 std::string MatrixTable(const MatrixResult& r) {

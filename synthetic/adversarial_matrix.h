@@ -6,6 +6,7 @@
 
 #include "synthetic/adversarial.h"
 #include "vision/frame_status.h"
+#include "vision/strand_measure.h"
 
 namespace clogscope::synthetic {
 
@@ -50,6 +51,11 @@ struct MatrixResult {
 };
 
 MatrixResult RunAdversarialMatrix(const MatrixOptions& options);
+
+// How the matrix measures a frame of a scene: the default options with the reference band (50 µm
+// below the tip, 150 µm long) at the scene's scale.
+vision::StrandMeasurement MeasureAdversarialFrame(const cv::Mat& frame,
+                                                  const AdversarialScene& scene);
 
 // A Markdown table of the result, one row per class and one for all.
 std::string MatrixTable(const MatrixResult& result);

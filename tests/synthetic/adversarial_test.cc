@@ -7,22 +7,19 @@
 #include <cmath>
 #include <filesystem>
 
+#include "synthetic/adversarial_matrix.h"
 #include "vision/strand_measure.h"
 
 namespace clogscope::synthetic {
 namespace {
 
-vision::StrandMeasurement Measure(const cv::Mat& frame, double scale_um_per_px) {
-  vision::StrandMeasureOptions o;
-  const vision::BandPx band = vision::DefaultBand(vision::MeasureTarget::kStrand, scale_um_per_px);
-  o.band_start_px = band.start_px;
-  o.band_height_px = band.height_px;
-  return vision::MeasureStrand(frame, o);
+// Renders the scene's first frame and measures it as the matrix does.
+vision::StrandMeasurement RenderAndMeasure(const AdversarialScene& p, AdversarialTruth* t) {
+  const cv::Mat f = RenderAdversarial(p, 1, std::filesystem::temp_directory_path().string(), t)[0];
+  return MeasureAdversarialFrame(f, p);
 }
 
 double Tolerance(double truth_px) { return std::max(0.3, 0.005 * truth_px); }
-
-std::string Temp() { return std::filesystem::temp_directory_path().string(); }
 
 TEST(AdversarialTest, RendererKeepsTheGeometricWidthOfAPlainStrand) {
   // The renderer's own honesty: a flat strand, no noise, lossless, measured within 0.05 px.
@@ -34,8 +31,7 @@ TEST(AdversarialTest, RendererKeepsTheGeometricWidthOfAPlainStrand) {
   p.background_slope = 0;
   p.blur_sigma_px = 1.2;
   AdversarialTruth t;
-  const cv::Mat f = RenderAdversarial(p, 1, Temp(), &t)[0];
-  const vision::StrandMeasurement m = Measure(f, p.scale_um_per_px);
+  const vision::StrandMeasurement m = RenderAndMeasure(p, &t);
   ASSERT_TRUE(m.valid()) << m.detail << " " << Describe(p);
   EXPECT_NEAR(m.width_px, t.width_px, 0.05) << Describe(p);
   EXPECT_NEAR(m.tip_y_px, t.tip_y_px, 1.5);
@@ -48,8 +44,7 @@ TEST(AdversarialTest, BacklitLensIsMeasuredAtItsOuterSilhouette) {
   for (uint64_t seed = 1; seed <= 6; ++seed) {
     const AdversarialScene p = RandomAdversarialScene(TroubleClass::kBacklitLens, seed);
     AdversarialTruth t;
-    const cv::Mat f = RenderAdversarial(p, 1, Temp(), &t)[0];
-    const vision::StrandMeasurement m = Measure(f, p.scale_um_per_px);
+    const vision::StrandMeasurement m = RenderAndMeasure(p, &t);
     if (!m.valid()) continue;
     ++valid;
     EXPECT_EQ(m.polarity, vision::Polarity::kDarkOnBright) << Describe(p);
@@ -62,8 +57,7 @@ TEST(AdversarialTest, DieSwellPutsTheTipAtTheNozzleAndReportsTheSwell) {
   for (uint64_t seed = 1; seed <= 6; ++seed) {
     const AdversarialScene p = RandomAdversarialScene(TroubleClass::kDieSwell, seed);
     AdversarialTruth t;
-    const cv::Mat f = RenderAdversarial(p, 1, Temp(), &t)[0];
-    const vision::StrandMeasurement m = Measure(f, p.scale_um_per_px);
+    const vision::StrandMeasurement m = RenderAndMeasure(p, &t);
     ASSERT_TRUE(m.valid()) << m.detail << " " << Describe(p);
     // Where the edges become parallel lies 0.2–1 widths below the tip: within 3 px here.
     EXPECT_LT(std::hypot(m.tip_x_px - t.tip_x_px, m.tip_y_px - t.tip_y_px), 3.0) << Describe(p);
@@ -84,8 +78,7 @@ TEST(AdversarialTest, ClippedStrandThroughH264IsSaturatedNotMeasured) {
     AdversarialScene p = RandomAdversarialScene(TroubleClass::kSaturated, seed);
     p.codec = Codec::kH264;
     AdversarialTruth t;
-    const cv::Mat f = RenderAdversarial(p, 1, Temp(), &t)[0];
-    const vision::StrandMeasurement m = Measure(f, p.scale_um_per_px);
+    const vision::StrandMeasurement m = RenderAndMeasure(p, &t);
     EXPECT_FALSE(m.valid() && std::abs(m.width_px - t.width_px) > Tolerance(t.width_px))
         << m.width_px << " px, truth " << t.width_px << ": " << Describe(p);
     if (!m.valid()) {
@@ -101,8 +94,7 @@ TEST(AdversarialTest, AHairBesideTheStrandIsNeverMeasuredAsIt) {
   for (uint64_t seed = 1; seed <= 12; ++seed) {
     const AdversarialScene p = RandomAdversarialScene(TroubleClass::kStringer, seed);
     AdversarialTruth t;
-    const cv::Mat f = RenderAdversarial(p, 1, Temp(), &t)[0];
-    const vision::StrandMeasurement m = Measure(f, p.scale_um_per_px);
+    const vision::StrandMeasurement m = RenderAndMeasure(p, &t);
     if (!m.valid()) continue;
     ++valid;
     EXPECT_NEAR(m.width_px, t.width_px, std::max(0.45, 0.0075 * t.width_px)) << Describe(p);
@@ -111,8 +103,7 @@ TEST(AdversarialTest, AHairBesideTheStrandIsNeverMeasuredAsIt) {
   // face. (Ambiguous before the face decided.)
   const AdversarialScene p = RandomAdversarialScene(TroubleClass::kStringer, 4);
   AdversarialTruth t;
-  const vision::StrandMeasurement m =
-      Measure(RenderAdversarial(p, 1, Temp(), &t)[0], p.scale_um_per_px);
+  const vision::StrandMeasurement m = RenderAndMeasure(p, &t);
   ASSERT_TRUE(m.valid()) << m.detail;
   EXPECT_NEAR(m.width_px, t.width_px, Tolerance(t.width_px));
   EXPECT_GE(valid, 8);
@@ -121,8 +112,7 @@ TEST(AdversarialTest, AHairBesideTheStrandIsNeverMeasuredAsIt) {
 TEST(AdversarialTest, NozzleAloneNeverGivesAWidth) {
   for (uint64_t seed = 1; seed <= 6; ++seed) {
     const AdversarialScene p = RandomAdversarialScene(TroubleClass::kNoStrand, seed);
-    const cv::Mat f = RenderAdversarial(p, 1, Temp(), nullptr)[0];
-    const vision::StrandMeasurement m = Measure(f, p.scale_um_per_px);
+    const vision::StrandMeasurement m = RenderAndMeasure(p, nullptr);
     EXPECT_FALSE(m.valid()) << m.width_px << " px: " << Describe(p);
   }
 }
