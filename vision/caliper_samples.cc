@@ -71,12 +71,14 @@ ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, d
   // Half a bin inward, so that every value of the spike's bin counts.
   if (top >= 0) clip.high = static_cast<float>((top - 0.5) / scale);
   if (bottom >= 0) clip.low = static_cast<float>((bottom + 0.5) / scale);
-  int clipped = 0;
+  int low = 0, high = 0;
   for (int b = 0; b < kBins; ++b) {
     const double v = b / scale;
-    if (v <= clip.low || v >= clip.high) clipped += h[b];
+    if (v <= clip.low) low += h[b];
+    if (v >= clip.high) high += h[b];
   }
-  clip.clipped_fraction = n > 0 ? static_cast<double>(clipped) / n : 0.0;
+  clip.clipped_low_fraction = n > 0 ? static_cast<double>(low) / n : 0.0;
+  clip.clipped_high_fraction = n > 0 ? static_cast<double>(high) / n : 0.0;
   return clip;
 }
 

@@ -13,7 +13,7 @@ namespace clogscope::vision {
 // scale (H.264 in TV range decodes clipped white at ~252 of 255); such a spike is the clip level.
 struct ClipLevels {
   float low = 0, high = 255;
-  double clipped_fraction = 0;  // of the slab's pixels at or beyond them
+  double clipped_low_fraction = 0, clipped_high_fraction = 0;  // of the slab's pixels at or beyond
 };
 
 // The clip levels of the slab s0 <= s < s1, u0 <= u <= u1: data_max and 0, or a spike in the

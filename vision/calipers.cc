@@ -356,11 +356,16 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     return fail(FrameStatus::kSaturated,
                 fmt::format("{} of {} edge pixels clipped", total_saturated, total_samples));
   }
-  // The shading model reads the strand's lit interior: clipped there, it cannot be fitted.
-  if ((shade[0] == 1 || shade[1] == 1) && clip.clipped_fraction > opt.max_saturated_fraction) {
+  // The shading model reads the strand's lit interior: clipped there (at the object's end of the
+  // range; a dark background clipped at 0 is no matter), it cannot be fitted.
+  const double object_clipped = g.polarity == Polarity::kBrightOnDark ? clip.clipped_high_fraction
+                                : g.polarity == Polarity::kDarkOnBright
+                                    ? clip.clipped_low_fraction
+                                    : clip.clipped_low_fraction + clip.clipped_high_fraction;
+  if ((shade[0] == 1 || shade[1] == 1) && object_clipped > opt.max_saturated_fraction) {
     return fail(FrameStatus::kSaturated,
                 fmt::format("{:.0f} % of the band clipped: its shading cannot be fitted",
-                            100 * clip.clipped_fraction));
+                            100 * object_clipped));
   }
   // A lit object on both sides (a front-lit strand or filament): one cylinder per caliper.
   // Only on an object the per-edge fits already saw as one (enough consistent calipers): a wrong

@@ -10,6 +10,7 @@
 #include "common/robust.h"
 #include "vision/calipers.h"
 #include "vision/scene.h"
+#include "vision/self_check.h"
 
 namespace clogscope::vision {
 namespace {
@@ -230,8 +231,16 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
   } else {
     MeasureCalipers(img, data_max, g, s0, s1, opt, &m);
   }
-  if (m.valid() && opt.target == MeasureTarget::kStrand && g.tip_width_px > 0)
-    m.swell_ratio = std::max(1.0, g.tip_width_px / m.width_px);
+  if (m.valid() && opt.target == MeasureTarget::kStrand) {
+    if (g.tip_width_px > 0) m.swell_ratio = std::max(1.0, g.tip_width_px / m.width_px);
+    const OutsideCheck check =
+        CheckOutsideIsBackground(img, g.axis, m.band_start_px, m.band_end_px, m.left_u0_px,
+                                 m.right_u0_px, m.edge_slope, m.blur_px);
+    if (!check.passed) {
+      m.status = FrameStatus::kNotSilhouette;
+      m.detail = check.why;
+    }
+  }
   return m;
 }
 

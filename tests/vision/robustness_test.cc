@@ -54,8 +54,10 @@ TEST(RobustnessTest, RandomisedScenesAgainstTruth) {
   }
   std::printf("%d of %d valid; unshaded %+.4f ± %.4f px (%d); shaded %+.4f ± %.4f px (%d)\n", valid,
               kFrames, plain.mean(), plain.sd(), plain.n, shaded.mean(), shaded.sd(), shaded.n);
-  // Measured on this suite: 198 of 200 valid; unshaded −0.009 ± 0.050 px; shaded −0.03 ± 0.19 px.
-  EXPECT_GE(valid, 0.98 * kFrames);
+  // Measured on this suite: 195 of 200 valid; unshaded −0.010 ± 0.052 px; shaded −0.03 ± 0.19 px.
+  // (198 before issue 22's self-checks: a highlight clipped inside a shaded strand (seeds 20, 89)
+  // and a disc against the strand's edge (seed 31) are refused now, as the rules say.)
+  EXPECT_GE(valid, 0.97 * kFrames);
   EXPECT_LE(std::abs(plain.mean()), 0.05);
   EXPECT_LE(plain.sd(), 0.06);
   EXPECT_LE(std::abs(shaded.mean()), 0.1);
