@@ -1,5 +1,6 @@
 // clogscope_bench: the speed and accuracy figures quoted in issue closing notes.
-//   clogscope_bench [measure|accuracy|video|experiment|lag|speed|all]   (default all)
+//   clogscope_bench [measure|accuracy|video|experiment|lag|speed|speed-codec|watch|all]
+//   (default all)
 // Prints Markdown tables. Timings are wall-clock on this machine; run on an idle machine.
 #include <fmt/format.h>
 
@@ -18,6 +19,7 @@
 
 #include "model/lag_fit.h"
 #include "pipeline/experiment.h"
+#include "pipeline/statistics.h"
 #include "vision/batch.h"
 #include "vision/feed_speed.h"
 #include "vision/frame_source.h"
@@ -491,6 +493,117 @@ void BenchSlip() {
   }
 }
 
+// One codec of the feed-speed bench: RenderSequence's own encoders (OpenCV's FFmpeg backend at its
+// fixed settings) or, with ffmpeg_args, the ffmpeg CLI on a lossless render (a camera's settings).
+struct SpeedCodec {
+  std::string name, extension, ffmpeg_args;
+};
+
+// Renders the feedstock scene at speed_mm_s through `codec` (frames at 30 frames/s) into dir.
+std::string RenderFeed(const SpeedCodec& codec, double speed_mm_s, uint64_t seed, int frames,
+                       const std::filesystem::path& dir) {
+  namespace fs = std::filesystem;
+  SceneParams p = clogscope::vision::FeedstockScene(speed_mm_s);
+  p.seed = seed;
+  const std::string video = (dir / fmt::format("feed{}", codec.extension)).string();
+  if (codec.ffmpeg_args.empty()) {
+    clogscope::vision::RenderSequence(p, frames, 30, video, "");
+    return video;
+  }
+  const fs::path frames_dir = dir / "png";
+  fs::remove_all(frames_dir);
+  clogscope::vision::RenderSequence(p, frames, 30, frames_dir.string(), "");
+  const std::string cmd =
+      fmt::format("ffmpeg -v error -y -framerate 30 -i {}/frame_%06d.png {} {}",
+                  frames_dir.string(), codec.ffmpeg_args, video);
+  if (std::system(cmd.c_str()) != 0) throw std::runtime_error("failed: " + cmd);
+  fs::remove_all(frames_dir);
+  return video;
+}
+
+// What `measure --speed` reports for a video: the tracked filament, the feed speed of every frame.
+std::vector<clogscope::vision::FeedSpeedSample> MeasureFeedVideo(const std::string& video) {
+  auto source = clogscope::vision::FrameSource::Open(video);
+  StrandMeasureOptions o;
+  o.target = clogscope::vision::MeasureTarget::kFilament;
+  clogscope::vision::FeedSpeedTracker speed(clogscope::vision::FeedSpeedOptions{});
+  std::vector<clogscope::vision::FeedSpeedSample> rows;
+  clogscope::vision::MeasureFrames(
+      *source, o,
+      [&](clogscope::vision::InputFrame& f, clogscope::vision::StrandMeasurement& m) {
+        rows.push_back(speed.Next(f.image, f.time_s, m));
+      });
+  return rows;
+}
+
+// Feed speed through real codecs (640x480, 20 µm/px, 30 frames/s, 61 frames per render): per codec
+// and speed over seeds, the error of the mean that `measure --speed` logs and how often its 95 %
+// interval covers the rendered speed.
+void BenchFeedSpeedCodec() {
+  namespace fs = std::filesystem;
+  cv::setNumThreads(1);
+  const fs::path dir = fs::temp_directory_path() / "clogscope_bench" / "speed_codec";
+  fs::create_directories(dir);
+  const std::vector<SpeedCodec> codecs = {
+      {"MJPEG (RenderSequence: FFmpeg mjpeg, OpenCV's settings)", ".avi", ""},
+      {"MJPEG -q:v 8 (ffmpeg)", ".avi", "-c:v mjpeg -q:v 8"},
+      {"H.264 crf 23 (RenderSequence: libx264, OpenCV's settings)", ".mp4", ""},
+      {"MPEG-4 part 2 -q:v 5 (ffmpeg)", ".avi", "-c:v mpeg4 -q:v 5"},
+  };
+  const std::vector<double> speeds = {0.3, 0.8, 2, 5, 15};
+  constexpr int kSeeds = 6, kFrames = 61;
+  fmt::print(
+      "\n## Feed speed through codecs (640x480, 20 µm/px, 30 frames/s, {} frames, {} seeds per "
+      "row)\n\nError: the logged mean against the rendered speed (mean over seeds, worst); "
+      "tolerance 0.5 % + 0.005 mm/s; covered: the logged 95 % interval holds the truth.\n\n"
+      "| codec | speed mm/s | mean error | worst error | within tolerance | covered | mean 95 % "
+      "half-width | rows used |\n|---|---|---|---|---|---|---|---|\n",
+      kFrames, kSeeds);
+  int all_cases = 0, all_within = 0, all_covered = 0;
+  const auto t0 = Clock::now();
+  for (const SpeedCodec& codec : codecs) {
+    int codec_cases = 0, codec_covered = 0;
+    for (double v : speeds) {
+      double sum_err = 0, worst = 0, sum_ci = 0;
+      int within = 0, covered = 0, used = 0, pairs = 0;
+      for (int seed = 1; seed <= kSeeds; ++seed) {
+        const std::string video = RenderFeed(codec, v, seed, kFrames, dir);
+        const auto rows = MeasureFeedVideo(video);
+        fs::remove(video);
+        std::vector<double> speeds_mm_s;
+        for (const auto& r : rows) {
+          if (r.reason == "first_frame") continue;
+          ++pairs;
+          if (r.valid) speeds_mm_s.push_back(r.SpeedPxPerS() * 20e-3);
+        }
+        const clogscope::pipeline::SampleStats st = clogscope::pipeline::RobustStats(speeds_mm_s);
+        const double err_mm_s = st.mean - v, err_pct = 100 * err_mm_s / v;
+        sum_err += err_pct;
+        if (std::abs(err_pct) > std::abs(worst)) worst = err_pct;
+        within += std::abs(err_mm_s) <= 0.005 * v + 0.005;
+        covered += std::abs(err_mm_s) <= st.ci95_half_width;
+        sum_ci += 100 * st.ci95_half_width / v;
+        used += st.n_used;
+      }
+      fmt::print("| {} | {:g} | {:+.3f} % | {:+.3f} % | {} of {} | {} of {} | {:.3f} % | {} of {} |\n",
+                 codec.name, v, sum_err / kSeeds, worst, within, kSeeds, covered, kSeeds,
+                 sum_ci / kSeeds, used, pairs);
+      codec_cases += kSeeds;
+      codec_covered += covered;
+      all_cases += kSeeds;
+      all_within += within;
+      all_covered += covered;
+    }
+    fmt::print("| {}: all speeds | | | | | {} of {} ({:.0f} %) | | |\n", codec.name,
+               codec_covered, codec_cases, 100.0 * codec_covered / codec_cases);
+  }
+  fmt::print(
+      "\nAll {} cases: {} within tolerance, 95 % interval covers the truth in {} ({:.0f} %); {:.0f} "
+      "s\n",
+      all_cases, all_within, all_covered, 100.0 * all_covered / all_cases,
+      Seconds(t0, Clock::now()));
+}
+
 }  // namespace
 
 void BenchWatch();  // watch_bench.cc
@@ -498,9 +611,11 @@ void BenchWatch();  // watch_bench.cc
 int main(int argc, char** argv) {
   const std::string what = argc > 1 ? argv[1] : "all";
   if (what != "all" && what != "measure" && what != "accuracy" && what != "video" &&
-      what != "experiment" && what != "lag" && what != "speed" && what != "watch") {
-    std::fprintf(
-        stderr, "usage: clogscope_bench [measure|accuracy|video|experiment|lag|speed|watch|all]\n");
+      what != "experiment" && what != "lag" && what != "speed" && what != "speed-codec" &&
+      what != "watch") {
+    std::fprintf(stderr,
+                 "usage: clogscope_bench "
+                 "[measure|accuracy|video|experiment|lag|speed|speed-codec|watch|all]\n");
     return 2;
   }
   fmt::print("# clogscope benchmarks ({} hardware threads)\n", std::thread::hardware_concurrency());
@@ -513,6 +628,7 @@ int main(int argc, char** argv) {
     BenchFeedSpeed();
     BenchSlip();
   }
+  if (what == "all" || what == "speed-codec") BenchFeedSpeedCodec();
   if (what == "all" || what == "watch") BenchWatch();
   return 0;
 }
