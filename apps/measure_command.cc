@@ -251,7 +251,7 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
     spdlog::info("{}: {} of {} frames valid ({:.0f} frames/s){}", input, valid, rows.size(),
                  rows.size() / std::max(secs, 1e-9),
                  WidthSummary(widths_px, conv) + (o.feed_speed ? SpeedSummary(speeds, *conv) : "") +
-                     (o.gear_roi ? GearSummary(rows, *conv, *o.gear_radius_mm) : ""));
+                     (o.gear_roi ? GearSummary(rows, speeds, *conv, *o.gear_radius_mm) : ""));
     if (const std::string part = StraightPartSummary(rows); !part.empty())
       spdlog::info("{}: {}", input, part);
     if (o.feed_speed) {

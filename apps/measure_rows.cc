@@ -84,13 +84,15 @@ GearAndSlip GearAndSlipOf(const Row& r, const calib::ScaleCalibration& conv, dou
 }
 
 // "; gear 2.00 ± 0.01 mm/s …; slip 10.0 ± 0.5 % per frame pair (mean ± …, 95 %), N of M pairs".
-std::string GearSummary(const std::vector<Row>& rows, const calib::ScaleCalibration& conv,
-                        double radius_mm) {
+std::string GearSummary(const std::vector<Row>& rows, const pipeline::FeedSpeedSummary& speeds,
+                        const calib::ScaleCalibration& conv, double radius_mm) {
   std::vector<double> gear, slip;
-  for (const Row& r : rows) {
-    const GearAndSlip g = GearAndSlipOf(r, conv, radius_mm);
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const GearAndSlip g = GearAndSlipOf(rows[i], conv, radius_mm);
     if (g.gear_mm_s) gear.push_back(*g.gear_mm_s);
-    if (g.slip_pct) slip.push_back(*g.slip_pct);
+    // A filament speed the feed summary leaves out (a short baseline, an outlier) leaves its
+    // slip out too.
+    if (g.slip_pct && speeds.use.at(i) == pipeline::SpeedUse::kUsed) slip.push_back(*g.slip_pct);
   }
   std::string out;
   for (const auto& [name, unit, values] :

@@ -51,9 +51,10 @@ std::vector<std::string> SpeedFields(const vision::FeedSpeedSample& v,
 using vision::GearAndSlip;
 GearAndSlip GearAndSlipOf(const Row& r, const calib::ScaleCalibration& conv, double radius_mm);
 
-// "; gear 2.00 ± 0.01 mm/s …; slip 10.0 ± 0.5 % per frame pair (mean ± …, 95 %), N of M pairs".
-std::string GearSummary(const std::vector<Row>& rows, const calib::ScaleCalibration& conv,
-                        double radius_mm);
+// "; gear 2.00 ± 0.01 mm/s …; slip 10.0 ± 0.5 % per frame pair (mean ± …, 95 %), N of M pairs";
+// the slip from the rows whose feed speed `speeds` uses.
+std::string GearSummary(const std::vector<Row>& rows, const pipeline::FeedSpeedSummary& speeds,
+                        const calib::ScaleCalibration& conv, double radius_mm);
 
 // The summary of the rows' feed speeds (pipeline::SummariseFeedSpeeds), one use per row.
 pipeline::FeedSpeedSummary SummariseSpeeds(const std::vector<Row>& rows);
