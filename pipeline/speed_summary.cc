@@ -56,15 +56,27 @@ FeedSpeedSummary SummariseFeedSpeeds(const std::vector<vision::FeedSpeedSample>&
   s.mean_px_per_s = st.mean;
   s.std_px_per_s = st.std;
   if (s.used < 2) return s;
-  // Rows k frames apart overlap: with a steady baseline k the sum of the rows' shifts telescopes to
-  // (the last k frames' positions − the first k frames') and the mean is that over the time between
-  // them. If each frame's position error were independent, the mean's variance would be
-  // sd²·k/n² (under sd²/n); codecs make it far from independent (an H.264 frame's texture is its
-  // reference frame's, moved by quantised motion vectors), and at worst the k frames at either
-  // end err together: sd²·k²/n², beyond sd²/n once the video holds fewer than k² rows (slow feeds,
-  // short videos). The interval takes the larger of the two.
-  const double n = s.used, k = std::max(1, s.baseline_frames);
-  const double sem = s.std_px_per_s * std::sqrt(std::max(1 / n, (k / n) * (k / n)));
+  // Rows k frames apart overlap. Along a run of consecutive used rows with baseline k the sum of
+  // their shifts telescopes to (the run's last k frames' positions − its first k frames'), so a
+  // run of L rows adds at most min(L, k)²·sd² to the variance of the sum: when the k frames at
+  // either end err together, as codecs make them (an H.264 frame's texture is its reference
+  // frame's, moved by quantised motion vectors). Were the frames' errors independent it would add
+  // min(L, k)·sd², under the L·sd² the plain formula assumes. The interval takes the larger of
+  // n·sd² and the worst case summed over the runs (a run ends where a row is left out, e.g. where
+  // the tracker renewed its reference axis); the worst case wins at slow feeds in short videos.
+  double worst_case = 0;
+  for (size_t i = 0; i < samples.size();) {
+    if (s.use[i] != SpeedUse::kUsed) {
+      ++i;
+      continue;
+    }
+    int run = 0, k = 1;
+    for (; i < samples.size() && s.use[i] == SpeedUse::kUsed; ++i, ++run)
+      k = std::max(k, samples[i].baseline_frames);
+    worst_case += std::pow(std::min(run, k), 2);
+  }
+  const double n = s.used;
+  const double sem = s.std_px_per_s * std::sqrt(std::max(n, worst_case)) / n;
   s.ci95_px_per_s = StudentT975(s.used - 1) * sem;
   // The rows' own σ (from the residuals of each comparison) misses what a codec does to a whole
   // frame (an H.264 frame's texture sits where its motion vectors put it): when the used rows

@@ -2,7 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <vector>
+
+#include "pipeline/statistics.h"
 
 namespace clogscope::pipeline {
 namespace {
@@ -51,7 +54,9 @@ TEST(SpeedSummaryTest, LeavesOutShortBaselinesAndOutliersAndSaysWhy) {
     if (s.use[i] == SpeedUse::kUsed) sum += rows[i].SpeedPxPerS();
   EXPECT_DOUBLE_EQ(s.mean_px_per_s, sum / 20);
   EXPECT_NEAR(s.mean_px_per_s, 15.0, 1e-9);
-  EXPECT_GT(s.ci95_px_per_s, 0);
+  // One run of 20 rows 16 frames apart: its sum telescopes to its first and last 16 frames, which
+  // may err together: the interval is t·sd·√(16²)/20, wider than t·sd/√20.
+  EXPECT_NEAR(s.ci95_px_per_s, StudentT975(19) * s.std_px_per_s * 16 / 20, 1e-12);
   EXPECT_STREQ(SpeedUseName(s.use[1]), "short_baseline");
   EXPECT_STREQ(SpeedUseName(s.use[37]), "outlier");
 }
@@ -64,6 +69,18 @@ TEST(SpeedSummaryTest, UsesShortBaselinesWhenNoRowReachesItsOwn) {
   EXPECT_EQ(s.used, 3);
   EXPECT_EQ(s.short_baseline, 0);
   EXPECT_NEAR(s.mean_px_per_s, 15.0, 1e-9);
+}
+
+// Consecutive frames (baseline 1) in two runs: the plain t·sd/√n.
+TEST(SpeedSummaryTest, ConsecutiveFramesHaveThePlainInterval) {
+  std::vector<vision::FeedSpeedSample> rows = {Without("first_frame")};
+  for (int i = 0; i < 30; ++i) rows.push_back(Speed(10.0 + 0.1 * (i % 3 - 1), 1, 1));
+  rows.push_back(Without("too_fast"));
+  for (int i = 0; i < 10; ++i) rows.push_back(Speed(10.0 + 0.1 * (i % 3 - 1), 1, 1));
+  const FeedSpeedSummary s = SummariseFeedSpeeds(rows);
+  EXPECT_EQ(s.used, 40);
+  EXPECT_NEAR(s.ci95_px_per_s, StudentT975(39) * s.std_px_per_s / std::sqrt(40.0), 1e-12);
+  EXPECT_DOUBLE_EQ(s.sigma_scale, 1);  // the rows have no σ of their own here
 }
 
 TEST(SpeedSummaryTest, NoSpeedsNoMean) {
