@@ -36,7 +36,7 @@ double TruthMmPerS(const std::vector<FrameTruth>& truth) {
          (truth.back().time_s - truth.front().time_s) * kMmPerPx;
 }
 
-// MJPEG at a camera's quality (ffmpeg's mjpeg at -q:v 8, ~12 KB a frame here): its quantisation
+// MJPEG at a camera's quality (ffmpeg's mjpeg at -q:v 8, ~6 KB a frame here): its quantisation
 // leaves a block pattern that stays in place. OpenCV's writer offers no quality, so the ffmpeg CLI
 // encodes a lossless render.
 std::vector<FrameTruth> RenderCameraMjpeg(const SceneParams& p, const fs::path& dir,
