@@ -150,7 +150,7 @@ AxisShift EstimateAxisShift(const AxisProfile& pa, const AxisProfile& pb,
   }
   // Near the ends the high-pass sees a truncated window, which distorts the texture at fixed
   // places in the frame: compared there, that part stays put and pulls the shift toward zero
-  // (−0.006 px, −0.05 % at 25 px per frame). Only the inner part is compared.
+  // (−0.006 px, −0.02 % at 25 px per frame). Only the inner part is compared.
   const int edge = std::min(static_cast<int>(std::lround(2 * o.highpass_sigma_px)),
                             static_cast<int>(a_hp.size()) / 4);
   auto inner = [&](const std::vector<double>& v) {
