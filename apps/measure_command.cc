@@ -327,6 +327,10 @@ int RunMeasure(int argc, char** argv) {
   app.add_option("--speed-max-shift-px", o.feed.max_shift_px,
                  "Largest movement per frame searched for --speed")
       ->capture_default_str();
+  app.add_option("--speed-smooth-px", o.feed.smooth_sigma_px,
+                 "Gaussian σ the texture profiles are smoothed with for --speed (more for blocky "
+                 "MJPEG, less for a fine texture)")
+      ->capture_default_str();
   app.footer(
       "Examples:\n"
       "  clogscope measure step1.mp4 --scale-um-per-px 3.0 --out-frames frames.csv\n"

@@ -126,7 +126,8 @@ std::string SpeedSummary(const pipeline::FeedSpeedSummary& s, const calib::Scale
     left_out.push_back(fmt::format("{} without a speed", s.pairs - s.with_speed));
   if (s.short_baseline)
     left_out.push_back(fmt::format("{} with a short baseline", s.short_baseline));
-  if (s.outliers) left_out.push_back(fmt::format("{} outliers", s.outliers));
+  if (s.outliers)
+    left_out.push_back(fmt::format("{} outlier{}", s.outliers, s.outliers == 1 ? "" : "s"));
   return fmt::format(
       "; feed speed {:.4f} ± {:.4f} mm/s per row (mean ± {:.4f} mm/s, 95 %), {} of {} pairs "
       "used{}, baselines up to {} frames",

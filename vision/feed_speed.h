@@ -23,12 +23,13 @@ struct FeedSpeedOptions {
   double min_texture_ratio = 4;   // texture σ over the profile's noise σ
   double min_correlation = 0.6;   // normalised cross-correlation at the best whole-pixel shift
   double highpass_sigma_px = 25;  // slow illumination along the axis is removed at this scale
-  // Profiles are smoothed at this scale before the shift (0: not at all): it takes out most of
-  // a codec's block and quantisation noise and the interpolator's phase error.
-  double smooth_sigma_px = 1.5;
-  // Along a video (FeedSpeedTracker), a frame is compared with the earliest of the last
-  // max_baseline_frames frames at which the texture has moved at least baseline_shift_px (at most
-  // half the search range); 0 or 1 frame: always the frame before.
+  // Profiles are smoothed at this scale before the shift (0: not at all): it takes out much of a
+  // codec's block pattern and the interpolator's phase error, and some of a fine real texture
+  // (1.5 px would suit blocky MJPEG better, but leaves Greeff's real video 2.6× noisier).
+  double smooth_sigma_px = 1.0;
+  // Along a video (FeedSpeedTracker), a frame is compared with the frame far enough back for the
+  // texture to have moved baseline_shift_px (at most half the search range), at most
+  // max_baseline_frames back; 0 px or 1 frame: always the frame before.
   double baseline_shift_px = 8;
   int max_baseline_frames = 16;
   bool Validate(std::string* why) const;
