@@ -47,8 +47,10 @@ const std::vector<std::string>& GearCsvColumns() {
 }
 
 const std::vector<std::string>& FeedSpeedCsvColumns() {
-  static const std::vector<std::string> kColumns = {"filament_speed_mm_s",
-                                                    "filament_speed_sigma_mm_s", "speed_reason"};
+  static const std::vector<std::string> kColumns = {
+      "filament_speed_mm_s", "filament_speed_sigma_mm_s",
+      "speed_reason",        "speed_baseline_frames",
+      "speed_used",          "speed_left_out"};
   return kColumns;
 }
 
@@ -204,13 +206,18 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
       vision::FlagWidthOutliers(ms);
       for (size_t i = 0; i < rows.size(); ++i) rows[i].m = std::move(ms[i]);
     }
+    // The rows' speeds are summarised before they are written, so each row can say whether the
+    // logged mean used it.
+    const pipeline::FeedSpeedSummary speeds =
+        o.feed_speed ? SummariseSpeeds(rows) : pipeline::FeedSpeedSummary{};
     std::vector<double> widths_px;
-    for (const Row& r : rows) {
+    for (size_t i = 0; i < rows.size(); ++i) {
+      const Row& r = rows[i];
       if (r.m.valid()) widths_px.push_back(r.m.width_px);
       std::vector<std::string> fields =
           pipeline::FrameFields(r.source, r.frame, r.time_s, r.m, conv);
       if (o.feed_speed) {
-        const auto sf = SpeedFields(r.speed, *conv);
+        const auto sf = SpeedFields(r.speed, speeds, i, *conv);
         fields.insert(fields.end(), sf.begin(), sf.end());
       }
       if (o.gear_roi) {
@@ -243,8 +250,8 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
     summary.valid_frames += valid;
     spdlog::info("{}: {} of {} frames valid ({:.0f} frames/s){}", input, valid, rows.size(),
                  rows.size() / std::max(secs, 1e-9),
-                 WidthSummary(widths_px, conv) + (o.feed_speed ? SpeedSummary(rows, *conv) : "") +
-                     (o.gear_roi ? GearSummary(rows, *conv, *o.gear_radius_mm) : ""));
+                 WidthSummary(widths_px, conv) + (o.feed_speed ? SpeedSummary(speeds, *conv) : "") +
+                     (o.gear_roi ? GearSummary(rows, speeds, *conv, *o.gear_radius_mm) : ""));
     if (const std::string part = StraightPartSummary(rows); !part.empty())
       spdlog::info("{}: {}", input, part);
     if (o.feed_speed) {
@@ -307,9 +314,9 @@ int RunMeasure(int argc, char** argv) {
                  "Overlay every Nth frame (default: every image, every 25th video frame)");
   app.add_flag("--no-outlier-flags", no_outliers, "Do not mark width outliers between frames");
   app.add_flag("--speed", o.feed_speed,
-               "With --target filament: feed speed from the surface texture between consecutive "
-               "video frames (columns filament_speed_mm_s, filament_speed_sigma_mm_s, "
-               "speed_reason; needs a scale)");
+               "With --target filament: feed speed from the surface texture between video "
+               "frames (columns filament_speed_mm_s, filament_speed_sigma_mm_s, speed_reason, "
+               "speed_baseline_frames, speed_used, speed_left_out; needs a scale)");
   std::string gear_roi, gear_centre;
   app.add_option("--gear-roi", gear_roi,
                  "With --speed: x,y,w,h around the drive gear: its surface speed and the slip");
@@ -319,6 +326,10 @@ int RunMeasure(int argc, char** argv) {
                  "The gear's radius where it grips the filament (surface speed = ω·R)");
   app.add_option("--speed-max-shift-px", o.feed.max_shift_px,
                  "Largest movement per frame searched for --speed")
+      ->capture_default_str();
+  app.add_option("--speed-smooth-px", o.feed.smooth_sigma_px,
+                 "Gaussian σ the texture profiles are smoothed with for --speed (more for blocky "
+                 "MJPEG, less for a fine texture)")
       ->capture_default_str();
   app.footer(
       "Examples:\n"

@@ -1,6 +1,7 @@
 #include "apps/measure_rows.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <cmath>
 #include <filesystem>
@@ -57,15 +58,25 @@ std::string StraightPartSummary(const std::vector<Row>& rows) {
       part, valid, Median(s0), Median(s1));
 }
 
-// The feed-speed columns of one row: mm/s, its σ (shift and scale), and the reason when empty.
+// The feed-speed columns of one row: mm/s, its σ (shift and scale), the reason when empty, the
+// baseline, and whether the summary used it.
 std::vector<std::string> SpeedFields(const vision::FeedSpeedSample& v,
+                                     const pipeline::FeedSpeedSummary& summary, size_t row,
                                      const calib::ScaleCalibration& conv) {
-  if (!v.valid) return {"", "", v.reason};
+  const pipeline::SpeedUse use = summary.use.at(row);
+  const bool used = use == pipeline::SpeedUse::kUsed;
+  const std::string left_out = used ? "" : pipeline::SpeedUseName(use);
+  if (!v.valid) return {"", "", v.reason, "", "0", left_out};
   const double mm_per_px = conv.scale_um_per_px * 1e-3;
   const double speed = v.SpeedPxPerS() * mm_per_px;
-  const double sigma = std::hypot(v.SigmaPxPerS() * mm_per_px,
+  const double sigma = std::hypot(v.SigmaPxPerS() * summary.sigma_scale * mm_per_px,
                                   speed * conv.scale_sigma_um_per_px / conv.scale_um_per_px);
-  return {CsvNumber(speed, 5), CsvNumber(sigma, 5), ""};
+  return {CsvNumber(speed, 5),
+          CsvNumber(sigma, 5),
+          "",
+          std::to_string(v.baseline_frames),
+          used ? "1" : "0",
+          left_out};
 }
 
 GearAndSlip GearAndSlipOf(const Row& r, const calib::ScaleCalibration& conv, double radius_mm) {
@@ -73,13 +84,15 @@ GearAndSlip GearAndSlipOf(const Row& r, const calib::ScaleCalibration& conv, dou
 }
 
 // "; gear 2.00 ± 0.01 mm/s …; slip 10.0 ± 0.5 % per frame pair (mean ± …, 95 %), N of M pairs".
-std::string GearSummary(const std::vector<Row>& rows, const calib::ScaleCalibration& conv,
-                        double radius_mm) {
+std::string GearSummary(const std::vector<Row>& rows, const pipeline::FeedSpeedSummary& speeds,
+                        const calib::ScaleCalibration& conv, double radius_mm) {
   std::vector<double> gear, slip;
-  for (const Row& r : rows) {
-    const GearAndSlip g = GearAndSlipOf(r, conv, radius_mm);
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const GearAndSlip g = GearAndSlipOf(rows[i], conv, radius_mm);
     if (g.gear_mm_s) gear.push_back(*g.gear_mm_s);
-    if (g.slip_pct) slip.push_back(*g.slip_pct);
+    // A filament speed the feed summary leaves out (a short baseline, an outlier) leaves its
+    // slip out too.
+    if (g.slip_pct && speeds.use.at(i) == pipeline::SpeedUse::kUsed) slip.push_back(*g.slip_pct);
   }
   std::string out;
   for (const auto& [name, unit, values] :
@@ -95,23 +108,32 @@ std::string GearSummary(const std::vector<Row>& rows, const calib::ScaleCalibrat
   return out;
 }
 
-// "; feed speed 0.001 ± 0.016 mm/s per frame pair (mean ± …, 95 %), N of M pairs".
-std::string SpeedSummary(const std::vector<Row>& rows, const calib::ScaleCalibration& conv) {
-  std::vector<double> speeds;
-  int pairs = 0;
-  for (const Row& r : rows) {
-    if (r.speed.reason == "first_frame" || r.speed.reason == "no_time") continue;
-    ++pairs;
-    if (r.speed.valid) speeds.push_back(r.speed.SpeedPxPerS() * conv.scale_um_per_px * 1e-3);
-  }
-  if (speeds.empty())
-    return pairs ? fmt::format("; feed speed in none of {} frame pairs", pairs) : "";
-  const pipeline::SampleStats st = pipeline::RobustStats(speeds);
+pipeline::FeedSpeedSummary SummariseSpeeds(const std::vector<Row>& rows) {
+  std::vector<vision::FeedSpeedSample> samples;
+  samples.reserve(rows.size());
+  for (const Row& r : rows) samples.push_back(r.speed);
+  return pipeline::SummariseFeedSpeeds(samples);
+}
+
+// "; feed speed 0.8001 ± 0.0102 mm/s per row (mean ± 0.0027 mm/s, 95 %), 45 of 60 pairs used (15
+// with a short baseline), baselines up to 6 frames".
+std::string SpeedSummary(const pipeline::FeedSpeedSummary& s, const calib::ScaleCalibration& conv) {
+  if (s.used == 0)
+    return s.pairs ? fmt::format("; feed speed in none of {} frame pairs", s.pairs) : "";
+  const double mm_per_px = conv.scale_um_per_px * 1e-3;
+  std::vector<std::string> left_out;
+  if (s.with_speed < s.pairs)
+    left_out.push_back(fmt::format("{} without a speed", s.pairs - s.with_speed));
+  if (s.short_baseline)
+    left_out.push_back(fmt::format("{} with a short baseline", s.short_baseline));
+  if (s.outliers)
+    left_out.push_back(fmt::format("{} outlier{}", s.outliers, s.outliers == 1 ? "" : "s"));
   return fmt::format(
-      "; feed speed {:.4f} ± {:.4f} mm/s per frame pair (mean ± {:.4f} mm/s, 95 %), {} of {} "
-      "pairs{}",
-      st.mean, st.std, st.ci95_half_width, speeds.size(), pairs,
-      st.n_rejected ? fmt::format(", {} left out as outliers", st.n_rejected) : "");
+      "; feed speed {:.4f} ± {:.4f} mm/s per row (mean ± {:.4f} mm/s, 95 %), {} of {} pairs "
+      "used{}, baselines up to {} frames",
+      s.mean_px_per_s * mm_per_px, s.std_px_per_s * mm_per_px, s.ci95_px_per_s * mm_per_px, s.used,
+      s.pairs, left_out.empty() ? "" : fmt::format(" ({})", fmt::join(left_out, ", ")),
+      s.baseline_frames);
 }
 
 }  // namespace clogscope::apps

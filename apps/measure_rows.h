@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "calib/pixel_scale.h"
+#include "pipeline/speed_summary.h"
 #include "vision/feed_speed.h"
 #include "vision/gear_speed.h"
 #include "vision/strand_measure.h"
@@ -39,20 +40,29 @@ std::string WidthSummary(const std::vector<double>& widths_px,
 // valid frames: a sentence saying so and where the straight part measured lies; else empty.
 std::string StraightPartSummary(const std::vector<Row>& rows);
 
-// The feed-speed columns of one row: mm/s, its σ (shift and scale), and the reason when empty.
+// The feed-speed columns of one row (FeedSpeedCsvColumns): mm/s, its σ (the shift's, scaled up to
+// the rows' scatter by the summary, and the scale's), the reason when empty, the baseline in
+// frames, whether the summary used the row and why not.
 std::vector<std::string> SpeedFields(const vision::FeedSpeedSample& v,
+                                     const pipeline::FeedSpeedSummary& summary, size_t row,
                                      const calib::ScaleCalibration& conv);
 
 // The row's gear surface speed and slip (vision::GearAndSlipOf).
 using vision::GearAndSlip;
 GearAndSlip GearAndSlipOf(const Row& r, const calib::ScaleCalibration& conv, double radius_mm);
 
-// "; gear 2.00 ± 0.01 mm/s …; slip 10.0 ± 0.5 % per frame pair (mean ± …, 95 %), N of M pairs".
-std::string GearSummary(const std::vector<Row>& rows, const calib::ScaleCalibration& conv,
-                        double radius_mm);
+// "; gear 2.00 ± 0.01 mm/s …; slip 10.0 ± 0.5 % per frame pair (mean ± …, 95 %), N of M pairs";
+// the slip from the rows whose feed speed `speeds` uses.
+std::string GearSummary(const std::vector<Row>& rows, const pipeline::FeedSpeedSummary& speeds,
+                        const calib::ScaleCalibration& conv, double radius_mm);
 
-// "; feed speed 0.001 ± 0.016 mm/s per frame pair (mean ± …, 95 %), N of M pairs".
-std::string SpeedSummary(const std::vector<Row>& rows, const calib::ScaleCalibration& conv);
+// The summary of the rows' feed speeds (pipeline::SummariseFeedSpeeds), one use per row.
+pipeline::FeedSpeedSummary SummariseSpeeds(const std::vector<Row>& rows);
+
+// "; feed speed 0.8001 ± 0.0102 mm/s per row (mean ± 0.0027 mm/s, 95 %), N of M pairs used (…)":
+// the mean is that of the rows marked used.
+std::string SpeedSummary(const pipeline::FeedSpeedSummary& summary,
+                         const calib::ScaleCalibration& conv);
 
 // Logs why frame pairs have no value, once per reason with the first detail. `reason_of` returns
 // an empty reason (Skipped()) for rows that need no word.

@@ -1,5 +1,6 @@
 // clogscope_bench: the speed and accuracy figures quoted in issue closing notes.
-//   clogscope_bench [measure|accuracy|video|experiment|lag|speed|watch|adversarial|all] (default all)
+//   clogscope_bench [measure|accuracy|video|experiment|lag|speed|speed-codec [FIRST_SEED]|watch|
+//                    adversarial [SCENES_PER_CLASS] [--list]|all]   (default all)
 // Prints Markdown tables. Timings are wall-clock on this machine; run on an idle machine.
 #include <fmt/format.h>
 
@@ -18,6 +19,7 @@
 
 #include "model/lag_fit.h"
 #include "pipeline/experiment.h"
+#include "pipeline/speed_summary.h"
 #include "vision/batch.h"
 #include "vision/feed_speed.h"
 #include "vision/frame_source.h"
@@ -412,14 +414,15 @@ void BenchLag() {
 }
 
 // Filament feed speed (640x480, 20 µm/px, 30 frames/s, surface texture ±8 grey levels under noise
-// σ 3): the error of the mean speed over 60 frame pairs, the per-pair spread, and what the speed
-// adds per frame on one core (FeedSpeedTracker::Next after the width measurement).
+// σ 3): the error of the mean speed over 60 frame pairs as `measure --speed` logs it (the rows the
+// summary uses), the rows' spread, and what the speed adds per frame on one core
+// (FeedSpeedTracker::Next after the width measurement).
 void BenchFeedSpeed() {
   cv::setNumThreads(1);
   fmt::print(
       "\n## Filament feed speed (640x480, 20 µm/px, 30 frames/s, 60 pairs, one core)\n\n"
-      "| speed mm/s | tilt ° | mean mm/s | error | per-pair σ mm/s | pairs with a speed | ms per "
-      "frame |\n|---|---|---|---|---|---|---|\n");
+      "| speed mm/s | tilt ° | mean mm/s | error | 95 % half-width mm/s | per-row sd mm/s | rows "
+      "used | ms per frame |\n|---|---|---|---|---|---|---|---|\n");
   for (auto [v, tilt] :
        std::vector<std::pair<double, double>>{{0, 0}, {0.5, 0}, {2, 0}, {5, 0}, {15, 0}, {2, 7}}) {
     SceneParams p = clogscope::vision::FeedstockScene(v);
@@ -428,36 +431,35 @@ void BenchFeedSpeed() {
     o.target = clogscope::vision::MeasureTarget::kFilament;
     StrandTracker tracker(o);
     clogscope::vision::FeedSpeedTracker speed(clogscope::vision::FeedSpeedOptions{});
-    std::vector<double> speeds;
+    std::vector<clogscope::vision::FeedSpeedSample> rows;
     double seconds = 0;
     for (int i = 0; i <= 60; ++i) {
       FrameTruth t;
       const cv::Mat f = RenderFrame(p, i, &t);
       const auto m = tracker.Measure(f);
       const auto t0 = Clock::now();
-      const auto s = speed.Next(f, t.time_s, m);
+      rows.push_back(speed.Next(f, t.time_s, m));
       seconds += Seconds(t0, Clock::now());
-      if (s.valid) speeds.push_back(s.SpeedPxPerS() * p.scale_um_per_px * 1e-3);
     }
-    double mean = 0, var = 0;
-    for (double x : speeds) mean += x / speeds.size();
-    for (double x : speeds) var += (x - mean) * (x - mean) / (speeds.size() - 1);
+    const auto st = clogscope::pipeline::SummariseFeedSpeeds(rows);
+    const double mm_per_px = p.scale_um_per_px * 1e-3, mean = st.mean_px_per_s * mm_per_px;
     fmt::print(
-        "| {:g} | {:g} | {:.4f} | {} | {:.4f} | {} of 60 | {:.3f} |\n", v, tilt, mean,
+        "| {:g} | {:g} | {:.4f} | {} | {:.4f} | {:.4f} | {} of {} | {:.3f} |\n", v, tilt, mean,
         v > 0 ? fmt::format("{:+.2f} %", 100 * (mean - v) / v) : fmt::format("{:+.4f} mm/s", mean),
-        std::sqrt(var), speeds.size(), 1e3 * seconds / 61);
+        st.ci95_px_per_s * mm_per_px, st.std_px_per_s * mm_per_px, st.used, st.pairs,
+        1e3 * seconds / 61);
   }
 }
 
 // Gear surface speed and slip: a 20-tooth gear of 2 mm tip radius beside the filament, the
-// filament at (1 − slip) of the gear's surface speed; 30 pairs each.
+// filament at (1 − slip) of the gear's surface speed; 30 pairs each. The slip's mean, as `measure`
+// logs it, is over the rows whose feed speed the summary uses.
 void BenchSlip() {
   cv::setNumThreads(1);
   fmt::print(
       "\n## Gear surface speed and slip (640x480, 20 µm/px, 30 frames/s, 30 pairs, one core)\n\n"
       "| gear mm/s | slip % | gear mean mm/s | gear error | slip mean % | slip error pp | gear ms "
-      "per "
-      "frame |\n|---|---|---|---|---|---|---|\n");
+      "per frame |\n|---|---|---|---|---|---|---|\n");
   for (double vg : {0.5, 5.0, 15.0}) {
     for (double slip : {0.0, 10.0, 20.0}) {
       const SceneParams p = clogscope::vision::FeedstockScene(vg * (1 - slip / 100), vg);
@@ -469,40 +471,168 @@ void BenchSlip() {
       go.roi = cv::Rect(70, 134, 213, 213);
       go.outer_radius_px = 100;
       clogscope::vision::GearSpeedTracker gear(go);
-      double gear_sum = 0, slip_sum = 0, seconds = 0;
-      int n = 0;
+      std::vector<clogscope::vision::FeedSpeedSample> feeds;
+      std::vector<clogscope::vision::GearSpeedSample> gears;
+      double seconds = 0;
       for (int i = 0; i <= 30; ++i) {
         FrameTruth t;
         const cv::Mat f = RenderFrame(p, i, &t);
-        const auto fs = feed.Next(f, t.time_s, tracker.Measure(f));
+        feeds.push_back(feed.Next(f, t.time_s, tracker.Measure(f)));
         const auto t0 = Clock::now();
-        const auto gs = gear.Next(f, t.time_s);
+        gears.push_back(gear.Next(f, t.time_s));
         seconds += Seconds(t0, Clock::now());
-        if (!fs.valid || !gs.valid) continue;
-        const double g = std::abs(gs.RadPerS()) * 2.0;  // R = 2 mm
+      }
+      const auto used = clogscope::pipeline::SummariseFeedSpeeds(feeds).use;
+      double gear_sum = 0, slip_sum = 0;
+      int n_gear = 0, n_slip = 0;
+      for (size_t i = 0; i < feeds.size(); ++i) {
+        if (!gears[i].valid) continue;
+        const double g = std::abs(gears[i].RadPerS()) * 2.0;  // R = 2 mm
         gear_sum += g;
-        slip_sum += 100 * (1 - fs.SpeedPxPerS() * p.scale_um_per_px * 1e-3 / g);
-        ++n;
+        ++n_gear;
+        if (used[i] != clogscope::pipeline::SpeedUse::kUsed) continue;
+        slip_sum += 100 * (1 - feeds[i].SpeedPxPerS() * p.scale_um_per_px * 1e-3 / g);
+        ++n_slip;
       }
       fmt::print("| {:g} | {:g} | {:.4f} | {:+.2f} % | {:.3f} | {:+.3f} | {:.2f} |\n", vg, slip,
-                 gear_sum / n, 100 * (gear_sum / n - vg) / vg, slip_sum / n, slip_sum / n - slip,
-                 1e3 * seconds / 31);
+                 gear_sum / n_gear, 100 * (gear_sum / n_gear - vg) / vg, slip_sum / n_slip,
+                 slip_sum / n_slip - slip, 1e3 * seconds / 31);
     }
   }
 }
 
+// One codec of the feed-speed bench: RenderSequence's own encoders (OpenCV's FFmpeg backend at its
+// fixed settings) or, with ffmpeg_args, the ffmpeg CLI on a lossless render (a camera's settings).
+struct SpeedCodec {
+  std::string name, extension, ffmpeg_args;
+};
+
+// Renders the feedstock scene at speed_mm_s through `codec` (frames at 30 frames/s) into dir.
+std::string RenderFeed(const SpeedCodec& codec, double speed_mm_s, uint64_t seed, int frames,
+                       const std::filesystem::path& dir) {
+  namespace fs = std::filesystem;
+  SceneParams p = clogscope::vision::FeedstockScene(speed_mm_s);
+  p.seed = seed;
+  const std::string video = (dir / fmt::format("feed{}", codec.extension)).string();
+  if (codec.ffmpeg_args.empty()) {
+    clogscope::vision::RenderSequence(p, frames, 30, video, "");
+    return video;
+  }
+  const fs::path frames_dir = dir / "png";
+  fs::remove_all(frames_dir);
+  clogscope::vision::RenderSequence(p, frames, 30, frames_dir.string(), "");
+  const std::string cmd = fmt::format("ffmpeg -v error -y -framerate 30 -i {}/frame_%06d.png {} {}",
+                                      frames_dir.string(), codec.ffmpeg_args, video);
+  if (std::system(cmd.c_str()) != 0) throw std::runtime_error("failed: " + cmd);
+  fs::remove_all(frames_dir);
+  return video;
+}
+
+// What `measure --speed` reports for a video: the tracked filament, the feed speed of every frame.
+std::vector<clogscope::vision::FeedSpeedSample> MeasureFeedVideo(const std::string& video) {
+  auto source = clogscope::vision::FrameSource::Open(video);
+  StrandMeasureOptions o;
+  o.target = clogscope::vision::MeasureTarget::kFilament;
+  clogscope::vision::FeedSpeedTracker speed(clogscope::vision::FeedSpeedOptions{});
+  std::vector<clogscope::vision::FeedSpeedSample> rows;
+  clogscope::vision::MeasureFrames(
+      *source, o, [&](clogscope::vision::InputFrame& f, clogscope::vision::StrandMeasurement& m) {
+        rows.push_back(speed.Next(f.image, f.time_s, m));
+      });
+  return rows;
+}
+
+// Feed speed through real codecs (640x480, 20 µm/px, 30 frames/s, 61 frames per render): per codec
+// and speed over seeds first_seed…, the error of the mean that `measure --speed` logs, how often
+// its 95 % interval covers the rendered speed, and how the rows' σ match their errors.
+void BenchFeedSpeedCodec(int first_seed) {
+  namespace fs = std::filesystem;
+  cv::setNumThreads(1);
+  const fs::path dir = fs::temp_directory_path() / "clogscope_bench" / "speed_codec";
+  fs::create_directories(dir);
+  const std::vector<SpeedCodec> codecs = {
+      {"MJPEG (RenderSequence: FFmpeg mjpeg, OpenCV's settings)", ".avi", ""},
+      {"MJPEG -q:v 8 (ffmpeg)", ".avi", "-c:v mjpeg -q:v 8"},
+      {"H.264 crf 23 (RenderSequence: libx264, OpenCV's settings)", ".mp4", ""},
+      {"MPEG-4 part 2 -q:v 5 (ffmpeg)", ".avi", "-c:v mpeg4 -q:v 5"},
+  };
+  const std::vector<double> speeds = {0.3, 0.8, 2, 5, 15};
+  constexpr int kSeeds = 6, kFrames = 61;
+  constexpr double kMmPerPx = 20e-3;
+  fmt::print(
+      "\n## Feed speed through codecs (640x480, 20 µm/px, 30 frames/s, {} frames, seeds {}-{} "
+      "per row)\n\nError: the logged mean against the rendered speed (mean over seeds, worst); "
+      "tolerance 0.5 % + 0.005 mm/s; covered: the logged 95 % interval holds the truth; row "
+      "error/σ: rms over the used rows of (row speed − truth) / its σ as the CSV gives it.\n\n"
+      "| codec | speed mm/s | mean error | worst error | within tolerance | covered | mean 95 % "
+      "half-width | row error/σ rms | rows used |\n|---|---|---|---|---|---|---|---|---|\n",
+      kFrames, first_seed, first_seed + kSeeds - 1);
+  int all_cases = 0, all_within = 0, all_covered = 0;
+  const auto t0 = Clock::now();
+  for (const SpeedCodec& codec : codecs) {
+    int codec_cases = 0, codec_covered = 0;
+    for (double v : speeds) {
+      double sum_err = 0, worst = 0, sum_ci = 0, sum_z2 = 0;
+      int within = 0, covered = 0, used = 0, pairs = 0;
+      for (int seed = first_seed; seed < first_seed + kSeeds; ++seed) {
+        const std::string video = RenderFeed(codec, v, seed, kFrames, dir);
+        const auto rows = MeasureFeedVideo(video);
+        fs::remove(video);
+        const clogscope::pipeline::FeedSpeedSummary st =
+            clogscope::pipeline::SummariseFeedSpeeds(rows);
+        const double mean_mm_s = st.mean_px_per_s * kMmPerPx;
+        const double ci_mm_s = st.ci95_px_per_s * kMmPerPx;
+        const double err_mm_s = mean_mm_s - v, err_pct = 100 * err_mm_s / v;
+        sum_err += err_pct;
+        if (std::abs(err_pct) > std::abs(worst)) worst = err_pct;
+        within += std::abs(err_mm_s) <= 0.005 * v + 0.005;
+        covered += std::abs(err_mm_s) <= ci_mm_s;
+        sum_ci += 100 * ci_mm_s / v;
+        used += st.used;
+        pairs += st.pairs;
+        for (size_t i = 0; i < rows.size(); ++i) {
+          if (st.use[i] != clogscope::pipeline::SpeedUse::kUsed) continue;
+          const double z = (rows[i].SpeedPxPerS() * kMmPerPx - v) /
+                           (rows[i].SigmaPxPerS() * st.sigma_scale * kMmPerPx);
+          sum_z2 += z * z;
+        }
+      }
+      fmt::print(
+          "| {} | {:g} | {:+.3f} % | {:+.3f} % | {} of {} | {} of {} | {:.3f} % | {:.2f} | {} of "
+          "{} |\n",
+          codec.name, v, sum_err / kSeeds, worst, within, kSeeds, covered, kSeeds, sum_ci / kSeeds,
+          std::sqrt(sum_z2 / std::max(used, 1)), used, pairs);
+      codec_cases += kSeeds;
+      codec_covered += covered;
+      all_cases += kSeeds;
+      all_within += within;
+      all_covered += covered;
+    }
+    fmt::print("| {}: all speeds | | | | | {} of {} ({:.0f} %) | | | |\n", codec.name,
+               codec_covered, codec_cases, 100.0 * codec_covered / codec_cases);
+  }
+  fmt::print(
+      "\nAll {} cases: {} within tolerance, 95 % interval covers the truth in {} ({:.0f} %); "
+      "{:.0f} "
+      "s\n",
+      all_cases, all_within, all_covered, 100.0 * all_covered / all_cases,
+      Seconds(t0, Clock::now()));
+}
+
 }  // namespace
 
-void BenchWatch();  // watch_bench.cc
+void BenchWatch();                             // watch_bench.cc
 void BenchAdversarial(int argc, char** argv);  // adversarial_bench.cc
 
 int main(int argc, char** argv) {
   const std::string what = argc > 1 ? argv[1] : "all";
   if (what != "all" && what != "measure" && what != "accuracy" && what != "video" &&
-      what != "experiment" && what != "lag" && what != "speed" && what != "watch" &&
-      what != "adversarial") {
-    std::fprintf(
-        stderr, "usage: clogscope_bench [measure|accuracy|video|experiment|lag|speed|watch|adversarial [SCENES_PER_CLASS [--list]]|all]\n");
+      what != "experiment" && what != "lag" && what != "speed" && what != "speed-codec" &&
+      what != "watch" && what != "adversarial") {
+    std::fprintf(stderr,
+                 "usage: clogscope_bench [measure|accuracy|video|experiment|lag|speed|speed-codec "
+                 "[FIRST_SEED]|watch|adversarial [SCENES_PER_CLASS] [--list]|all]
+");
     return 2;
   }
   fmt::print("# clogscope benchmarks ({} hardware threads)\n", std::thread::hardware_concurrency());
@@ -515,6 +645,9 @@ int main(int argc, char** argv) {
     BenchFeedSpeed();
     BenchSlip();
   }
+  // speed-codec [first seed]: other seeds check that the figures are not those seeds' luck.
+  if (what == "all" || what == "speed-codec")
+    BenchFeedSpeedCodec(what == "speed-codec" && argc > 2 ? std::atoi(argv[2]) : 1);
   if (what == "all" || what == "watch") BenchWatch();
   if (what == "all" || what == "adversarial") BenchAdversarial(argc, argv);
   return 0;

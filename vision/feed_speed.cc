@@ -19,6 +19,11 @@ bool FeedSpeedOptions::Validate(std::string* why) const {
     *why = "texture ratio must be positive and correlation in (0, 1)";
   else if (!(highpass_sigma_px >= 2))
     *why = "high-pass scale must be at least 2 px";
+  else if (!(smooth_sigma_px >= 0 && smooth_sigma_px <= 10))
+    *why = "smoothing scale must be in [0, 10] px";
+  else if (!(baseline_shift_px >= 0 && baseline_shift_px <= 1000) ||
+           !(max_baseline_frames >= 1 && max_baseline_frames <= 300))
+    *why = "baseline shift must be in [0, 1000] px and its frames in [1, 300]";
   else
     return true;
   return false;
@@ -133,17 +138,27 @@ AxisShift EstimateAxisShift(const AxisProfile& pa, const AxisProfile& pb,
   if (pa.start_s_px != pb.start_s_px || pa.values.size() != pb.values.size()) {
     throw std::invalid_argument("feed speed: the two profiles must share their sampling");
   }
-  const std::vector<double> a = HighPass(pa.values, o.highpass_sigma_px);
-  const std::vector<double> b = HighPass(pb.values, o.highpass_sigma_px);
-  const int n = static_cast<int>(a.size());
+  const std::vector<double> a_hp = HighPass(pa.values, o.highpass_sigma_px);
+  const std::vector<double> b_hp = HighPass(pb.values, o.highpass_sigma_px);
   const double noise = std::max(0.5 * (pa.noise + pb.noise), 1e-9);
-  out.texture_ratio = StdDev(a) / noise;
+  out.texture_ratio = StdDev(a_hp) / noise;
   if (out.texture_ratio < o.min_texture_ratio) {
     out.status = FeedShiftStatus::kNoTexture;
     out.detail = fmt::format("surface texture σ is {:.1f}× its noise (needs {:g}×)",
                              out.texture_ratio, o.min_texture_ratio);
     return out;
   }
+  // Near the ends the high-pass sees a truncated window, which distorts the texture at fixed
+  // places in the frame: compared there, that part stays put and pulls the shift toward zero
+  // (−0.006 px, −0.02 % at 25 px per frame). Only the inner part is compared.
+  const int edge = std::min(static_cast<int>(std::lround(2 * o.highpass_sigma_px)),
+                            static_cast<int>(a_hp.size()) / 4);
+  auto inner = [&](const std::vector<double>& v) {
+    const std::vector<double> smooth = Smooth(v, o.smooth_sigma_px);
+    return std::vector<double>(smooth.begin() + edge, smooth.end() - edge);
+  };
+  const std::vector<double> a = inner(a_hp), b = inner(b_hp);
+  const int n = static_cast<int>(a.size());
   // Whole pixels: b(s + k) = a(s) when the surface moved k px down the axis. At least half the
   // profile must overlap.
   const int limit = std::min(static_cast<int>(std::floor(o.max_shift_px)), n / 2);
@@ -187,19 +202,37 @@ cv::Point2d CentreAt(const StrandMeasurement& m, double s) {
   return {m.tip_x_px + s * m.axis_dx + u * m.axis_dy, m.tip_y_px + s * m.axis_dy - u * m.axis_dx};
 }
 
-// Whether `m`'s centre line and width still match `ref` where ref's stretch begins and ends.
+// Whether `m`'s centre line and width still match `ref` where ref's stretch begins and ends: the
+// centre lines within 3 % of the width (at least 0.3 px), the widths within 1 px. Both profiles
+// of a comparison are sampled along ref, so ref only has to stay well inside the filament's inner
+// part; a tighter rule renews it on the measurement's own noise (through H.264 the measured
+// centre line of a filament at rest wanders by up to 1.9 px at the far end of a 450 px stretch),
+// and each renewal forgets the frames a longer baseline needs.
 bool SameGeometry(const StrandMeasurement& ref, const StrandMeasurement& m, double stretch_px) {
   if (!ref.has_geometry || !m.has_geometry) return false;
   const double width_ref = ref.right_u0_px - ref.left_u0_px, width_m = m.right_u0_px - m.left_u0_px;
   if (std::abs(width_ref - width_m) > 1.0) return false;
+  const double tolerance_px = std::max(0.3, 0.03 * width_ref);
   // m's centre line through two of its points; the distance of ref's centre from it.
   const cv::Point2d a = CentreAt(m, 0), b = CentreAt(m, 100);
   const cv::Point2d d = (b - a) / cv::norm(b - a);
   for (double s : {ref.band_start_px, ref.band_start_px + stretch_px}) {
     const cv::Point2d q = CentreAt(ref, s) - a;
-    if (std::abs(q.x * d.y - q.y * d.x) > 0.3) return false;
+    if (std::abs(q.x * d.y - q.y * d.x) > tolerance_px) return false;
   }
   return true;
+}
+
+// How many frames back a frame should be compared with when the texture moved shift_px since
+// the frame before: enough for baseline_shift_px (at most half the search range, so the longer
+// shift stays well inside it), at most max_baseline_frames.
+int WantedBaselineFrames(double shift_px, const FeedSpeedOptions& o) {
+  const double target_px = std::min(o.baseline_shift_px, 0.5 * o.max_shift_px);
+  const double per_frame_px = std::abs(shift_px);
+  if (per_frame_px >= target_px) return 1;
+  if (per_frame_px * o.max_baseline_frames <= target_px) return o.max_baseline_frames;
+  return std::clamp(static_cast<int>(std::ceil(target_px / per_frame_px)), 1,
+                    o.max_baseline_frames);
 }
 
 }  // namespace
@@ -234,16 +267,19 @@ FeedSpeedSample FeedSpeedTracker::Next(const cv::Mat& frame, double time_s,
     out.detail = "no filament measured in the frame before";
   } else {
     sampled = true;
-    const double stretch = previous_profile_.values.size();
-    if (!SameGeometry(reference_, previous_m_, stretch) || previous_profile_.values.empty()) {
+    const double stretch = history_.empty() ? 0.0 : history_.back().profile.values.size();
+    if (history_.empty() || history_.back().profile.values.empty() ||
+        !SameGeometry(reference_, previous_m_, stretch)) {
       // The filament moved (or this is the first pair): a new reference, the previous frame
-      // sampled along it.
+      // sampled along it; frames before it are not on this axis.
       reference_ = previous_m_;
-      previous_profile_ = SampleAxisProfile(previous_, reference_, options_);
+      history_.clear();
+      history_.push_back({SampleAxisProfile(previous_, reference_, options_), previous_t_});
     }
     const AxisProfile current = SampleAxisProfile(grey, reference_, options_);
-    const AxisShift shift = current.values.size() == previous_profile_.values.size()
-                                ? EstimateAxisShift(previous_profile_, current, options_)
+    const AxisProfile& before = history_.back().profile;
+    const AxisShift shift = current.values.size() == before.values.size()
+                                ? EstimateAxisShift(before, current, options_)
                                 : AxisShift{};
     out.dt_s = time_s - previous_t_;
     out.search_limit_px = shift.search_limit_px;
@@ -253,9 +289,41 @@ FeedSpeedSample FeedSpeedTracker::Next(const cv::Mat& frame, double time_s,
         shift.detail.empty() ? "the filament's stretch could not be sampled" : shift.detail;
     out.shift_px = shift.shift_px;
     out.sigma_px = shift.sigma_px;
-    previous_profile_ = current;
+    if (out.valid) {
+      out.baseline_frames = 1;
+      // The baseline follows the speed of the rows before (this pair's own shift only when
+      // there are none), and holds while that speed stays within a quarter of it: chosen from
+      // this frame's own shift, a frame that looks behind would get the longer baseline and one
+      // ahead the shorter, a bias (−0.09 % at 1.33 px per frame through MJPEG); held, every
+      // frame ends one comparison and starts another, and its own error cancels along the video.
+      const int wanted = WantedBaselineFrames(
+          std::isnan(shift_per_frame_px_) ? shift.shift_px : shift_per_frame_px_, options_);
+      if (!(baseline_frames_ > 0 &&
+            std::abs(wanted - baseline_frames_) <= std::max(1, baseline_frames_ / 4))) {
+        baseline_frames_ = wanted;
+      }
+      out.wanted_baseline_frames = baseline_frames_;
+      const int k = std::min(out.wanted_baseline_frames, static_cast<int>(history_.size()));
+      const PastFrame& far = history_[history_.size() - k];
+      if (k > 1 && far.profile.values.size() == current.values.size()) {
+        const AxisShift longer = EstimateAxisShift(far.profile, current, options_);
+        // The two must agree on the movement (a loose check: a wrong whole-pixel match is
+        // several px off, k times the frame pair's own error is a fraction of that).
+        const double expected_px = k * shift.shift_px;
+        if (longer.valid() &&
+            std::abs(longer.shift_px - expected_px) <= 2 + 0.5 * std::abs(expected_px)) {
+          out.shift_px = longer.shift_px;
+          out.sigma_px = longer.sigma_px;
+          out.dt_s = time_s - far.time_s;
+          out.baseline_frames = k;
+        }
+      }
+    }
+    if (out.valid) shift_per_frame_px_ = out.shift_px / out.baseline_frames;
+    history_.push_back({current, time_s});
+    while (static_cast<int>(history_.size()) > options_.max_baseline_frames) history_.pop_front();
   }
-  if (!sampled) previous_profile_ = {};  // the next pair samples the frame before it afresh
+  if (!sampled) history_.clear();  // the next pair samples the frame before it afresh
   previous_ = grey;
   previous_m_ = m;
   previous_t_ = time_s;

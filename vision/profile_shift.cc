@@ -135,6 +135,22 @@ std::vector<double> HighPass(const std::vector<double>& v, double sigma) {
   return mean;
 }
 
+std::vector<double> Smooth(const std::vector<double>& v, double sigma) {
+  if (!(sigma > 0)) return v;
+  const int n = static_cast<int>(v.size()), r = static_cast<int>(std::ceil(3.5 * sigma));
+  std::vector<double> w(2 * r + 1), out(n);
+  for (int j = -r; j <= r; ++j) w[j + r] = std::exp(-0.5 * j * j / (sigma * sigma));
+  for (int i = 0; i < n; ++i) {
+    double sum = 0, weight = 0;
+    for (int j = std::max(-r, -i); j <= std::min(r, n - 1 - i); ++j) {
+      sum += w[j + r] * v[i + j];
+      weight += w[j + r];
+    }
+    out[i] = sum / weight;
+  }
+  return out;
+}
+
 double StdDev(const std::vector<double>& v) {
   double m = 0, q = 0;
   for (double x : v) m += x / v.size();

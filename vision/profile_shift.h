@@ -27,6 +27,8 @@ FineShift RefineShift(const std::vector<double>& a, const std::vector<double>& b
 // Removes what varies slower than sigma samples (three box passes, O(n)); the ends use the samples
 // inside.
 std::vector<double> HighPass(const std::vector<double>& v, double sigma);
+// Gaussian smoothing over ±3.5σ, renormalised where the kernel runs past an end; σ ≤ 0: a copy.
+std::vector<double> Smooth(const std::vector<double>& v, double sigma);
 double StdDev(const std::vector<double>& v);
 
 }  // namespace clogscope::vision

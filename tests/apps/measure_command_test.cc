@@ -94,6 +94,7 @@ TEST(MeasureCommandTest, WithoutOutFramesTheTableGoesToStandardOutput) {
 
 // A filament fed at 3 mm/s past a 30 frames/s camera (MJPEG): every pair after the first has a
 // speed, their mean within 1 % of the truth; a featureless filament gets no number, a reason.
+// Each row says whether the logged mean used it, and the logged mean is that of those rows.
 TEST(MeasureCommandTest, FeedSpeedOfARenderedFilament) {
   const fs::path d = FreshDir("speed");
   const std::string scene =
@@ -108,26 +109,52 @@ TEST(MeasureCommandTest, FeedSpeedOfARenderedFilament) {
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const CsvTable t = ParseCsv(r.out, "stdout");
     ASSERT_EQ(t.rows.size(), 20u);
-    const int c_speed = t.Column("filament_speed_mm_s"), c_reason = t.Column("speed_reason");
+    const int c_speed = t.Column("filament_speed_mm_s"), c_reason = t.Column("speed_reason"),
+              c_baseline = t.Column("speed_baseline_frames"), c_used = t.Column("speed_used"),
+              c_left_out = t.Column("speed_left_out");
     ASSERT_GE(c_speed, 0);
+    ASSERT_GE(c_left_out, 0);
     EXPECT_EQ(t.rows[0][c_reason], "first_frame");
-    double sum = 0;
-    int n = 0;
+    EXPECT_EQ(t.rows[0][c_used], "0");
+    EXPECT_EQ(t.rows[0][c_left_out], "no_speed");
+    double sum = 0, sum_used = 0;
+    int n = 0, n_used = 0;
     for (size_t i = 1; i < t.rows.size(); ++i) {
       if (t.rows[i][c_speed].empty()) {
         EXPECT_FALSE(t.rows[i][c_reason].empty());
+        EXPECT_EQ(t.rows[i][c_used], "0");
         continue;
       }
       sum += std::stod(t.rows[i][c_speed]);
       ++n;
+      if (t.rows[i][c_used] == "1") {
+        EXPECT_EQ(t.rows[i][c_left_out], "");
+        sum_used += std::stod(t.rows[i][c_speed]);
+        ++n_used;
+      } else {
+        EXPECT_FALSE(t.rows[i][c_left_out].empty());
+      }
     }
     if (std::string(texture) == "8") {
       EXPECT_EQ(n, 19);
       EXPECT_NEAR(sum / n, 3.0, 0.03);
-      EXPECT_NE(r.err.find("19 of 19 pairs"), std::string::npos) << r.err;
+      // 5 px per frame: each frame is compared with the one two back (10 px), which the second
+      // frame cannot be; its row is left out of the mean.
+      EXPECT_EQ(t.rows[1][c_baseline], "1");
+      EXPECT_EQ(t.rows[1][c_left_out], "short_baseline");
+      EXPECT_EQ(t.rows[5][c_baseline], "2");
+      EXPECT_GE(n_used, 16);  // the rest may hold an outlier or two
+      EXPECT_NE(r.err.find(std::to_string(n_used) + " of 19 pairs used (1 with a short baseline"),
+                std::string::npos)
+          << r.err;
+      const size_t at = r.err.find("feed speed ");
+      ASSERT_NE(at, std::string::npos) << r.err;
+      EXPECT_NEAR(std::stod(r.err.substr(at + 11)), sum_used / n_used, 0.00005 + 1e-9) << r.err;
+      EXPECT_NEAR(sum_used / n_used, 3.0, 0.015);
     } else {
       EXPECT_EQ(n, 0);
       EXPECT_EQ(t.rows[5][c_reason], "no_texture");
+      EXPECT_EQ(t.rows[5][c_left_out], "no_speed");
       EXPECT_NE(r.err.find("no_texture"), std::string::npos) << r.err;
     }
   }

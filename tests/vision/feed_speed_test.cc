@@ -129,5 +129,46 @@ TEST(FeedSpeedTest, TrackerUsesTheFramesOwnTimesAndFollowsTheAxis) {
   EXPECT_EQ(still.Next(f, -1, tracker.Measure(f)).reason, "no_time");
 }
 
+// A slow filament (0.3 mm/s, 0.5 px per frame): each frame is compared with the one 16 back (8 px)
+// once there is one, with every earlier frame before that; the speeds over 16 frames are within
+// 0.2 % of the truth.
+TEST(FeedSpeedTest, TrackerComparesASlowFilamentOverLongerBaselines) {
+  const SceneParams p = Filament(0.3);
+  StrandMeasureOptions o;
+  o.target = MeasureTarget::kFilament;
+  StrandTracker tracker(o);
+  FeedSpeedTracker speed(FeedSpeedOptions{});
+  double sum = 0;
+  int full = 0;
+  for (int i = 0; i < 24; ++i) {
+    FrameTruth t;
+    const cv::Mat f = RenderFrame(p, i, &t);
+    const FeedSpeedSample v = speed.Next(f, t.time_s, tracker.Measure(f));
+    if (i == 0) continue;
+    ASSERT_TRUE(v.valid) << i << ": " << v.detail;
+    EXPECT_EQ(v.wanted_baseline_frames, 16) << i;
+    EXPECT_EQ(v.baseline_frames, std::min(i, 16)) << i;
+    EXPECT_NEAR(v.dt_s, v.baseline_frames / 30.0, 1e-9) << i;
+    if (v.baseline_frames < 16) continue;
+    ++full;
+    sum += v.SpeedPxPerS() * p.scale_um_per_px * 1e-3;
+  }
+  EXPECT_EQ(full, 8);
+  EXPECT_NEAR(sum / full, 0.3, 0.0006);
+  // Comparing consecutive frames only (the former behaviour) is an option.
+  FeedSpeedOptions one;
+  one.baseline_shift_px = 0;
+  FeedSpeedTracker consecutive(one);
+  StrandTracker tracker2(o);
+  for (int i = 0; i < 3; ++i) {
+    FrameTruth t;
+    const cv::Mat f = RenderFrame(p, i, &t);
+    const FeedSpeedSample v = consecutive.Next(f, t.time_s, tracker2.Measure(f));
+    if (i > 0) {
+      EXPECT_EQ(v.baseline_frames, 1);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace clogscope::vision
