@@ -631,8 +631,7 @@ int main(int argc, char** argv) {
       what != "watch" && what != "adversarial") {
     std::fprintf(stderr,
                  "usage: clogscope_bench [measure|accuracy|video|experiment|lag|speed|speed-codec "
-                 "[FIRST_SEED]|watch|adversarial [SCENES_PER_CLASS] [--list]|all]
-");
+                 "[FIRST_SEED]|watch|adversarial [SCENES_PER_CLASS] [--list]|all]\n");
     return 2;
   }
   fmt::print("# clogscope benchmarks ({} hardware threads)\n", std::thread::hardware_concurrency());
