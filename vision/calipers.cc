@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 
 #include "common/robust.h"
 #include "vision/caliper_samples.h"
@@ -190,8 +191,11 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   }
   // Edges inside the object near its silhouette (a stripe, a lens's core) must stay out of the
   // edge windows: how deep inside each side's window may reach.
-  double inner_edge_px[2];
-  for (int side = 0; side < 2; ++side) {
+  // (A filament's band is its whole stretch, its median profile blurred by gear and knurl marks:
+  // not looked at.)
+  double inner_edge_px[2] = {std::numeric_limits<double>::infinity(),
+                             std::numeric_limits<double>::infinity()};
+  for (int side = 0; side < 2 && opt.target != MeasureTarget::kFilament; ++side) {
     const double mid = 0.5 * (band_s0 + band_s1);
     const double e = (side == 0 ? left_guess : right_guess) + slope_guess * mid;
     inner_edge_px[side] = InnerEdgeDistance(img, f, band_s0, band_s1, e, side == 0 ? 1 : -1,

@@ -254,7 +254,7 @@ std::pair<double, double> Interval(const PairCandidate& c, const AxisFrame& fram
 
 // Marks pairs lying inside a comparable outer pair (a highlight stripe, a clear strand's internal
 // lines): the outer silhouette is the object.
-void SuppressNested(std::vector<PairCandidate>* cands) {
+void SuppressNested(MeasureTarget target, std::vector<PairCandidate>* cands) {
   auto& c = *cands;
   for (size_t i = 0; i < c.size(); ++i) {
     for (size_t j = 0; j < c.size(); ++j) {
@@ -268,11 +268,18 @@ void SuppressNested(std::vector<PairCandidate>* cands) {
       const double sj = c[i].axis.S(c[j].axis.ox, c[j].axis.oy);
       const double overlap = std::min(sj + c[j].length_px, c[i].length_px) - std::max(sj, 0.0);
       if (overlap < 0.5 * c[j].length_px) continue;
-      // Inside an outer silhouette (bright or dark), edges never make the strand: a stripe or a
-      // lens's core is part of the object whatever its contrast. A mixed outer pair (brighter on
-      // one side, darker on the other) is a weaker hypothesis of an object.
-      const bool mixed_outer = c[i].polarity == Polarity::kMixed;
-      if (c[i].score >= (mixed_outer ? 0.8 : 0.3) * c[j].score) {
+      // Inside an outer silhouette, edges of its own kind (a shading ridge, a clear strand's
+      // internal lines) or, below a nozzle, of the opposite kind (a bright stripe or a lens's
+      // core in a dark strand) never make the strand, whatever their contrast; a mixed pair
+      // inside, or a mixed outer pair (brighter on one side, darker on the other), is a weaker
+      // case. (Between a filament's gears and idler, a dark gap inside a bright outer pair is
+      // often the better pair: there the opposite kind stays a weaker case.)
+      const bool opposite =
+          target == MeasureTarget::kStrand &&
+          ((c[i].polarity == Polarity::kBrightOnDark && c[j].polarity == Polarity::kDarkOnBright) ||
+           (c[i].polarity == Polarity::kDarkOnBright && c[j].polarity == Polarity::kBrightOnDark));
+      const bool same_kind = c[i].polarity == c[j].polarity;
+      if (c[i].score >= (same_kind || opposite ? 0.3 : 0.8) * c[j].score) {
         c[j].verdict = fmt::format("inside a wider pair ({:.1f} px)", c[i].width_px);
         c[j].suppressed_by = static_cast<int>(i);
       }
@@ -655,7 +662,7 @@ SceneResult FindScene(const std::vector<cv::Mat>& channels, const SceneOptions& 
       if (!InsideIsOneObject(d, c))
         c.verdict = "spans separate objects: the background shows between its edges";
     }
-    SuppressNested(&r.candidates);
+    SuppressNested(o.target, &r.candidates);
     double top = 0;
     for (const auto& c : r.candidates)
       if (c.verdict.empty()) top = std::max(top, c.score);
