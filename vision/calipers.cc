@@ -12,6 +12,7 @@
 #include "vision/caliper_samples.h"
 #include "vision/cylinder_fit.h"
 #include "vision/edge_fit.h"
+#include "vision/self_check.h"
 #include "vision/straight_run.h"
 
 namespace clogscope::vision {
@@ -27,8 +28,6 @@ constexpr int kReferenceCalipers = 5;
 // Curvature of the width along the band: more than 1 px of sag, bending like a disc (|w''|/2 above
 // 0.25/w, i.e. a chord of a circle less than 4 widths in radius).
 constexpr double kMaxSagPx = 1.0, kMaxBend = 0.25;  // outside the band, for the occlusion check
-// The self-check: one edge's residuals this many times the other's, and by this many grey levels.
-constexpr double kMaxResidualRatio = 2.0, kMinResidualExcess = 1.5;
 // The mean capped F statistic in its own σ units above 1.
 double ShadingEvidenceSigmas(const std::vector<double>& f) {
   if (f.empty()) return 0;
@@ -585,9 +584,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       }
     }
   }
-  // Self-check: both silhouettes fit a blurred step against a plain background about as well (the
-  // noise is the frame's on both). One side fitting far worse has something else at its edge: a
-  // bright spot behind it, an object beside it, an inner edge in its window.
+  // Self-check (self_check.h): both silhouettes fit about as well.
   if (!filament) {
     std::vector<double> rms[2];
     for (int k = run_begin; k < run_end; ++k) {
@@ -595,17 +592,8 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       rms[0].push_back(fits[k].left.rms);
       rms[1].push_back(fits[k].right.rms);
     }
-    if (rms[0].size() >= 3) {
-      const double l = Median(rms[0]), r = Median(rms[1]);
-      const double worse = std::max(l, r), better = std::max(std::min(l, r), 1e-9);
-      if (worse > kMaxResidualRatio * better && worse - better > kMinResidualExcess) {
-        return fail(FrameStatus::kNotSilhouette,
-                    fmt::format("the {} edge fits a silhouette on a plain background {:.1f}× "
-                                "worse than the {} (residuals {:.1f} and {:.1f} grey levels)",
-                                l > r ? "left" : "right", worse / better, l > r ? "right" : "left",
-                                worse, better));
-      }
-    }
+    const SelfCheck check = CheckEdgeResiduals(rms[0], rms[1]);
+    if (!check.passed) return fail(FrameStatus::kNotSilhouette, check.why);
   }
   if (m->contrast < min_contrast)
     return fail(FrameStatus::kLowContrast,

@@ -16,6 +16,8 @@ constexpr double kMinReachPx = 20.0;       // how far out the outside is looked 
 constexpr double kNearPx = 3.0;            // the background's level: this far beyond the blur
 constexpr double kMaxObjectLike = 0.4;     // of one side's outside samples
 constexpr double kMaxLevelMismatch = 1.0;  // of the object's contrast
+// One edge's residuals this many times the other's, and by this many grey levels.
+constexpr double kMaxResidualRatio = 2.0, kMinResidualExcess = 1.5;
 
 // Along u from the edge at u0 + slope·s, `dir` ±1, from `from` over `length` px: per px of distance
 // the median over kRows rows of the band (noise and a blob over a few rows do not count).
@@ -37,10 +39,9 @@ std::vector<double> Strip(const GreyImage& img, const AxisFrame& f, double s0, d
 
 }  // namespace
 
-OutsideCheck CheckOutsideIsBackground(const GreyImage& img, const AxisFrame& f, double s0,
-                                      double s1, double left_u0, double right_u0, double slope,
-                                      double blur_px) {
-  OutsideCheck out;
+SelfCheck CheckOutsideIsBackground(const GreyImage& img, const AxisFrame& f, double s0, double s1,
+                                   double left_u0, double right_u0, double slope, double blur_px) {
+  SelfCheck out;
   const double width = right_u0 - left_u0;
   const double gap = 3.0 * blur_px + 2.0;
   if (width < 2 * gap + 2) return out;  // too thin to read an inside level
@@ -82,6 +83,22 @@ OutsideCheck CheckOutsideIsBackground(const GreyImage& img, const AxisFrame& f, 
         "the background outside its edges differs ({:.0f} and {:.0f} grey levels, the object "
         "{:.0f}): not one object's silhouette",
         background[0], background[1], object);
+  }
+  return out;
+}
+
+SelfCheck CheckEdgeResiduals(const std::vector<double>& left_rms,
+                             const std::vector<double>& right_rms) {
+  SelfCheck out;
+  if (left_rms.size() < 3 || right_rms.size() < 3) return out;
+  const double l = Median(left_rms), r = Median(right_rms);
+  const double worse = std::max(l, r), better = std::max(std::min(l, r), 1e-9);
+  if (worse > kMaxResidualRatio * better && worse - better > kMinResidualExcess) {
+    out.passed = false;
+    out.why = fmt::format(
+        "the {} edge fits a silhouette on a plain background {:.1f}× worse than the {} "
+        "(residuals {:.1f} and {:.1f} grey levels)",
+        l > r ? "left" : "right", worse / better, l > r ? "right" : "left", worse, better);
   }
   return out;
 }

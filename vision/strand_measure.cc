@@ -233,7 +233,7 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
   }
   if (m.valid() && opt.target == MeasureTarget::kStrand) {
     if (g.tip_width_px > 0) m.swell_ratio = std::max(1.0, g.tip_width_px / m.width_px);
-    const OutsideCheck check =
+    const SelfCheck check =
         CheckOutsideIsBackground(img, g.axis, m.band_start_px, m.band_end_px, m.left_u0_px,
                                  m.right_u0_px, m.edge_slope, m.blur_px);
     if (!check.passed) {
