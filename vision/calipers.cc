@@ -188,13 +188,14 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     left_guess = 0.5 * (la + lb) - slope_guess * 0.5 * (sa + sb);
     right_guess = 0.5 * (ra + rb) - slope_guess * 0.5 * (sa + sb);
   }
+  const bool filament = opt.target == MeasureTarget::kFilament;
   // Edges inside the object near its silhouette (a stripe, a lens's core) must stay out of the
   // edge windows: how deep inside each side's window may reach.
   // (A filament's band is its whole stretch, its median profile blurred by gear and knurl marks:
   // not looked at.)
   double inner_edge_px[2] = {std::numeric_limits<double>::infinity(),
                              std::numeric_limits<double>::infinity()};
-  for (int side = 0; side < 2 && opt.target != MeasureTarget::kFilament; ++side) {
+  for (int side = 0; side < 2 && !filament; ++side) {
     const double mid = 0.5 * (band_s0 + band_s1);
     const double e = (side == 0 ? left_guess : right_guess) + slope_guess * mid;
     inner_edge_px[side] = InnerEdgeDistance(img, f, band_s0, band_s1, e, side == 0 ? 1 : -1,
@@ -212,7 +213,6 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   bool border = false;
   // A filament's band is its whole visible stretch, parts of which a drive gear or a guide may
   // hide: a quarter of it (at least 8 calipers) will do. A strand's short band must be clean.
-  const bool filament = opt.target == MeasureTarget::kFilament;
   double min_used = filament ? std::max(8.0, 0.5 * opt.min_caliper_fraction * n_cal)
                              : opt.min_caliper_fraction * n_cal;
   // Usually one pass. Another re-centres the windows on the fitted edge lines, or widens them to
