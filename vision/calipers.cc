@@ -12,6 +12,7 @@
 #include "vision/caliper_samples.h"
 #include "vision/cylinder_fit.h"
 #include "vision/edge_fit.h"
+#include "vision/residual_structure.h"
 #include "vision/self_check.h"
 #include "vision/straight_run.h"
 
@@ -25,6 +26,9 @@ constexpr double kRadToDeg = 180.0 / M_PI;
 // above that, plus a margin for structured noise such as compression artefacts.
 constexpr double kMinShadingShiftPx = 0.1;
 constexpr int kReferenceCalipers = 5;
+// How far the tip may lie from where it was placed along the axis: set by the nozzle's face on
+// both sides of the strand, or inferred from the outline (tip.h).
+constexpr double kTipSigmaBothFacesPx = 0.25, kTipSigmaWidths = 0.25;
 // Curvature of the width along the band: more than 1 px of sag, bending like a disc (|w''|/2 above
 // 0.25/w, i.e. a chord of a circle less than 4 widths in radius).
 constexpr double kMaxSagPx = 1.0, kMaxBend = 0.25;  // outside the band, for the occlusion check
@@ -489,6 +493,9 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   // disc sags toward the ends. Periodic roughness (a filament marked by drive-gear teeth) averages
   // out of a quadratic over several periods.
   // All fitted calipers: on a disc the chord's change leaves few of them within the MAD cut.
+  // A strand's width about its smooth trend along the band: a swell relaxing down the band widens
+  // the calipers' spread without making their mean any less certain.
+  double trend_var = -1, width_slope = 0;
   if (cal_widths.size() >= 4) {
     Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
     Eigen::Vector3d atb = Eigen::Vector3d::Zero();
@@ -501,6 +508,19 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       atb += row * c.width_px;
     }
     const Eigen::Vector3d coef = ata.ldlt().solve(atb);
+    if (!filament && used >= 5) {
+      double ss = 0;
+      for (const Caliper& c : m->calipers) {
+        if (!c.inlier) continue;
+        const double ds = c.s_px - s_mid;
+        const double r = c.width_px - (coef[0] + coef[1] * ds + coef[2] * ds * ds);
+        ss += r * r;
+      }
+      trend_var = ss / (used - 3);
+      // Only a width that clearly changes: the slope of a straight strand's noisy widths is noise.
+      const double slope_sigma = std::sqrt(trend_var * ata.inverse()(1, 1));
+      if (std::abs(coef[1]) > 3.0 * slope_sigma) width_slope = coef[1];
+    }
     const double half = 0.5 * (m->straight_end_px - m->straight_start_px);
     // A disc's chord w(s) ≈ 2R − s²/R bends with |w''|/2 = 1/R ≈ 2/w; a strand's slow changes
     // (or a filament's along a long stretch) bend hundreds of widths more gently.
@@ -514,12 +534,15 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     }
   }
   m->width_px = sum / used;
+  // The calipers' spread, or what their own fits expect of it when a few calipers happen to agree.
+  double expected_var = 0;
+  for (const Caliper& c : m->calipers)
+    if (c.inlier) expected_var += c.width_sigma_px * c.width_sigma_px;
+  m->width_sigma_px = std::sqrt(expected_var) / used;
   if (used >= 2) {
-    const double var = std::max(0.0, (sum2 - sum * sum / used) / (used - 1));
-    m->width_sigma_px = std::sqrt(var / used);
-  } else {
-    const auto& k = fits[0];
-    m->width_sigma_px = std::hypot(k.left.edge_sigma_px, k.right.edge_sigma_px);
+    const double var =
+        trend_var >= 0 ? trend_var : std::max(0.0, (sum2 - sum * sum / used) / (used - 1));
+    m->width_sigma_px = std::max(m->width_sigma_px, std::sqrt(var / used));
   }
   // The model's doubt: a side judged plain on weak evidence of shading would be this much wider
   // if shaded; half of it (both sides together) counts as one σ.
@@ -530,6 +553,32 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     shading_doubt_px[1] = shading_shift_px[1];
   }
   m->model_sigma_px = 0.5 * (shading_doubt_px[0] + shading_doubt_px[1]);
+  {
+    const double outer = std::max(6.5, 3.0 * sigma_guess + 2.5) + (shade[0] || shade[1] ? 3.5 : 0);
+    const double inner = std::min(outer, std::max(4.0, 0.3 * width0));
+    // The inlier calipers' own edge models (calipers refitted as cylinders have none).
+    double structure_doubt_px[2];
+    for (int side = 0; side < 2; ++side) {
+      std::vector<CaliperEdge> edges;
+      for (int k = 0; k < n_cal; ++k) {
+        if (!m->calipers[k].inlier || fits[k].width_sigma_px >= 0) continue;
+        const double s0 = band_s0 + k * opt.caliper_spacing_px;
+        edges.push_back(
+            {s0, s0 + opt.caliper_spacing_px, side == 0 ? fits[k].left : fits[k].right});
+      }
+      const double in = inner_reach(side, inner, sigma_guess);
+      structure_doubt_px[side] =
+          BandEdgeDoubtPx(img, f, clip, edges, side == 0 ? outer : in, side == 0 ? in : outer);
+    }
+    // And where the band starts, when the width changes along it (die swell relaxing): a tip set
+    // by the nozzle's face on both sides is good to a fraction of a px; one inferred from where
+    // the outline leaves the nozzle's may be off by a good part of the strand's width.
+    const double tip_sigma_px =
+        g.tip_face_sides == 2 ? kTipSigmaBothFacesPx : kTipSigmaWidths * width0;
+    m->model_sigma_px =
+        std::hypot(std::hypot(m->model_sigma_px, std::abs(width_slope) * tip_sigma_px),
+                   std::hypot(structure_doubt_px[0], structure_doubt_px[1]));
+  }
   m->width_sigma_px = std::hypot(m->width_sigma_px, m->model_sigma_px);
 
   // The same calipers further down the strand, outside the band: a blob covering one edge over

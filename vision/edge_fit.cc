@@ -59,6 +59,26 @@ struct ShadedStepModel {
   }
 };
 
+// The blurred step whose two sides slope differently (a background gradient that stops at the
+// silhouette): the blurred ramp k·s·R(z), R(z) = zΦ(z) + φ(z), adds slope k on the +u side.
+struct TwoSlopeStepModel {
+  static constexpr int kN = 6;
+  void operator()(double du, double u, const double* p, double* value, double* j) const {
+    const double inv_s = 1.0 / p[kS];
+    const double z = (u - p[kE]) * inv_s;
+    double f, df;
+    StepShape(z, &f, &df);
+    const double ramp = z * f + df;
+    *value = p[kA] + p[kB] * du + p[kC] * f + p[kK] * p[kS] * ramp;
+    j[kA] = 1.0;
+    j[kB] = du;
+    j[kC] = f;
+    j[kE] = -p[kC] * df * inv_s - p[kK] * f;
+    j[kS] = -p[kC] * df * inv_s * z + p[kK] * df;
+    j[kK] = p[kS] * ramp;
+  }
+};
+
 // A thin line's blurred profile, close to a Gaussian; symmetric, so its centre is unbiased.
 struct LineModel {
   static constexpr int kN = 5;
@@ -163,6 +183,7 @@ EdgeFit FitBlurredStep(const std::vector<EdgeSample>& samples, double edge_guess
   p << lo, 0.0, hi - lo, edge_guess_px, std::max(sigma_guess_px, 0.5);
   fit = Solve(samples, p, u_ref, StepModel());
   fit.contrast = fit.step;
+  fit.u_ref = u_ref;
   return fit;
 }
 
@@ -178,10 +199,43 @@ EdgeFit FitShadedStep(const std::vector<EdgeSample>& samples, double edge_guess_
   ShadedStepModel model;
   model.iota = object_side > 0 ? 1.0 : -1.0;
   fit = Solve(samples, p, u_ref, model);
+  fit.u_ref = u_ref;
+  fit.object_side = object_side > 0 ? 1 : -1;
   double g2, dg2;
   BlurredSqrt::Get()(2.0, &g2, &dg2);
   fit.contrast = fit.step + model.iota * fit.shading * g2;
   return fit;
+}
+
+EdgeFit FitTwoSlopeStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
+                        double sigma_guess_px, double u_ref) {
+  EdgeFit fit;
+  fit.samples = static_cast<int>(samples.size());
+  double lo, hi;
+  if (samples.size() < 10 || !PlateauStart(samples, edge_guess_px, sigma_guess_px, &lo, &hi))
+    return fit;
+  Vec<6> p;
+  p << lo, 0.0, hi - lo, edge_guess_px, std::max(sigma_guess_px, 0.5), 0.0;
+  fit = Solve(samples, p, u_ref, TwoSlopeStepModel());
+  fit.slope_change_per_px = fit.shading;
+  fit.shading = 0;
+  fit.contrast = fit.step;
+  fit.u_ref = u_ref;
+  return fit;
+}
+
+double EdgeModelValue(const EdgeFit& fit, double u_px) {
+  const double z = (u_px - fit.edge_px) / fit.sigma_px;
+  double f, df;
+  StepShape(z, &f, &df);
+  double value = fit.base + fit.slope_per_px * (u_px - fit.u_ref) + fit.step * f +
+                 fit.slope_change_per_px * fit.sigma_px * (z * f + df);
+  if (fit.object_side != 0) {
+    double g, dg;
+    BlurredSqrt::Get()(fit.object_side * z, &g, &dg);
+    value += fit.shading * g;
+  }
+  return value;
 }
 
 EdgeFit FitLineProfile(const std::vector<EdgeSample>& samples, double centre_guess_px,

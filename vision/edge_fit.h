@@ -27,7 +27,21 @@ struct EdgeFit {
   double rms = 0;  // residual RMS, grey levels
   int samples = 0;
   int iterations = 0;
+  double slope_change_per_px = 0;  // FitTwoSlopeStep: slope at +u minus slope at −u
+  double u_ref = 0;                // where the linear term is anchored
+  int object_side = 0;             // FitShadedStep: the object's side (±1); 0 for the plain step
 };
+
+// The blurred step whose sides slope differently (a background gradient or texture on one side of
+// a silhouette, a flat object on the other):
+//   value(u) = base + slope·(u − u_ref) + step·Φ(z) + k·sigma_px·(zΦ(z) + φ(z)),
+// the last term a ramp of slope k on the +u side, blurred with the step. One parameter more than
+// FitBlurredStep, which it equals when both sides slope alike.
+EdgeFit FitTwoSlopeStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
+                        double sigma_guess_px, double u_ref);
+
+// The fitted model's value at u (FitBlurredStep, FitShadedStep, FitTwoSlopeStep results).
+double EdgeModelValue(const EdgeFit& fit, double u_px);
 
 // Levenberg–Marquardt fit of the blurred-step model, started at edge_guess_px with width
 // sigma_guess_px. `u_ref` is where the linear background term is anchored (the window centre).

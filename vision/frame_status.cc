@@ -32,6 +32,8 @@ const char* FrameStatusName(FrameStatus status) {
       return "ambiguous";
     case FrameStatus::kNotSilhouette:
       return "not_silhouette";
+    case FrameStatus::kImprecise:
+      return "imprecise";
   }
   return "?";
 }

@@ -19,8 +19,9 @@ enum class FrameStatus {
   kWidthOutlier,   // far from the neighbouring frames' widths (set by FlagWidthOutliers)
   kAmbiguous,      // two strand-like objects of similar score: no guess
   kNotSilhouette,  // one edge does not fit a silhouette against a plain background
+  kImprecise,      // the width's σ is above what a valid width may carry
 };
-inline constexpr int kFrameStatusCount = static_cast<int>(FrameStatus::kNotSilhouette) + 1;
+inline constexpr int kFrameStatusCount = static_cast<int>(FrameStatus::kImprecise) + 1;
 const char* FrameStatusName(FrameStatus status);
 
 // What is measured: a strand below a nozzle tip (the band is placed from the tip), or a filament,

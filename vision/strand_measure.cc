@@ -118,6 +118,8 @@ bool StrandMeasureOptions::Validate(std::string* why) const {
   if (!(min_length_px >= 8)) return fail("min length must be at least 8 px");
   if (!(max_saturated_fraction >= 0 && max_saturated_fraction <= 1))
     return fail("max saturated fraction must be in [0, 1]");
+  if (!(max_sigma_px > 0)) return fail("max sigma must be positive");
+  if (!(max_sigma_fraction >= 0)) return fail("max sigma fraction must not be negative");
   return true;
 }
 
@@ -240,6 +242,13 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
       m.status = FrameStatus::kNotSilhouette;
       m.detail = check.why;
     }
+  }
+  const double max_sigma_px = std::max(opt.max_sigma_px, opt.max_sigma_fraction * m.width_px);
+  if (m.valid() && m.width_sigma_px > max_sigma_px) {
+    m.status = FrameStatus::kImprecise;
+    m.detail =
+        fmt::format("width {:.2f} ± {:.2f} px: σ above the {:.2f} px a valid width may carry",
+                    m.width_px, m.width_sigma_px, max_sigma_px);
   }
   return m;
 }

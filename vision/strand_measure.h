@@ -31,6 +31,10 @@ struct StrandMeasureOptions {
   bool shading = true;
   double min_caliper_fraction = 0.5;     // fewer consistent calipers than this: occluded
   double max_saturated_fraction = 0.05;  // more clipped pixels at the edges than this: saturated
+  // A valid width is good to max(0.3 px, 0.5 %) at 3σ: a width whose σ (the calipers' spread and
+  // the edge model's doubt) is above max(max_sigma_px, max_sigma_fraction·width) is `imprecise`.
+  double max_sigma_px = 0.1;
+  double max_sigma_fraction = 0.005 / 3;
 
   bool Validate(std::string* why) const;
 };

@@ -23,25 +23,34 @@ TEST(AdversarialMatrixTest, FewConfidentlyWrongWidthsAndNoneWithoutAStrand) {
   SCOPED_TRACE(MatrixTable(r) + "confidently wrong:" + wrong);
   // No width where there is no strand, ever.
   EXPECT_EQ(r.classes[static_cast<int>(TroubleClass::kNoStrand)].valid, 0);
-  // Confidently wrong: at most 4 % of all frames, and at most 2 % whose own σ does not cover the
-  // error either (2.7 % and 0.8 % measured when this was written: 32 and 10 of 1200; 10 % before
-  // the object model's first round).
-  EXPECT_LE(r.all.wrong, 0.04 * r.all.frames);
-  EXPECT_LE(r.all.wrong_beyond_sigma, 0.02 * r.all.frames);
+  // Confidently wrong: at most 2 of 1200 frames (none measured when this was written; 32 before
+  // the σ carried the edge model's doubt and imprecise widths were refused, 120 before the object
+  // model's first round), and none whose own σ does not cover the error either.
+  EXPECT_LE(r.all.wrong, 2);
+  EXPECT_EQ(r.all.wrong_beyond_sigma, 0);
+  // What that costs: valid widths on 642 of the 1000 measurable strand frames when this was
+  // written (the saturated and nozzle-alone classes are refused by design).
+  const int measurable = r.all.frames -
+                         r.classes[static_cast<int>(TroubleClass::kSaturated)].frames -
+                         r.classes[static_cast<int>(TroubleClass::kNoStrand)].frames;
+  EXPECT_GE(r.all.valid, 0.6 * measurable);
   // The classes the first round fixed stay fixed: the lens at its silhouette, clipping refused,
-  // the tip of a swelling strand at the nozzle (10 % measured, 57 % before).
+  // the tip of a swelling strand at the nozzle (none wrong measured; 10 % in the first round, 57 %
+  // before).
   for (TroubleClass c : {TroubleClass::kSaturated, TroubleClass::kBacklitLens}) {
     const ClassSummary& s = r.classes[static_cast<int>(c)];
     EXPECT_LE(s.wrong, 0.02 * s.frames) << TroubleClassName(c);
   }
   const ClassSummary& swell = r.classes[static_cast<int>(TroubleClass::kDieSwell)];
-  EXPECT_LE(swell.wrong, 0.15 * swell.frames);
-  EXPECT_GE(swell.valid, 0.9 * swell.frames);
+  EXPECT_LE(swell.wrong, 0.02 * swell.frames);
+  // A swell relaxing through the band with no nozzle face to fix the tip is imprecise (44 %
+  // valid measured, 95 % before, 10 % of them wrong).
+  EXPECT_GE(swell.valid, 0.4 * swell.frames);
   const ClassSummary& lens = r.classes[static_cast<int>(TroubleClass::kBacklitLens)];
   EXPECT_GE(lens.valid, 0.8 * lens.frames);
   // Bias and spread of the valid widths that are not wrong.
   EXPECT_LT(std::abs(r.all.bias_px), 0.05);
-  EXPECT_LT(r.all.sd_px, 0.2);
+  EXPECT_LT(r.all.sd_px, 0.11);  // 0.093 measured
 }
 
 }  // namespace

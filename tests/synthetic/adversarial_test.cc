@@ -58,6 +58,12 @@ TEST(AdversarialTest, DieSwellPutsTheTipAtTheNozzleAndReportsTheSwell) {
     const AdversarialScene p = RandomAdversarialScene(TroubleClass::kDieSwell, seed);
     AdversarialTruth t;
     const vision::StrandMeasurement m = RenderAndMeasure(p, &t);
+    // A tip the nozzle's face does not fix leaves the mean of a changing width in doubt: such a
+    // frame may be refused as imprecise, with a σ that covers its error.
+    if (m.status == vision::FrameStatus::kImprecise) {
+      EXPECT_LT(std::abs(m.width_px - t.width_px), 4 * m.width_sigma_px) << Describe(p);
+      continue;
+    }
     ASSERT_TRUE(m.valid()) << m.detail << " " << Describe(p);
     // Where the edges become parallel lies 0.2–1 widths below the tip: within 3 px here.
     EXPECT_LT(std::hypot(m.tip_x_px - t.tip_x_px, m.tip_y_px - t.tip_y_px), 3.0) << Describe(p);

@@ -44,6 +44,33 @@ TEST(EdgeFitTest, RecoversEdgeWithoutNoise) {
   EXPECT_NEAR(f.step, -160, 0.5);
 }
 
+// A background that slopes up to a flat object's silhouette (a lamp's gradient, a textured bed),
+// blurred by numerical convolution: the plain step trades the slope's bend at the edge against the
+// edge's position; the two-slope step describes it.
+TEST(EdgeFitTest, TwoSlopeStepFindsAnEdgeWhoseBackgroundSlopesOnOneSide) {
+  const double edge = 0.3, blur = 2.0, gradient = 4.0;  // grey levels per px, left of the edge
+  const auto scene = [&](double t) { return t < edge ? 60 + gradient * (t - edge) : 200.0; };
+  std::vector<EdgeSample> s;
+  for (double u = -14; u <= 14; u += 0.25) {
+    double sum = 0, weight = 0;
+    for (double t = u - 6 * blur; t <= u + 6 * blur; t += 0.01) {
+      const double w = std::exp(-0.5 * (t - u) * (t - u) / (blur * blur));
+      sum += w * scene(t);
+      weight += w;
+    }
+    s.push_back({static_cast<float>(u), static_cast<float>(sum / weight)});
+  }
+  const EdgeFit plain = FitBlurredStep(s, 0.0, 1.5, 0.0);
+  const EdgeFit two = FitTwoSlopeStep(s, 0.0, 1.5, 0.0);
+  ASSERT_TRUE(plain.converged && two.converged);
+  EXPECT_GT(std::abs(plain.edge_px - edge), 0.1);
+  EXPECT_NEAR(two.edge_px, edge, 0.01);
+  EXPECT_NEAR(two.sigma_px, blur, 0.02);
+  EXPECT_NEAR(two.slope_change_per_px, -gradient, 0.05);
+  // The fitted model reproduces the profile.
+  for (const EdgeSample& smp : s) EXPECT_NEAR(EdgeModelValue(two, smp.u_px), smp.value, 0.2);
+}
+
 TEST(EdgeFitTest, ReportedSigmaMatchesScatter) {
   // The edge's standard error from the residuals should match its spread over noisy repeats.
   std::mt19937 rng(7);

@@ -260,8 +260,20 @@ TEST(StrandMeasureTest, ShadedStrandMeasuredAtItsSilhouette) {
   EXPECT_LE(std::abs(shaded.mean), 0.1);
   StrandMeasureOptions plain;
   plain.shading = false;
+  plain.max_sigma_px = 1e9;  // see the plain step's width, however doubtful
   const ErrorStats biased = Measure(p, 8, plain);
   EXPECT_LT(biased.mean, -0.4);  // the issue saw −0.75 px at ambient 0.5
+  // The plain step's residuals show what it misses: its σ covers the bias, and by default it is
+  // no valid width.
+  for (int i = 0; i < 8; ++i) {
+    FrameTruth t;
+    const cv::Mat img = RenderFrame(p, i, &t);
+    const StrandMeasurement m = MeasureStrand(img, plain);
+    EXPECT_LT(std::abs(m.width_px - t.width_px), 4 * m.width_sigma_px) << i;
+    plain.max_sigma_px = StrandMeasureOptions{}.max_sigma_px;
+    EXPECT_EQ(MeasureStrand(img, plain).status, FrameStatus::kImprecise) << i;
+    plain.max_sigma_px = 1e9;
+  }
 }
 
 // Shaded so deeply that the silhouette is barely brighter than the background (ambient 0.4 of a
