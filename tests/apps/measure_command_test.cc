@@ -412,6 +412,55 @@ TEST(MeasureCommandTest, LargeFramesAreBoundedOrRefused) {
   EXPECT_NE(r.err.find("claims.png: frames are 40000x40000"), std::string::npos) << r.err;
 }
 
+// One 12000x12000 JPEG inside an MJPEG stream of small frames: that frame is reported (its size in
+// its row) and skipped, the others measured; `watch` goes on too. A stream whose frames together
+// would take too much memory ends with one line naming the right sizes, never an abort.
+TEST(MeasureCommandTest, AnOversizedFrameInsideAVideoIsSkipped) {
+  const fs::path d = FreshDir("oversized_frame");
+  ASSERT_EQ(RunCli("render --out " + (d / "a.avi").string() + " --frames 4 " + kSmall, d).exit_code,
+            0);
+  const std::string ffmpeg = "ffmpeg -nostdin -v error -y ";
+  ASSERT_EQ(std::system((ffmpeg + "-i " + (d / "a.avi").string() + " -c:v copy -f mjpeg " +
+                         (d / "a.mjpeg").string())
+                            .c_str()),
+            0);
+  ASSERT_EQ(std::system((ffmpeg + "-f lavfi -i color=c=gray:s=12000x12000 -frames:v 1 -f mjpeg " +
+                         (d / "big.jpg").string())
+                            .c_str()),
+            0);
+  const std::string small = ReadFile((d / "a.mjpeg").string());
+  WriteFileAtomically((d / "raw.mjpeg").string(),
+                      small + ReadFile((d / "big.jpg").string()) + small);
+  ASSERT_EQ(std::system((ffmpeg + "-f mjpeg -framerate 25 -i " + (d / "raw.mjpeg").string() +
+                         " -c:v copy -r 25 " + (d / "v.avi").string())
+                            .c_str()),
+            0);
+  RunResult r =
+      RunCli("measure " + (d / "v.avi").string() + " --out-frames " + (d / "f.csv").string(), d);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  const CsvTable t = ParseCsv(ReadFile((d / "f.csv").string()), "f.csv");
+  ASSERT_EQ(t.rows.size(), 9u) << r.err;
+  for (const auto& row : t.rows) {
+    const bool big = row[t.Column("frame")] == "4";
+    EXPECT_EQ(row[t.Column("valid")], big ? "0" : "1") << row[t.Column("detail")];
+    if (!big) continue;
+    EXPECT_EQ(row[t.Column("reason")], "unreadable");
+    EXPECT_NE(row[t.Column("detail")].find("12000x12000"), std::string::npos)
+        << row[t.Column("detail")];
+  }
+  r = RunCli("watch " + (d / "v.avi").string() + " --log " + (d / "w.log").string(), d);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("terminate"), std::string::npos) << r.err;
+  // Sixteen reference frames of 4096x4096: ends with one line, the frames' own size in it.
+  const std::string refs16 = std::string(CLOGSCOPE_TESTDATA_DIR) + "/video/refs16_4096.mp4";
+  r = RunCli("watch " + refs16 + " --log " + (d / "w2.log").string(), d);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("refs16_4096.mp4: decoding would hold over 128 MB of frames (4096x4096"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("terminate"), std::string::npos) << r.err;
+}
+
 TEST(MeasureCommandTest, BandOptionsResolveFromMicronsOrPixels) {
   MeasureCommandOptions o;
   o.inputs = {"x"};
