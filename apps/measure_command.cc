@@ -36,6 +36,42 @@ bool WritesToStdout(const MeasureCommandOptions& o) {
   return o.out_frames.empty() || o.out_frames == "-";
 }
 
+// The options of the two modes that do not go with the other, and why; an option in neither list
+// goes with both.
+const std::map<std::string, std::string>& ManifestOnlyOptions() {
+  static const std::map<std::string, std::string> kOptions = {
+      {"--out", "the folder for a manifest's tables (use --out-frames for inputs)"},
+      {"--samples", "frames per step of a manifest"},
+      {"--jobs", "steps of a manifest measured at once"},
+      {"--resume", "keeps the steps of a manifest measured before"}};
+  return kOptions;
+}
+const std::map<std::string, std::string>& InputsOnlyOptions() {
+  static const std::string kSpeed = "speeds of a manifest's steps come from its feedstock: block";
+  static const std::map<std::string, std::string> kOptions = {
+      {"--out-frames", "a manifest's tables go to --out"},
+      {"--overlay-every", "a manifest's overlays are three sampled frames per step"},
+      {"--no-outlier-flags", "a manifest's steps leave outliers out by their MAD"},
+      {"--speed", kSpeed},
+      {"--gear-roi", kSpeed},
+      {"--gear-centre", kSpeed},
+      {"--gear-radius-mm", kSpeed},
+      {"--speed-max-shift-px", kSpeed},
+      {"--speed-smooth-px", kSpeed}};
+  return kOptions;
+}
+
+// Refuses, naming it, the first option given that does not go with the mode chosen.
+void RefuseOtherModesOptions(const CLI::App& app, bool manifest) {
+  const auto& other = manifest ? InputsOnlyOptions() : ManifestOnlyOptions();
+  for (const CLI::Option* option : app.get_options()) {
+    const auto it = other.find(option->get_name());
+    if (option->count() == 0 || it == other.end()) continue;
+    throw std::invalid_argument(fmt::format("{}: {} --manifest: {}", it->first,
+                                            manifest ? "not with" : "only with", it->second));
+  }
+}
+
 }  // namespace
 
 const std::vector<std::string>& FrameCsvColumns() { return pipeline::FrameColumns(); }
@@ -90,28 +126,12 @@ void MeasureCommandOptions::ResolveBand() {
   if (scale_um_per_px && calibration) {
     throw std::invalid_argument("give either --scale-um-per-px or --calib, not both");
   }
-  if ((band_start_um || band_height_um) && !scale_um_per_px && !calibration) {
-    throw std::invalid_argument(
-        "--band-start-um/--band-height-um need --scale-um-per-px or --calib (or give the band in "
-        "px)");
-  }
-  if ((band_start_um && band_start_px) || (band_height_um && band_height_px)) {
-    throw std::invalid_argument("give the band either in µm or in px, not both");
-  }
-  const double scale = calibration ? calibration->scale_um_per_px
-                                   : scale_um_per_px.value_or(vision::kNominalScaleUmPerPx);
-  const vision::BandPx band = vision::DefaultBand(strand.target, scale);
-  strand.band_start_px = band_start_px   ? *band_start_px
-                         : band_start_um ? *band_start_um / scale
-                                         : band.start_px;
-  strand.band_height_px = band_height_px   ? *band_height_px
-                          : band_height_um ? *band_height_um / scale
-                                           : band.height_px;
-  if (!(strand.band_start_px >= 0)) throw std::invalid_argument("band start: must not be negative");
-  if (!(strand.band_height_px >= 4)) {
-    throw std::invalid_argument(
-        fmt::format("band height {:.2f} px: must be at least 4 px", strand.band_height_px));
-  }
+  const BandResolution r =
+      ResolveBandPx(band, strand.target,
+                    calibration ? std::optional(calibration->scale_um_per_px) : scale_um_per_px);
+  if (r.problem != BandProblem::kNone) throw std::invalid_argument(BandProblemText(r));
+  strand.band_start_px = r.band.start_px;
+  strand.band_height_px = r.band.height_px;
 }
 
 MeasureSummary MeasureInputs(MeasureCommandOptions o) {
@@ -345,11 +365,19 @@ int RunMeasure(int argc, char** argv) {
       "70,134,213,213 --gear-radius-mm 2\n"
       "Exit status: 0 all inputs read, 2 some inputs unreadable, 1 nothing measured.");
   if (!ParseCommandLine(app, argc, argv)) return 0;  // --help printed
+  RefuseOtherModesOptions(app, !exp.manifest.empty());
   if (!exp.manifest.empty()) {
     if (!o.inputs.empty())
       throw std::invalid_argument("give either inputs or --manifest, not both");
+    ApplyMeasurementOptions(app, text, &o);
     exp.scale_um_per_px = o.scale_um_per_px;
     exp.calib_path = text.calib_path;
+    exp.strand = o.strand;
+    exp.roi_given = !text.roi.empty();
+    exp.polarity_given = app.count("--polarity") > 0;
+    exp.target_given = app.count("--target") > 0;
+    exp.band = o.band;
+    exp.overlay_dir = o.overlay_dir;
     if (samples) exp.samples = samples;
     return RunExperimentCli(exp);
   }

@@ -294,7 +294,8 @@ StepResult MeasureStep(const StepSpec& spec, const ExperimentOptions& o, int dec
 std::vector<StepResult> RunExperiment(const Manifest& m, const ExperimentOptions& o) {
   std::string why;
   if (!o.Validate(&why)) throw std::invalid_argument(why);
-  const fs::path out(o.out_dir), steps_dir = out / "steps", overlay_dir = out / "overlays";
+  const fs::path out(o.out_dir), steps_dir = out / "steps";
+  const fs::path overlay_dir = o.overlay_dir.empty() ? out / "overlays" : fs::path(o.overlay_dir);
   std::error_code ec;
   fs::create_directories(steps_dir, ec);
   fs::create_directories(overlay_dir, ec);

@@ -412,6 +412,64 @@ TEST(MeasureCommandTest, LargeFramesAreBoundedOrRefused) {
   EXPECT_NE(r.err.find("claims.png: frames are 40000x40000"), std::string::npos) << r.err;
 }
 
+// `measure --manifest` measures with the options given beside it (as the step files record them),
+// and refuses, in one line, those that mean nothing for a manifest; none is silently dropped.
+TEST(MeasureCommandTest, ManifestModeTakesTheMeasurementOptions) {
+  const fs::path d = FreshDir("manifest_options");
+  ASSERT_EQ(RunCli("render --out " + (d / "v.mp4").string() + " --frames 8 " + kSmall, d).exit_code,
+            0);
+  WriteFileAtomically((d / "m.yaml").string(),
+                      "samples: 2\nroi: 0,0,640,360\nsteps:\n"
+                      "  - {step: 1, temperature_c: 200, video: v.mp4}\n");
+  const std::string manifest = "measure --manifest " + (d / "m.yaml").string() + " --out ";
+  const auto spec_of = [&](const fs::path& out) {
+    return nlohmann::json::parse(ReadFile((out / "steps" / "step_0001.json").string()))["spec"];
+  };
+  // In px, with the caliper, blur, contrast and shading options and an overlay folder.
+  const fs::path a = d / "a";
+  RunResult r = RunCli(manifest + a.string() +
+                           " --scale-um-per-px 3 --roi 10,20,600,330 --polarity dark "
+                           "--band-start-px 10 --band-height-px 40 --caliper-px 3 "
+                           "--max-blur-px 5 --min-contrast 20 --no-shading --overlay " +
+                           (d / "ov").string(),
+                       d);
+  ASSERT_TRUE(fs::exists(a / "steps" / "step_0001.json")) << r.err;
+  nlohmann::json spec = spec_of(a);
+  EXPECT_EQ(spec["roi"], nlohmann::json({10, 20, 600, 330}));
+  EXPECT_EQ(spec["polarity"], static_cast<int>(vision::Polarity::kDarkOnBright));
+  EXPECT_EQ(spec["target"], static_cast<int>(vision::MeasureTarget::kStrand));
+  EXPECT_EQ(spec["band_px"], nlohmann::json({10.0, 40.0}));
+  EXPECT_EQ(spec["caliper_spacing_px"], 3.0);
+  EXPECT_EQ(spec["max_blur_px"], 5.0);
+  EXPECT_NEAR(spec["min_contrast_fraction"].get<double>(), 20 / 255.0, 1e-12);
+  EXPECT_EQ(spec["shading"], false);
+  EXPECT_TRUE(fs::is_directory(d / "ov"));
+  EXPECT_FALSE(fs::exists(a / "overlays") && !fs::is_empty(a / "overlays"));
+  // In µm through the scale, and the target; the manifest's ROI stays when none is given.
+  const fs::path b = d / "b";
+  r = RunCli(manifest + b.string() +
+                 " --scale-um-per-px 2 --band-start-um 30 --band-height-um 120 --target filament",
+             d);
+  ASSERT_TRUE(fs::exists(b / "steps" / "step_0001.json")) << r.err;
+  spec = spec_of(b);
+  EXPECT_EQ(spec["roi"], nlohmann::json({0, 0, 640, 360}));
+  EXPECT_EQ(spec["target"], static_cast<int>(vision::MeasureTarget::kFilament));
+  EXPECT_EQ(spec["band_px"], nlohmann::json({15.0, 60.0}));
+  // Options of the per-frame mode: refused by name, nothing measured.
+  for (const std::string option :
+       {"--speed", "--out-frames f.csv", "--overlay-every 2", "--no-outlier-flags",
+        "--gear-roi 1,2,30,40", "--gear-radius-mm 2", "--speed-max-shift-px 9"}) {
+    const fs::path c = d / "c";
+    r = RunCli(manifest + c.string() + " " + option, d);
+    EXPECT_EQ(r.exit_code, 1) << option;
+    EXPECT_NE(r.err.find(option.substr(0, option.find(' ')) + ": "), std::string::npos)
+        << option << ": " << r.err;
+    EXPECT_NE(r.err.find("--manifest"), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_FALSE(fs::exists(c / "steps")) << option;
+  }
+}
+
 // One 12000x12000 JPEG inside an MJPEG stream of small frames: that frame is reported (its size in
 // its row) and skipped, the others measured; `watch` goes on too. A stream whose frames together
 // would take too much memory ends with one line naming the right sizes, never an abort.
@@ -471,10 +529,10 @@ TEST(MeasureCommandTest, BandOptionsResolveFromMicronsOrPixels) {
   o.ResolveBand();
   EXPECT_NEAR(o.strand.band_start_px, 20.0, 1e-12);
   EXPECT_NEAR(o.strand.band_height_px, 60.0, 1e-12);
-  o.band_height_px = 30;
+  o.band.height_px = 30;
   o.ResolveBand();
   EXPECT_NEAR(o.strand.band_height_px, 30.0, 1e-12);
-  o.band_height_um = 100;
+  o.band.height_um = 100;
   EXPECT_THROW(o.ResolveBand(), std::invalid_argument);
 }
 

@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
@@ -104,6 +105,20 @@ TEST_F(RunCommandTest, BadManifestsAreOneLineErrors) {
   r = RunCli("run " + (dir_ / "nope.yaml").string() + " --out " + (dir_ / "o2").string(), dir_);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("nope.yaml"), std::string::npos) << r.err;
+  // A band in µm without any pixel scale: refused as `measure` refuses it (one line from one
+  // home), not measured at an assumed 3 µm/px.
+  WriteFileAtomically(
+      (dir_ / "band.yaml").string(),
+      "samples: 5\nband_height_um: 90\nsteps:\n  - {step: 1, temperature_c: 220, video: s1.mp4}\n");
+  r = RunCli("run " + (dir_ / "band.yaml").string() + " --out " + (dir_ / "o4").string(), dir_);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  const std::string band_err = "a band in µm needs a pixel scale";
+  EXPECT_NE(r.err.find("band.yaml: band_height_um: " + band_err), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "o4" / "frames.csv"));
+  r = RunCli("measure " + (dir_ / "s1.mp4").string() + " --band-start-um 50", dir_);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("--band-start-um: " + band_err), std::string::npos) << r.err;
   // One step's video is missing: the others complete, exit 2.
   WriteFileAtomically(
       (dir_ / "partial.yaml").string(),
