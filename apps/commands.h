@@ -87,6 +87,7 @@ struct MeasureSummary {
   int frames = 0;
   int valid_frames = 0;
   int overlays_written = 0;
+  int overlay_frames_held_peak = 0;  // most frames kept at once for overlays still to be drawn
   double seconds = 0;
   std::vector<std::string> errors;  // one line per input that could not be read
 };

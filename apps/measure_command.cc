@@ -14,6 +14,7 @@
 #include "apps/cli_util.h"
 #include "apps/commands.h"
 #include "apps/measure_options.h"
+#include "apps/measure_overlays.h"
 #include "apps/measure_rows.h"
 #include "calib/calibration_file.h"
 #include "common/atomic_file.h"
@@ -191,7 +192,9 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
     const bool from_video = vision::IsVideoPath(input) && !fs::is_directory(input);
     const int every = o.overlay_every > 0 ? o.overlay_every : (from_video ? kVideoOverlayEvery : 1);
     std::vector<Row> rows;
-    std::vector<std::pair<size_t, cv::Mat>> keep;  // frames to draw overlays of, by row
+    std::optional<OverlayWriter> overlays;
+    if (!o.overlay_dir.empty())
+      overlays.emplace(o.overlay_dir, from_video, o.flag_outliers, conv, &overlay_names);
     const auto ts = std::chrono::steady_clock::now();
     vision::FeedSpeedTracker speed(o.feed);  // starts afresh with every input
     std::optional<vision::GearSpeedTracker> gear;
@@ -199,14 +202,14 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
     try {
       vision::MeasureFrames(
           *source, o.strand, [&](vision::InputFrame& f, vision::StrandMeasurement& m) {
-            if (!o.overlay_dir.empty() && !f.image.empty() && f.index % every == 0) {
-              keep.emplace_back(rows.size(), f.image);
-            }
             vision::FeedSpeedSample v;
             if (o.feed_speed) v = speed.Next(f.image, f.time_s, m);
             vision::GearSpeedSample g;
             if (gear) g = gear->Next(f.image, f.time_s);
             rows.push_back({f.source, f.index, f.time_s, std::move(m), std::move(v), std::move(g)});
+            if (!overlays) return;
+            if (!f.image.empty() && f.index % every == 0) overlays->Add(rows.size() - 1, f.image);
+            overlays->WriteReady(rows, /*all=*/false);
           });
     } catch (const std::exception& e) {
       // One input that cannot be measured (its frames smaller than the ROI, a library error) is
@@ -223,7 +226,7 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
       std::vector<vision::StrandMeasurement> ms;
       ms.reserve(rows.size());
       for (auto& r : rows) ms.push_back(std::move(r.m));
-      vision::FlagWidthOutliers(ms);
+      vision::FlagWidthOutliers(ms, kOutlierHalfWindow);
       for (size_t i = 0; i < rows.size(); ++i) rows[i].m = std::move(ms[i]);
     }
     // The rows' speeds are summarised before they are written, so each row can say whether the
@@ -250,19 +253,14 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
     }
     const int valid = static_cast<int>(widths_px.size());
     table.flush();
-    for (const auto& [row, image] : keep) {
-      const std::string name =
-          (fs::path(o.overlay_dir) / OverlayName(rows[row], from_video, &overlay_names)).string();
-      try {
-        vision::WriteImageAtomically(
-            name, vision::DrawOverlay(image, rows[row].m, conv ? conv->scale_um_per_px : 0.0,
-                                      conv ? conv->edge_bias_px : 0.0));
-        ++summary.overlays_written;
-      } catch (const std::exception& e) {
-        // Overlays are a view of the table: without them the measurement still stands.
-        spdlog::warn("overlays stopped: {}", e.what());
-        summary.errors.push_back(e.what());
-        break;
+    if (overlays) {
+      overlays->WriteReady(rows, /*all=*/true);
+      summary.overlays_written += overlays->written();
+      summary.overlay_frames_held_peak =
+          std::max(summary.overlay_frames_held_peak, overlays->held_peak());
+      if (!overlays->error().empty()) {
+        spdlog::warn("overlays stopped: {}", overlays->error());
+        summary.errors.push_back(overlays->error());
       }
     }
     ++summary.inputs_ok;

@@ -470,6 +470,36 @@ TEST(MeasureCommandTest, ManifestModeTakesTheMeasurementOptions) {
   }
 }
 
+// Overlays are drawn and written as the frames go by: the frames waiting for theirs stay few
+// (those whose width-outlier verdict awaits the following frames), however long the video.
+TEST(MeasureCommandTest, OverlaysDoNotHoldTheVideo) {
+  const fs::path d = FreshDir("overlay_memory");
+  RenderCommandOptions r;
+  r.scene.width_px = 320;
+  r.scene.height_px = 240;
+  r.scene.tip_x_px = 160;
+  r.scene.tip_y_px = 60;
+  r.scene.strand_width_um = 150;
+  r.frames = 90;
+  r.out = (d / "v.mp4").string();
+  RenderToFiles(r);
+  MeasureCommandOptions o;
+  o.inputs = {r.out};
+  o.out_frames = (d / "frames.csv").string();
+  o.overlay_dir = (d / "ov").string();
+  o.overlay_every = 1;
+  for (const bool flags : {true, false}) {
+    o.flag_outliers = flags;
+    const MeasureSummary s = MeasureInputs(o);
+    EXPECT_EQ(s.frames, 90);
+    EXPECT_EQ(s.overlays_written, 90);
+    // At most the outlier window's half (25 frames) and the frame in hand; 1 without flags.
+    EXPECT_LE(s.overlay_frames_held_peak, flags ? 26 : 1) << "flags " << flags;
+    EXPECT_GE(s.overlay_frames_held_peak, 1);
+    EXPECT_TRUE(fs::exists(d / "ov" / "v.mp4_000089.png"));
+  }
+}
+
 // One 12000x12000 JPEG inside an MJPEG stream of small frames: that frame is reported (its size in
 // its row) and skipped, the others measured; `watch` goes on too. A stream whose frames together
 // would take too much memory ends with one line naming the right sizes, never an abort.
