@@ -31,6 +31,19 @@ fs::path FreshDir(const std::string& name) { return testing::FreshDir("clogscope
 
 const std::string kSmall = "--size 640x360 --tip-x-px 320 --tip-y-px 100 ";
 
+// The kSmall scene through the typed function: `frames` frames to `out` (a folder or a video).
+std::string RenderSmall(const std::string& out, int frames) {
+  RenderCommandOptions r;
+  r.scene.width_px = 640;
+  r.scene.height_px = 360;
+  r.scene.tip_x_px = 320;
+  r.scene.tip_y_px = 100;
+  r.frames = frames;
+  r.out = out;
+  RenderToFiles(r);
+  return out;
+}
+
 TEST(MeasureCommandTest, VideoEndToEndAgainstTruth) {
   const fs::path d = FreshDir("e2e");
   ASSERT_EQ(RunCli("render --out " + (d / "v.mp4").string() + " --frames 30 --width-jitter-um 3 " +
@@ -474,17 +487,8 @@ TEST(MeasureCommandTest, ManifestModeTakesTheMeasurementOptions) {
 // (those whose width-outlier verdict awaits the following frames), however long the video.
 TEST(MeasureCommandTest, OverlaysDoNotHoldTheVideo) {
   const fs::path d = FreshDir("overlay_memory");
-  RenderCommandOptions r;
-  r.scene.width_px = 320;
-  r.scene.height_px = 240;
-  r.scene.tip_x_px = 160;
-  r.scene.tip_y_px = 60;
-  r.scene.strand_width_um = 150;
-  r.frames = 90;
-  r.out = (d / "v.mp4").string();
-  RenderToFiles(r);
   MeasureCommandOptions o;
-  o.inputs = {r.out};
+  o.inputs = {RenderSmall((d / "v.mp4").string(), 90)};
   o.out_frames = (d / "frames.csv").string();
   o.overlay_dir = (d / "ov").string();
   o.overlay_every = 1;
@@ -568,16 +572,8 @@ TEST(MeasureCommandTest, BandOptionsResolveFromMicronsOrPixels) {
 
 TEST(MeasureCommandTest, TypedFunctionWritesAtomicallyAndSummarises) {
   const fs::path d = FreshDir("typed");
-  RenderCommandOptions r;
-  r.scene.width_px = 640;
-  r.scene.height_px = 360;
-  r.scene.tip_x_px = 320;
-  r.scene.tip_y_px = 100;
-  r.frames = 3;
-  r.out = (d / "png").string();
-  RenderToFiles(r);
   MeasureCommandOptions o;
-  o.inputs = {r.out, (d / "nothing-here").string()};
+  o.inputs = {RenderSmall((d / "png").string(), 3), (d / "nothing-here").string()};
   o.out_frames = (d / "frames.csv").string();
   const MeasureSummary s = MeasureInputs(o);
   EXPECT_EQ(s.inputs_ok, 1);
