@@ -280,34 +280,40 @@ TEST_F(WatchCommandTest, AnHttpMjpegStreamFromFfmpegIsWatchedAndServed) {
 TEST_F(WatchCommandTest, BadInputGetsOneLineNamingTheProblem) {
   const fs::path d = *dir_;
   const std::string video = TinyVideo();
-  auto r = RunCli("watch /nonexistent/video.avi --scale-um-per-px 3", d);
+  std::vector<std::string> errors;  // every one must be one line
+  const auto run = [&](const std::string& args) {
+    const testing::RunResult r = RunCli(args, d);
+    errors.push_back(r.err);
+    return r;
+  };
+  auto r = run("watch /nonexistent/video.avi --scale-um-per-px 3");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("/nonexistent/video.avi"), std::string::npos) << r.err;
   // Nothing listens on the port: refused at once.
-  r = RunCli("watch http://127.0.0.1:" + std::to_string(FreePort()) + "/x --open-timeout-s 2", d);
+  r = run("watch http://127.0.0.1:" + std::to_string(FreePort()) + "/x --open-timeout-s 2");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("cannot open"), std::string::npos) << r.err;
   {
     // Something listens but never sends a frame.
     Listener silent;
-    r = RunCli("watch tcp://127.0.0.1:" + std::to_string(silent.port) + " --open-timeout-s 1.5", d);
+    r = run("watch tcp://127.0.0.1:" + std::to_string(silent.port) + " --open-timeout-s 1.5");
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.err.find("--open-timeout-s"), std::string::npos) << r.err;
     // The HTTP port is taken.
-    r = RunCli("watch " + video + " --http 127.0.0.1:" + std::to_string(silent.port), d);
+    r = run("watch " + video + " --http 127.0.0.1:" + std::to_string(silent.port));
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.err.find("--http"), std::string::npos) << r.err;
   }
-  r = RunCli("watch " + video + " --warn-pct -3 --clog-pct -2", d);
+  r = run("watch " + video + " --warn-pct -3 --clog-pct -2");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--clog-pct"), std::string::npos) << r.err;
-  r = RunCli("watch " + video + " --baseline-um 400", d);
+  r = run("watch " + video + " --baseline-um 400");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--baseline-um"), std::string::npos) << r.err;
-  r = RunCli("watch " + video + " --extruder direct-pla", d);
+  r = run("watch " + video + " --extruder direct-pla");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--extruder"), std::string::npos) << r.err;
-  for (const std::string& line : {r.err}) EXPECT_EQ(std::count(line.begin(), line.end(), '\n'), 1);
+  for (const std::string& e : errors) EXPECT_EQ(std::count(e.begin(), e.end(), '\n'), 1) << e;
 }
 
 }  // namespace
