@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "apps/band.h"
 #include "calib/pixel_scale.h"
 #include "model/fit.h"
 #include "model/lag_io.h"
@@ -64,12 +65,11 @@ struct MeasureCommandOptions {
   std::vector<std::string> inputs;                     // images, directories of images, videos
   std::optional<double> scale_um_per_px;               // converts widths to µm when given
   std::optional<calib::ScaleCalibration> calibration;  // or a calibration (--calib): scale and bias
-  std::optional<double> band_start_um, band_height_um;  // need a scale
-  std::optional<double> band_start_px, band_height_px;  // defaults: the µm values at 3 µm/px
-  vision::StrandMeasureOptions strand;                  // band fields are filled from the above
-  std::string out_frames;   // per-frame CSV; empty or "-": standard output
-  std::string overlay_dir;  // empty: no overlays
-  int overlay_every = 0;    // 0: every image, every 25th video frame
+  BandRequest band;                     // in µm (needs a scale) or px; default: DefaultBand
+  vision::StrandMeasureOptions strand;  // band fields are filled from the above
+  std::string out_frames;               // per-frame CSV; empty or "-": standard output
+  std::string overlay_dir;              // empty: no overlays
+  int overlay_every = 0;                // 0: every image, every 25th video frame
   bool flag_outliers = true;
   bool feed_speed = false;  // filament target: feed speed between consecutive video frames
   vision::FeedSpeedOptions feed;
@@ -87,6 +87,7 @@ struct MeasureSummary {
   int frames = 0;
   int valid_frames = 0;
   int overlays_written = 0;
+  int overlay_frames_held_peak = 0;  // most frames kept at once for overlays still to be drawn
   double seconds = 0;
   std::vector<std::string> errors;  // one line per input that could not be read
 };
@@ -265,6 +266,13 @@ struct ExperimentCommandOptions {
   std::optional<double> scale_um_per_px;  // overrides the manifest's scale or calibration
   std::string calib_path;
   bool full_pipeline = false;  // run: calibrate when the manifest says, measure, predict, summary
+  // How frames are measured (`measure --manifest` takes them from its command line): the caliper,
+  // blur, contrast and shading settings as they are; the ROI, polarity and target when given, else
+  // the manifest's; each part of the band asked for here replaces the manifest's.
+  vision::StrandMeasureOptions strand;
+  bool roi_given = false, polarity_given = false, target_given = false;
+  BandRequest band;
+  std::string overlay_dir;  // empty: OUT/overlays
   bool Validate(std::string* why) const;
 };
 

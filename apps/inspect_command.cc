@@ -75,6 +75,8 @@ bool InspectCommandOptions::Validate(std::string* why) const {
     *why = fmt::format("--frame {}: must not be negative", frame);
   else if (out_png.empty())
     *why = "--out must name a PNG file";
+  else if (vision::LowerExtension(out_png) != ".png")
+    *why = "--out " + out_png + ": must end in .png (the annotated frame is a PNG)";
   else
     return strand.Validate(why);
   return false;

@@ -14,6 +14,7 @@
 #include "apps/cli_util.h"
 #include "apps/commands.h"
 #include "apps/measure_options.h"
+#include "apps/measure_overlays.h"
 #include "apps/measure_rows.h"
 #include "calib/calibration_file.h"
 #include "common/atomic_file.h"
@@ -34,6 +35,42 @@ constexpr int kVideoOverlayEvery = 25;
 
 bool WritesToStdout(const MeasureCommandOptions& o) {
   return o.out_frames.empty() || o.out_frames == "-";
+}
+
+// The options of the two modes that do not go with the other, and why; an option in neither list
+// goes with both.
+const std::map<std::string, std::string>& ManifestOnlyOptions() {
+  static const std::map<std::string, std::string> kOptions = {
+      {"--out", "the folder for a manifest's tables (use --out-frames for inputs)"},
+      {"--samples", "frames per step of a manifest"},
+      {"--jobs", "steps of a manifest measured at once"},
+      {"--resume", "keeps the steps of a manifest measured before"}};
+  return kOptions;
+}
+const std::map<std::string, std::string>& InputsOnlyOptions() {
+  static const std::string kSpeed = "speeds of a manifest's steps come from its feedstock: block";
+  static const std::map<std::string, std::string> kOptions = {
+      {"--out-frames", "a manifest's tables go to --out"},
+      {"--overlay-every", "a manifest's overlays are three sampled frames per step"},
+      {"--no-outlier-flags", "a manifest's steps leave outliers out by their MAD"},
+      {"--speed", kSpeed},
+      {"--gear-roi", kSpeed},
+      {"--gear-centre", kSpeed},
+      {"--gear-radius-mm", kSpeed},
+      {"--speed-max-shift-px", kSpeed},
+      {"--speed-smooth-px", kSpeed}};
+  return kOptions;
+}
+
+// Refuses, naming it, the first option given that does not go with the mode chosen.
+void RefuseOtherModesOptions(const CLI::App& app, bool manifest) {
+  const auto& other = manifest ? InputsOnlyOptions() : ManifestOnlyOptions();
+  for (const CLI::Option* option : app.get_options()) {
+    const auto it = other.find(option->get_name());
+    if (option->count() == 0 || it == other.end()) continue;
+    throw std::invalid_argument(fmt::format("{}: {} --manifest: {}", it->first,
+                                            manifest ? "not with" : "only with", it->second));
+  }
 }
 
 }  // namespace
@@ -90,28 +127,12 @@ void MeasureCommandOptions::ResolveBand() {
   if (scale_um_per_px && calibration) {
     throw std::invalid_argument("give either --scale-um-per-px or --calib, not both");
   }
-  if ((band_start_um || band_height_um) && !scale_um_per_px && !calibration) {
-    throw std::invalid_argument(
-        "--band-start-um/--band-height-um need --scale-um-per-px or --calib (or give the band in "
-        "px)");
-  }
-  if ((band_start_um && band_start_px) || (band_height_um && band_height_px)) {
-    throw std::invalid_argument("give the band either in µm or in px, not both");
-  }
-  const double scale = calibration ? calibration->scale_um_per_px
-                                   : scale_um_per_px.value_or(vision::kNominalScaleUmPerPx);
-  const vision::BandPx band = vision::DefaultBand(strand.target, scale);
-  strand.band_start_px = band_start_px   ? *band_start_px
-                         : band_start_um ? *band_start_um / scale
-                                         : band.start_px;
-  strand.band_height_px = band_height_px   ? *band_height_px
-                          : band_height_um ? *band_height_um / scale
-                                           : band.height_px;
-  if (!(strand.band_start_px >= 0)) throw std::invalid_argument("band start: must not be negative");
-  if (!(strand.band_height_px >= 4)) {
-    throw std::invalid_argument(
-        fmt::format("band height {:.2f} px: must be at least 4 px", strand.band_height_px));
-  }
+  const BandResolution r =
+      ResolveBandPx(band, strand.target,
+                    calibration ? std::optional(calibration->scale_um_per_px) : scale_um_per_px);
+  if (r.problem != BandProblem::kNone) throw std::invalid_argument(BandProblemText(r));
+  strand.band_start_px = r.band.start_px;
+  strand.band_height_px = r.band.height_px;
 }
 
 MeasureSummary MeasureInputs(MeasureCommandOptions o) {
@@ -171,7 +192,9 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
     const bool from_video = vision::IsVideoPath(input) && !fs::is_directory(input);
     const int every = o.overlay_every > 0 ? o.overlay_every : (from_video ? kVideoOverlayEvery : 1);
     std::vector<Row> rows;
-    std::vector<std::pair<size_t, cv::Mat>> keep;  // frames to draw overlays of, by row
+    std::optional<OverlayWriter> overlays;
+    if (!o.overlay_dir.empty())
+      overlays.emplace(o.overlay_dir, from_video, o.flag_outliers, conv, &overlay_names);
     const auto ts = std::chrono::steady_clock::now();
     vision::FeedSpeedTracker speed(o.feed);  // starts afresh with every input
     std::optional<vision::GearSpeedTracker> gear;
@@ -179,14 +202,14 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
     try {
       vision::MeasureFrames(
           *source, o.strand, [&](vision::InputFrame& f, vision::StrandMeasurement& m) {
-            if (!o.overlay_dir.empty() && !f.image.empty() && f.index % every == 0) {
-              keep.emplace_back(rows.size(), f.image);
-            }
             vision::FeedSpeedSample v;
             if (o.feed_speed) v = speed.Next(f.image, f.time_s, m);
             vision::GearSpeedSample g;
             if (gear) g = gear->Next(f.image, f.time_s);
             rows.push_back({f.source, f.index, f.time_s, std::move(m), std::move(v), std::move(g)});
+            if (!overlays) return;
+            if (!f.image.empty() && f.index % every == 0) overlays->Add(rows.size() - 1, f.image);
+            overlays->WriteReady(rows, /*all=*/false);
           });
     } catch (const std::exception& e) {
       // One input that cannot be measured (its frames smaller than the ROI, a library error) is
@@ -203,7 +226,7 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
       std::vector<vision::StrandMeasurement> ms;
       ms.reserve(rows.size());
       for (auto& r : rows) ms.push_back(std::move(r.m));
-      vision::FlagWidthOutliers(ms);
+      vision::FlagWidthOutliers(ms, kOutlierHalfWindow);
       for (size_t i = 0; i < rows.size(); ++i) rows[i].m = std::move(ms[i]);
     }
     // The rows' speeds are summarised before they are written, so each row can say whether the
@@ -230,19 +253,14 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
     }
     const int valid = static_cast<int>(widths_px.size());
     table.flush();
-    for (const auto& [row, image] : keep) {
-      const std::string name =
-          (fs::path(o.overlay_dir) / OverlayName(rows[row], from_video, &overlay_names)).string();
-      try {
-        vision::WriteImageAtomically(
-            name, vision::DrawOverlay(image, rows[row].m, conv ? conv->scale_um_per_px : 0.0,
-                                      conv ? conv->edge_bias_px : 0.0));
-        ++summary.overlays_written;
-      } catch (const std::exception& e) {
-        // Overlays are a view of the table: without them the measurement still stands.
-        spdlog::warn("overlays stopped: {}", e.what());
-        summary.errors.push_back(e.what());
-        break;
+    if (overlays) {
+      overlays->WriteReady(rows, /*all=*/true);
+      summary.overlays_written += overlays->written();
+      summary.overlay_frames_held_peak =
+          std::max(summary.overlay_frames_held_peak, overlays->held_peak());
+      if (!overlays->error().empty()) {
+        spdlog::warn("overlays stopped: {}", overlays->error());
+        summary.errors.push_back(overlays->error());
       }
     }
     ++summary.inputs_ok;
@@ -345,11 +363,19 @@ int RunMeasure(int argc, char** argv) {
       "70,134,213,213 --gear-radius-mm 2\n"
       "Exit status: 0 all inputs read, 2 some inputs unreadable, 1 nothing measured.");
   if (!ParseCommandLine(app, argc, argv)) return 0;  // --help printed
+  RefuseOtherModesOptions(app, !exp.manifest.empty());
   if (!exp.manifest.empty()) {
     if (!o.inputs.empty())
       throw std::invalid_argument("give either inputs or --manifest, not both");
+    ApplyMeasurementOptions(app, text, &o);
     exp.scale_um_per_px = o.scale_um_per_px;
     exp.calib_path = text.calib_path;
+    exp.strand = o.strand;
+    exp.roi_given = !text.roi.empty();
+    exp.polarity_given = app.count("--polarity") > 0;
+    exp.target_given = app.count("--target") > 0;
+    exp.band = o.band;
+    exp.overlay_dir = o.overlay_dir;
     if (samples) exp.samples = samples;
     return RunExperimentCli(exp);
   }

@@ -11,11 +11,11 @@ void AddMeasurementOptions(CLI::App& app, MeasureCommandOptions* o, MeasureCliTe
   app.add_option("--calib", text->calib_path,
                  "Calibration file from clogscope calibrate (scale and edge bias)");
   app.add_option("--roi", text->roi, "Search only inside x,y,w,h (px)");
-  app.add_option("--band-start-um", o->band_start_um, "Band start below the tip (default 50 µm)");
-  app.add_option("--band-height-um", o->band_height_um, "Band height (default 150 µm)");
-  app.add_option("--band-start-px", o->band_start_px,
+  app.add_option("--band-start-um", o->band.start_um, "Band start below the tip (default 50 µm)");
+  app.add_option("--band-height-um", o->band.height_um, "Band height (default 150 µm)");
+  app.add_option("--band-start-px", o->band.start_px,
                  "Band start in px (default 50 µm at 3 µm/px)");
-  app.add_option("--band-height-px", o->band_height_px,
+  app.add_option("--band-height-px", o->band.height_px,
                  "Band height in px (default 150 µm at 3 µm/px)");
   app.add_option("--caliper-px", o->strand.caliper_spacing_px, "Caliper thickness along the axis")
       ->capture_default_str();

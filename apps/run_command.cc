@@ -168,7 +168,9 @@ pipeline::FeedstockOptions FeedstockOptionsFor(const pipeline::Manifest& m,
   }
   fo.strand.target = vision::MeasureTarget::kFilament;
   const vision::BandPx band =
-      vision::DefaultBand(fo.strand.target, fo.conversion ? fo.conversion->scale_um_per_px : 3.0);
+      ResolveBandPx({}, fo.strand.target,
+                    fo.conversion ? std::optional(fo.conversion->scale_um_per_px) : std::nullopt)
+          .band;
   fo.strand.band_start_px = band.start_px;
   fo.strand.band_height_px = band.height_px;
   const auto where = [&](const std::string& key, const std::string& text) {
@@ -249,13 +251,23 @@ ExperimentReport RunExperimentCommand(const ExperimentCommandOptions& o,
   eo.out_dir = o.out_dir;
   eo.conversion = rep.conversion;
   eo.cancel = cancel;
-  if (!m.roi.empty()) eo.strand.roi = ParseRoi(m.roi);
-  eo.strand.polarity = vision::ParsePolarity(m.polarity);
-  eo.strand.target = vision::ParseMeasureTarget(m.target);
-  const double scale = rep.conversion ? rep.conversion->scale_um_per_px : 3.0;
-  const vision::BandPx band = vision::DefaultBand(eo.strand.target, scale);
-  eo.strand.band_start_px = m.band_start_um ? *m.band_start_um / scale : band.start_px;
-  eo.strand.band_height_px = m.band_height_um ? *m.band_height_um / scale : band.height_px;
+  eo.overlay_dir = o.overlay_dir;
+  // The command line's measurement settings over the manifest's.
+  eo.strand = o.strand;
+  if (!o.roi_given) eo.strand.roi = m.roi.empty() ? cv::Rect() : ParseRoi(m.roi);
+  if (!o.polarity_given) eo.strand.polarity = vision::ParsePolarity(m.polarity);
+  if (!o.target_given) eo.strand.target = vision::ParseMeasureTarget(m.target);
+  BandRequest manifest_band;
+  manifest_band.start_um = m.band_start_um;
+  manifest_band.height_um = m.band_height_um;
+  manifest_band.start_um_name = m.path + ": band_start_um";
+  manifest_band.height_um_name = m.path + ": band_height_um";
+  const BandResolution band =
+      ResolveBandPx(BandOver(manifest_band, o.band), eo.strand.target,
+                    rep.conversion ? std::optional(rep.conversion->scale_um_per_px) : std::nullopt);
+  if (band.problem != BandProblem::kNone) throw std::invalid_argument(BandProblemText(band));
+  eo.strand.band_start_px = band.band.start_px;
+  eo.strand.band_height_px = band.band.height_px;
   if (m.feedstock.enabled) eo.feedstock = FeedstockOptionsFor(m, rep.conversion, eo.samples);
   Progress progress(static_cast<int>(m.steps.size()));
   eo.on_step = [&](const pipeline::StepResult& r, int done, int) { progress.Step(r, done); };

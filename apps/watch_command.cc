@@ -148,7 +148,7 @@ int RunWatch(int argc, char** argv) {
       "  clogscope watch replay.mp4 --realtime --scale-um-per-px 3 --on-alert \\\n"
       "      'curl -s -X POST http://printer.local/printer/print/pause'\n"
       "Exit status: 0 after Ctrl-C, the file's end or --duration-s; 1 when nothing could be "
-      "watched.");
+      "watched or the source failed.");
   if (!ParseCommandLine(app, argc, argv)) return 0;
   ApplyMeasurementOptions(app, text, &o.measure);
   g_stop_watch.store(false);
@@ -170,6 +170,7 @@ int RunWatch(int argc, char** argv) {
       "final level {}; latency median {:.1f} ms, p95 {:.1f} ms",
       s.ended_because, s.frames, s.valid_frames, s.skipped_frames, s.reconnects, s.level_changes,
       pipeline::WatchLevelName(s.final_level), s.latency_median_ms, s.latency_p95_ms);
+  if (!s.error.empty()) throw std::invalid_argument(s.error);
   return 0;
 }
 

@@ -3,7 +3,6 @@
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <httplib.h>
-#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -16,6 +15,7 @@
 #include <thread>
 
 #include "common/csv.h"
+#include "common/spawn.h"
 #include "vision/overlay.h"
 
 extern char** environ;
@@ -68,15 +68,13 @@ bool AlertCommand::Run(const pipeline::WatchStatus& s,
   add("VIBRATION_INCREASE_PCT", clog ? CsvNumber(clog->vibration_increase_pct, 3) : "");
   add("SOURCE", source);
   add("STATUS_JSON", status_json);
-  std::vector<char*> envp;
-  for (std::string& e : env) envp.push_back(e.data());
-  envp.push_back(nullptr);
-  std::string sh = "/bin/sh", dash_c = "-c", cmd = command_;
-  char* argv[] = {sh.data(), dash_c.data(), cmd.data(), nullptr};
-  pid_t pid = 0;
-  const int err = posix_spawn(&pid, "/bin/sh", nullptr, nullptr, argv, envp.data());
-  if (err != 0) {
-    *why = fmt::format("--on-alert: cannot start /bin/sh ({})", std::strerror(err));
+  SpawnOptions run;
+  run.argv = {"/bin/sh", "-c", command_};
+  run.env = std::move(env);
+  std::string spawn_why;
+  const pid_t pid = Spawn(run, &spawn_why);
+  if (pid < 0) {
+    *why = "--on-alert: " + spawn_why;
     return false;
   }
   running_.push_back(pid);
@@ -94,12 +92,8 @@ std::vector<std::string> AlertCommand::Reap(bool wait) {
         ++it;
         continue;
       }
-      if (r == *it && !(WIFEXITED(status) && WEXITSTATUS(status) == 0)) {
-        failures.push_back(
-            WIFEXITED(status)
-                ? fmt::format("--on-alert command exited with {}", WEXITSTATUS(status))
-                : std::string("--on-alert command was killed by a signal"));
-      }
+      if (r == *it && !ExitProblem(status).empty())
+        failures.push_back("--on-alert command " + ExitProblem(status));
       it = running_.erase(it);
     }
     if (!wait || running_.empty() || std::chrono::steady_clock::now() > deadline) break;

@@ -3,21 +3,23 @@
 #include <fmt/format.h>
 
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 
 #include "common/atomic_file.h"
+#include "common/spawn.h"
 
 namespace clogscope {
 namespace {
 
+// A gnuplot string literal in single quotes: gnuplot expands backquotes (`command`) inside double
+// quotes, never inside single ones, where only '' stands for a quote.
 std::string Quote(const std::string& s) {
-  std::string out = "\"";
+  std::string out = "'";
   for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
+    if (c == '\'') out += '\'';
+    if (c != '\n') out += c;
   }
-  return out + "\"";
+  return out + "'";
 }
 
 bool IsCompletePng(const std::string& path) {
@@ -36,7 +38,8 @@ bool IsCompletePng(const std::string& path) {
 }  // namespace
 
 bool PlotToPng(const PlotSpec& spec, const std::string& png_path, std::string* why) {
-  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) {
+  const std::string gnuplot = FindOnPath("gnuplot");
+  if (gnuplot.empty()) {
     *why = "gnuplot is not installed (apt-get install gnuplot-nox)";
     return false;
   }
@@ -76,8 +79,15 @@ bool PlotToPng(const PlotSpec& spec, const std::string& png_path, std::string* w
     *why = e.what();
     return false;
   }
-  const std::string cmd = "gnuplot " + Quote(script_path) + " 2>" + Quote(script_path + ".err");
-  const int rc = std::system(cmd.c_str());
+  // No shell. The script as gnuplot's argument (it stops at the first error; read from standard
+  // input it would go on and plot to standard output), never taken for an option.
+  SpawnOptions run;
+  run.argv = {gnuplot, script_path.front() == '-' ? "./" + script_path : script_path};
+  run.stdout_path = "/dev/null";
+  run.stderr_path = script_path + ".err";
+  std::string spawn_why;
+  const pid_t pid = Spawn(run, &spawn_why);
+  const bool ok = pid > 0 && WaitForExit(pid, &spawn_why);
   std::string err;
   try {
     err = ReadFile(script_path + ".err");
@@ -85,9 +95,9 @@ bool PlotToPng(const PlotSpec& spec, const std::string& png_path, std::string* w
   }
   std::remove(script_path.c_str());
   std::remove((script_path + ".err").c_str());
-  if (rc != 0 || !std::filesystem::exists(partial)) {
+  if (!ok || !std::filesystem::exists(partial)) {
     std::remove(partial.c_str());
-    *why = "gnuplot failed: " + err.substr(0, err.find('\n'));
+    *why = "gnuplot failed: " + (err.empty() ? spawn_why : err.substr(0, err.find('\n')));
     return false;
   }
   // gnuplot may exit 0 after a failed write (a full disk): only a PNG that ends in its IEND

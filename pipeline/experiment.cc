@@ -168,6 +168,9 @@ std::vector<std::string> FrameFields(const std::string& source, int frame, doubl
   const bool ok = m.valid();
   auto num = [&](double v, int d) { return ok ? CsvNumber(v, d) : std::string(); };
   auto geo = [&](double v, int d) { return m.has_geometry ? CsvNumber(v, d) : std::string(); };
+  // Empty when no strand decided it (an unread frame, none in view): "auto" is only a request.
+  const bool polarity_known =
+      m.status != vision::FrameStatus::kNoStrand && m.polarity != vision::Polarity::kAuto;
   return {source,
           std::to_string(frame),
           time_s >= 0 ? CsvNumber(time_s, 4) : "",
@@ -183,7 +186,7 @@ std::vector<std::string> FrameFields(const std::string& source, int frame, doubl
           geo(m.tip_y_px, 2),
           std::to_string(m.calipers_used),
           std::to_string(m.calipers_total),
-          m.status == vision::FrameStatus::kNoStrand ? "" : vision::PolarityName(m.polarity),
+          polarity_known ? vision::PolarityName(m.polarity) : "",
           vision::FrameStatusName(m.status),
           m.detail};
 }
@@ -291,7 +294,8 @@ StepResult MeasureStep(const StepSpec& spec, const ExperimentOptions& o, int dec
 std::vector<StepResult> RunExperiment(const Manifest& m, const ExperimentOptions& o) {
   std::string why;
   if (!o.Validate(&why)) throw std::invalid_argument(why);
-  const fs::path out(o.out_dir), steps_dir = out / "steps", overlay_dir = out / "overlays";
+  const fs::path out(o.out_dir), steps_dir = out / "steps";
+  const fs::path overlay_dir = o.overlay_dir.empty() ? out / "overlays" : fs::path(o.overlay_dir);
   std::error_code ec;
   fs::create_directories(steps_dir, ec);
   fs::create_directories(overlay_dir, ec);

@@ -49,6 +49,7 @@ struct ExperimentOptions {
   int jobs = 0;  // steps measured at once; 0 = all cores
   bool resume = false;
   std::string out_dir;
+  std::string overlay_dir;  // empty: out_dir/overlays
   int overlays_per_step = 3;
   double outlier_mad_k = 3.5;
   vision::StrandMeasureOptions strand;

@@ -83,6 +83,7 @@ struct Reader {
   std::atomic<bool> up{true};
   std::atomic<long long> reconnects{0};
   std::string ended_because;  // written by the reader before Close()
+  std::string error;          // why the source could not go on, or empty
 
   void Warn(const std::string& message) const {
     if (events.on_warning) events.on_warning(message);
@@ -98,7 +99,16 @@ struct Reader {
     vision::LiveFrame frame;
     std::string why;
     while (!stop->load()) {
-      const vision::LiveRead r = source->Next(&frame, &why);
+      vision::LiveRead r;
+      try {
+        r = source->Next(&frame, &why);
+      } catch (const std::exception& e) {
+        // A source that cannot go on (its frames would take too much memory): the watch ends
+        // with the reason; nothing thrown may leave this thread.
+        error = fmt::format("{}: {}", options.source, e.what());
+        ended_because = "the source failed";
+        break;
+      }
       if (r == vision::LiveRead::kFrame) {
         if (!queue->Push(std::move(frame), stop)) break;
         frame = vision::LiveFrame{};
@@ -212,7 +222,7 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
   vision::SceneMemory memory(options.strand.target);
   const auto started = Clock::now();
 
-  Reader reader{options, events, std::move(source), nullptr, stop, {true}, {0}, {}};
+  Reader reader{options, events, std::move(source), nullptr, stop, {true}, {0}, {}, {}};
   const bool live = reader.source->live();
   FrameQueue queue(2, /*drop_oldest=*/live || options.source_options.realtime);
   reader.queue = &queue;
@@ -271,6 +281,7 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
     if (!queue.Pop(&frame, std::chrono::milliseconds(100), &ended)) {
       if (ended) {
         summary.ended_because = reader.ended_because;
+        summary.error = reader.error;
         break;
       }
       if (!live) continue;  // a file's clock is its own: no frame, no time

@@ -70,6 +70,7 @@ struct LiveWatchSummary {
   int level_changes = 0;
   WatchLevel final_level = WatchLevel::kOk;
   std::string ended_because;  // "the file ended", "stopped", "--duration-s reached"
+  std::string error;          // the one line of a source that failed mid-way, or empty
   double latency_median_ms = 0, latency_p95_ms = 0, latency_max_ms = 0;
   double seconds = 0;
 };

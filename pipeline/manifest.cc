@@ -307,6 +307,12 @@ Manifest LoadManifest(const std::string& path) {
       throw std::invalid_argument(
           fmt::format("{}:{}: end_s must be after start_s", m.path, s.line));
     }
+    if (!s.images.empty() && (s.start_s != 0 || s.end_s >= 0 || s.settle_s != 0)) {
+      throw std::invalid_argument(fmt::format(
+          "{}:{}: step {}: start_s, end_s and settle_s need a video: a folder of images has no "
+          "frame times (a settle_s at the top reaches every step: give this one settle_s: 0)",
+          m.path, s.line, s.step));
+    }
   }
   return m;
 }

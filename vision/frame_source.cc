@@ -71,6 +71,7 @@ class VideoSource : public FrameSource {
                                      "{} frames missing ({} to {}): damaged data or a jump of "
                                      "{:.6g} s in the timestamps",
                                      missing, next_index_, d.index - 1, d.time_s - bad.time_s);
+      if (!d.skipped_reason.empty()) bad.error += " (" + d.skipped_reason + ")";
       pending_.push_back(std::move(bad));
     }
     InputFrame good;

@@ -30,6 +30,9 @@ struct FrameMemory {
   std::atomic<size_t> held_bytes{0};
   std::atomic<size_t> peak_bytes{0};
   std::atomic<bool> over{false};
+  // The buffer refused: its frame's size, its bytes and those held when it was asked for.
+  std::atomic<int> refused_width{0}, refused_height{0};
+  std::atomic<size_t> refused_bytes{0}, refused_held_bytes{0};
 };
 
 struct VideoDecoder::Impl {
@@ -119,6 +122,10 @@ int CountedGetBuffer(AVCodecContext* codec, AVFrame* frame, int flags) {
   for (AVBufferRef* buf : frame->buf) bytes += buf ? buf->size : 0;
   for (int i = 0; i < frame->nb_extended_buf; ++i) bytes += frame->extended_buf[i]->size;
   if (memory->held_bytes + bytes > kMaxDecoderBytes || frame->nb_extended_buf > 0) {
+    memory->refused_width = frame->width;
+    memory->refused_height = frame->height;
+    memory->refused_bytes = bytes;
+    memory->refused_held_bytes = memory->held_bytes.load();
     memory->over = true;
     av_frame_unref(frame);
     return AVERROR(ENOMEM);
@@ -227,11 +234,20 @@ bool VideoDecoder::Read(DecodedFrame* out) {
   Impl& d = *impl_;
   while (!d.finished) {
     if (d.memory->over) {
-      throw std::invalid_argument(fmt::format(
-          "decoding would hold over {} MB of frames ({}x{}, held {:.0f} MB): re-encode with "
-          "fewer reference frames or smaller frames",
-          kMaxDecoderBytes >> 20, d.codec->width, d.codec->height,
-          d.memory->peak_bytes / double(1 << 20)));
+      const FrameMemory& m = *d.memory;
+      const std::string one_too_large = FrameSizeProblem(m.refused_width, m.refused_height);
+      if (one_too_large.empty()) {
+        constexpr double kMb = 1 << 20;
+        throw std::invalid_argument(fmt::format(
+            "decoding would hold over {} MB of frames ({}x{}: {:.0f} MB held, {:.0f} MB more "
+            "asked): re-encode with fewer reference frames or smaller frames",
+            kMaxDecoderBytes >> 20, m.refused_width.load(), m.refused_height.load(),
+            m.refused_held_bytes / kMb, m.refused_bytes / kMb));
+      }
+      // One frame larger than any measured (a huge JPEG inside an MJPEG stream): that frame is
+      // lost, the stream goes on, and the next frame says why the one before it is missing.
+      d.memory->over = false;
+      skipped_reason_ = one_too_large;
     }
     int err = avcodec_receive_frame(d.codec, d.frame);
     if (err == 0) {
@@ -276,6 +292,8 @@ bool VideoDecoder::Read(DecodedFrame* out) {
                        : next_index_;
       next_index_ = out->index + 1;
       out->time_s = t;
+      out->skipped_reason = std::move(skipped_reason_);
+      skipped_reason_.clear();
       out->corrupt = (d.frame->flags & AV_FRAME_FLAG_CORRUPT) != 0 ||
                      d.frame->decode_error_flags != 0 || out->grey.empty();
       av_frame_unref(d.frame);

@@ -14,6 +14,8 @@ struct DecodedFrame {
   int index = 0;      // frame number: from the timestamp at constant frame rate, else decode order
   double time_s = 0;  // presentation time from the stream start
   bool corrupt = false;  // the decoder reported damage in this frame's data
+  // Why the frame before this one was not decoded, when the decoder knows (it was too large).
+  std::string skipped_reason;
 };
 
 // How a decoder opens and reads: for live streams, limits on how long it may wait and a flag that
@@ -65,7 +67,8 @@ class VideoDecoder {
   int next_index_ = 0;
   double read_timeout_s_ = 0;
   int corrupt_packets_ = 0;
-  double skip_before_s_ = -1;  // after a seek: drop frames earlier than this
+  std::string skipped_reason_;  // for the next frame returned
+  double skip_before_s_ = -1;   // after a seek: drop frames earlier than this
 };
 
 }  // namespace clogscope::vision

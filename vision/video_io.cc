@@ -16,14 +16,13 @@
 #include "vision/image_header.h"
 
 namespace clogscope::vision {
-namespace {
+
 std::string LowerExtension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return std::tolower(c); });
   return ext;
 }
-}  // namespace
 
 VideoKind VideoKindForPath(const std::string& path) {
   const std::string ext = LowerExtension(path);

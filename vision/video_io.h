@@ -19,6 +19,9 @@ inline constexpr long long kMaxFramePixels = 4096LL * 4096;
 // Empty when w×h is measurable, else why not: "frames are 8192×8192 (67.1 Mpx), over …".
 std::string FrameSizeProblem(long long width_px, long long height_px);
 
+// The file name's extension in lower case with its dot (".png"), or empty.
+std::string LowerExtension(const std::string& path);
+
 // True for the file extensions `measure` reads as images.
 bool IsImagePath(const std::string& path);
 // Reads an image file as stored (8- or 16-bit, grey or colour). An empty image and the reason in

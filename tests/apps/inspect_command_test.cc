@@ -19,6 +19,25 @@ std::string Render(const fs::path& dir, const std::string& name, const vision::S
   return path;
 }
 
+// --out names a PNG: a name without the extension (or with another) is refused, not written as
+// a PNG under a name nothing will open it by.
+TEST(InspectCommandTest, OutMustBeAPngName) {
+  InspectCommandOptions o;
+  o.input = "frame.png";
+  for (const std::string name : {"inspect", "dir/inspect.jpg", "x.png.partial"}) {
+    o.out_png = name;
+    std::string why;
+    EXPECT_FALSE(o.Validate(&why)) << name;
+    EXPECT_NE(why.find("--out " + name + ": "), std::string::npos) << why;
+    EXPECT_NE(why.find(".png"), std::string::npos) << why;
+  }
+  for (const std::string name : {"inspect.png", "dir/Inspect.PNG"}) {
+    o.out_png = name;
+    std::string why;
+    EXPECT_TRUE(o.Validate(&why)) << name << ": " << why;
+  }
+}
+
 TEST(InspectCommandTest, ExplainsTheFrameAndSuggestsOptions) {
   const fs::path d = testing::FreshDir("clogscope_inspect");
   vision::SceneParams p;
@@ -67,7 +86,7 @@ TEST(InspectCommandTest, ExplainsTheFrameAndSuggestsOptions) {
   p.strand = false;
   o.input = Render(d, "empty.png", p);
   const InspectReport e = InspectInput(o);
-  EXPECT_FALSE(e.measurement.valid());
+  EXPECT_EQ(e.measurement.status, vision::FrameStatus::kNoStrand);  // the README's no_strand
   EXPECT_TRUE(e.suggested_roi.empty());
   EXPECT_NE(e.text.find("no_strand"), std::string::npos) << e.text;
 

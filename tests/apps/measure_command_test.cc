@@ -31,6 +31,19 @@ fs::path FreshDir(const std::string& name) { return testing::FreshDir("clogscope
 
 const std::string kSmall = "--size 640x360 --tip-x-px 320 --tip-y-px 100 ";
 
+// The kSmall scene through the typed function: `frames` frames to `out` (a folder or a video).
+std::string RenderSmall(const std::string& out, int frames) {
+  RenderCommandOptions r;
+  r.scene.width_px = 640;
+  r.scene.height_px = 360;
+  r.scene.tip_x_px = 320;
+  r.scene.tip_y_px = 100;
+  r.frames = frames;
+  r.out = out;
+  RenderToFiles(r);
+  return out;
+}
+
 TEST(MeasureCommandTest, VideoEndToEndAgainstTruth) {
   const fs::path d = FreshDir("e2e");
   ASSERT_EQ(RunCli("render --out " + (d / "v.mp4").string() + " --frames 30 --width-jitter-um 3 " +
@@ -412,6 +425,134 @@ TEST(MeasureCommandTest, LargeFramesAreBoundedOrRefused) {
   EXPECT_NE(r.err.find("claims.png: frames are 40000x40000"), std::string::npos) << r.err;
 }
 
+// `measure --manifest` measures with the options given beside it (as the step files record them),
+// and refuses, in one line, those that mean nothing for a manifest; none is silently dropped.
+TEST(MeasureCommandTest, ManifestModeTakesTheMeasurementOptions) {
+  const fs::path d = FreshDir("manifest_options");
+  ASSERT_EQ(RunCli("render --out " + (d / "v.mp4").string() + " --frames 8 " + kSmall, d).exit_code,
+            0);
+  WriteFileAtomically((d / "m.yaml").string(),
+                      "samples: 2\nroi: 0,0,640,360\nsteps:\n"
+                      "  - {step: 1, temperature_c: 200, video: v.mp4}\n");
+  const std::string manifest = "measure --manifest " + (d / "m.yaml").string() + " --out ";
+  const auto spec_of = [&](const fs::path& out) {
+    return nlohmann::json::parse(ReadFile((out / "steps" / "step_0001.json").string()))["spec"];
+  };
+  // In px, with the caliper, blur, contrast and shading options and an overlay folder.
+  const fs::path a = d / "a";
+  RunResult r = RunCli(manifest + a.string() +
+                           " --scale-um-per-px 3 --roi 10,20,600,330 --polarity dark "
+                           "--band-start-px 10 --band-height-px 40 --caliper-px 3 "
+                           "--max-blur-px 5 --min-contrast 20 --no-shading --overlay " +
+                           (d / "ov").string(),
+                       d);
+  ASSERT_TRUE(fs::exists(a / "steps" / "step_0001.json")) << r.err;
+  nlohmann::json spec = spec_of(a);
+  EXPECT_EQ(spec["roi"], nlohmann::json({10, 20, 600, 330}));
+  EXPECT_EQ(spec["polarity"], static_cast<int>(vision::Polarity::kDarkOnBright));
+  EXPECT_EQ(spec["target"], static_cast<int>(vision::MeasureTarget::kStrand));
+  EXPECT_EQ(spec["band_px"], nlohmann::json({10.0, 40.0}));
+  EXPECT_EQ(spec["caliper_spacing_px"], 3.0);
+  EXPECT_EQ(spec["max_blur_px"], 5.0);
+  EXPECT_NEAR(spec["min_contrast_fraction"].get<double>(), 20 / 255.0, 1e-12);
+  EXPECT_EQ(spec["shading"], false);
+  EXPECT_TRUE(fs::is_directory(d / "ov"));
+  EXPECT_FALSE(fs::exists(a / "overlays") && !fs::is_empty(a / "overlays"));
+  // In µm through the scale, and the target; the manifest's ROI stays when none is given.
+  const fs::path b = d / "b";
+  r = RunCli(manifest + b.string() +
+                 " --scale-um-per-px 2 --band-start-um 30 --band-height-um 120 --target filament",
+             d);
+  ASSERT_TRUE(fs::exists(b / "steps" / "step_0001.json")) << r.err;
+  spec = spec_of(b);
+  EXPECT_EQ(spec["roi"], nlohmann::json({0, 0, 640, 360}));
+  EXPECT_EQ(spec["target"], static_cast<int>(vision::MeasureTarget::kFilament));
+  EXPECT_EQ(spec["band_px"], nlohmann::json({15.0, 60.0}));
+  // Options of the per-frame mode: refused by name, nothing measured.
+  for (const std::string option :
+       {"--speed", "--out-frames f.csv", "--overlay-every 2", "--no-outlier-flags",
+        "--gear-roi 1,2,30,40", "--gear-radius-mm 2", "--speed-max-shift-px 9"}) {
+    const fs::path c = d / "c";
+    r = RunCli(manifest + c.string() + " " + option, d);
+    EXPECT_EQ(r.exit_code, 1) << option;
+    EXPECT_NE(r.err.find(option.substr(0, option.find(' ')) + ": "), std::string::npos)
+        << option << ": " << r.err;
+    EXPECT_NE(r.err.find("--manifest"), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_FALSE(fs::exists(c / "steps")) << option;
+  }
+}
+
+// Overlays are drawn and written as the frames go by: the frames waiting for theirs stay few
+// (those whose width-outlier verdict awaits the following frames), however long the video.
+TEST(MeasureCommandTest, OverlaysDoNotHoldTheVideo) {
+  const fs::path d = FreshDir("overlay_memory");
+  MeasureCommandOptions o;
+  o.inputs = {RenderSmall((d / "v.mp4").string(), 90)};
+  o.out_frames = (d / "frames.csv").string();
+  o.overlay_dir = (d / "ov").string();
+  o.overlay_every = 1;
+  for (const bool flags : {true, false}) {
+    o.flag_outliers = flags;
+    const MeasureSummary s = MeasureInputs(o);
+    EXPECT_EQ(s.frames, 90);
+    EXPECT_EQ(s.overlays_written, 90);
+    // At most the outlier window's half (25 frames) and the frame in hand; 1 without flags.
+    EXPECT_LE(s.overlay_frames_held_peak, flags ? 26 : 1) << "flags " << flags;
+    EXPECT_GE(s.overlay_frames_held_peak, 1);
+    EXPECT_TRUE(fs::exists(d / "ov" / "v.mp4_000089.png"));
+  }
+}
+
+// One 12000x12000 JPEG inside an MJPEG stream of small frames: that frame is reported (its size in
+// its row) and skipped, the others measured; `watch` goes on too. A stream whose frames together
+// would take too much memory ends with one line naming the right sizes, never an abort.
+TEST(MeasureCommandTest, AnOversizedFrameInsideAVideoIsSkipped) {
+  const fs::path d = FreshDir("oversized_frame");
+  ASSERT_EQ(RunCli("render --out " + (d / "a.avi").string() + " --frames 4 " + kSmall, d).exit_code,
+            0);
+  const std::string ffmpeg = "ffmpeg -nostdin -v error -y ";
+  ASSERT_EQ(std::system((ffmpeg + "-i " + (d / "a.avi").string() + " -c:v copy -f mjpeg " +
+                         (d / "a.mjpeg").string())
+                            .c_str()),
+            0);
+  ASSERT_EQ(std::system((ffmpeg + "-f lavfi -i color=c=gray:s=12000x12000 -frames:v 1 -f mjpeg " +
+                         (d / "big.jpg").string())
+                            .c_str()),
+            0);
+  const std::string small = ReadFile((d / "a.mjpeg").string());
+  WriteFileAtomically((d / "raw.mjpeg").string(),
+                      small + ReadFile((d / "big.jpg").string()) + small);
+  ASSERT_EQ(std::system((ffmpeg + "-f mjpeg -framerate 25 -i " + (d / "raw.mjpeg").string() +
+                         " -c:v copy -r 25 " + (d / "v.avi").string())
+                            .c_str()),
+            0);
+  RunResult r =
+      RunCli("measure " + (d / "v.avi").string() + " --out-frames " + (d / "f.csv").string(), d);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  const CsvTable t = ParseCsv(ReadFile((d / "f.csv").string()), "f.csv");
+  ASSERT_EQ(t.rows.size(), 9u) << r.err;
+  for (const auto& row : t.rows) {
+    const bool big = row[t.Column("frame")] == "4";
+    EXPECT_EQ(row[t.Column("valid")], big ? "0" : "1") << row[t.Column("detail")];
+    if (!big) continue;
+    EXPECT_EQ(row[t.Column("reason")], "unreadable");
+    EXPECT_NE(row[t.Column("detail")].find("12000x12000"), std::string::npos)
+        << row[t.Column("detail")];
+  }
+  r = RunCli("watch " + (d / "v.avi").string() + " --log " + (d / "w.log").string(), d);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("terminate"), std::string::npos) << r.err;
+  // Sixteen reference frames of 4096x4096: ends with one line, the frames' own size in it.
+  const std::string refs16 = std::string(CLOGSCOPE_TESTDATA_DIR) + "/video/refs16_4096.mp4";
+  r = RunCli("watch " + refs16 + " --log " + (d / "w2.log").string(), d);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("refs16_4096.mp4: decoding would hold over 128 MB of frames (4096x4096"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("terminate"), std::string::npos) << r.err;
+}
+
 TEST(MeasureCommandTest, BandOptionsResolveFromMicronsOrPixels) {
   MeasureCommandOptions o;
   o.inputs = {"x"};
@@ -422,25 +563,17 @@ TEST(MeasureCommandTest, BandOptionsResolveFromMicronsOrPixels) {
   o.ResolveBand();
   EXPECT_NEAR(o.strand.band_start_px, 20.0, 1e-12);
   EXPECT_NEAR(o.strand.band_height_px, 60.0, 1e-12);
-  o.band_height_px = 30;
+  o.band.height_px = 30;
   o.ResolveBand();
   EXPECT_NEAR(o.strand.band_height_px, 30.0, 1e-12);
-  o.band_height_um = 100;
+  o.band.height_um = 100;
   EXPECT_THROW(o.ResolveBand(), std::invalid_argument);
 }
 
 TEST(MeasureCommandTest, TypedFunctionWritesAtomicallyAndSummarises) {
   const fs::path d = FreshDir("typed");
-  RenderCommandOptions r;
-  r.scene.width_px = 640;
-  r.scene.height_px = 360;
-  r.scene.tip_x_px = 320;
-  r.scene.tip_y_px = 100;
-  r.frames = 3;
-  r.out = (d / "png").string();
-  RenderToFiles(r);
   MeasureCommandOptions o;
-  o.inputs = {r.out, (d / "nothing-here").string()};
+  o.inputs = {RenderSmall((d / "png").string(), 3), (d / "nothing-here").string()};
   o.out_frames = (d / "frames.csv").string();
   const MeasureSummary s = MeasureInputs(o);
   EXPECT_EQ(s.inputs_ok, 1);

@@ -11,7 +11,9 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdio>
 #include <fstream>
+#include <future>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -52,6 +54,23 @@ struct Listener {
 };
 
 int FreePort() { return Listener().port; }
+
+// Whether something listens on 127.0.0.1:`port`, read from /proc/net/tcp (no connection made: a
+// server that takes one client, as `ffmpeg -listen 1`, must not spend it on the question).
+bool Listens(int port) {
+  std::ifstream tcp("/proc/net/tcp");
+  std::string line;
+  std::getline(tcp, line);  // header
+  char want[32];
+  std::snprintf(want, sizeof want, "0100007F:%04X", port);
+  while (std::getline(tcp, line)) {
+    std::istringstream fields(line);
+    std::string slot, local, remote, state;
+    fields >> slot >> local >> remote >> state;
+    if (local == want && state == "0A") return true;  // TCP_LISTEN
+  }
+  return false;
+}
 
 class WatchCommandTest : public ::testing::Test {
  protected:
@@ -167,7 +186,11 @@ TEST_F(WatchCommandTest, AnHttpMjpegStreamFromFfmpegIsWatchedAndServed) {
   argv.push_back(nullptr);
   pid_t ffmpeg = 0;
   ASSERT_EQ(posix_spawnp(&ffmpeg, "ffmpeg", nullptr, nullptr, argv.data(), environ), 0);
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));  // until it listens
+  // Until it listens (or gives up): its socket in LISTEN, not a guessed time.
+  const auto listen_deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (!Listens(stream_port) && std::chrono::steady_clock::now() < listen_deadline)
+    std::this_thread::yield();
+  ASSERT_TRUE(Listens(stream_port)) << "ffmpeg never listened on " << stream_port;
 
   const fs::path log = *dir_ / "stream.jsonl";
   WatchCommandOptions o = Options(url);
@@ -176,10 +199,36 @@ TEST_F(WatchCommandTest, AnHttpMjpegStreamFromFfmpegIsWatchedAndServed) {
   o.live.duration_s = kSeconds + 5;  // past the stream's end: the source drops
   o.live.source_options.read_timeout_s = 2;
   std::atomic<bool> stop{false};
-  std::atomic<int> http_port{0};
+  // The port the watch reports once it listens, or what it threw before: never a wait that
+  // cannot end.
+  std::promise<int> started;
   WatchReport report;
-  std::thread watch([&] { report = WatchNozzle(o, &stop, [&](int port) { http_port = port; }); });
-  while (http_port == 0) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  std::thread watch([&] {
+    bool told = false;
+    try {
+      report = WatchNozzle(o, &stop, [&](int port) {
+        told = true;
+        started.set_value(port);
+      });
+    } catch (...) {
+      if (!told) started.set_exception(std::current_exception());
+      told = true;
+    }
+    if (!told) started.set_value(0);  // returned without ever listening
+  });
+  std::future<int> reported = started.get_future();
+  int http_port = 0;
+  try {
+    http_port = reported.get();
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "the watch failed before listening: " << e.what();
+  }
+  if (http_port == 0) {
+    watch.join();
+    kill(ffmpeg, SIGTERM);
+    waitpid(ffmpeg, nullptr, 0);
+    FAIL() << "no HTTP port reported";
+  }
 
   // A real HTTP client polls /status until the watch says warn, then reads the rest.
   httplib::Client client("127.0.0.1", http_port);
@@ -231,34 +280,40 @@ TEST_F(WatchCommandTest, AnHttpMjpegStreamFromFfmpegIsWatchedAndServed) {
 TEST_F(WatchCommandTest, BadInputGetsOneLineNamingTheProblem) {
   const fs::path d = *dir_;
   const std::string video = TinyVideo();
-  auto r = RunCli("watch /nonexistent/video.avi --scale-um-per-px 3", d);
+  std::vector<std::string> errors;  // every one must be one line
+  const auto run = [&](const std::string& args) {
+    const testing::RunResult r = RunCli(args, d);
+    errors.push_back(r.err);
+    return r;
+  };
+  auto r = run("watch /nonexistent/video.avi --scale-um-per-px 3");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("/nonexistent/video.avi"), std::string::npos) << r.err;
   // Nothing listens on the port: refused at once.
-  r = RunCli("watch http://127.0.0.1:" + std::to_string(FreePort()) + "/x --open-timeout-s 2", d);
+  r = run("watch http://127.0.0.1:" + std::to_string(FreePort()) + "/x --open-timeout-s 2");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("cannot open"), std::string::npos) << r.err;
   {
     // Something listens but never sends a frame.
     Listener silent;
-    r = RunCli("watch tcp://127.0.0.1:" + std::to_string(silent.port) + " --open-timeout-s 1.5", d);
+    r = run("watch tcp://127.0.0.1:" + std::to_string(silent.port) + " --open-timeout-s 1.5");
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.err.find("--open-timeout-s"), std::string::npos) << r.err;
     // The HTTP port is taken.
-    r = RunCli("watch " + video + " --http 127.0.0.1:" + std::to_string(silent.port), d);
+    r = run("watch " + video + " --http 127.0.0.1:" + std::to_string(silent.port));
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.err.find("--http"), std::string::npos) << r.err;
   }
-  r = RunCli("watch " + video + " --warn-pct -3 --clog-pct -2", d);
+  r = run("watch " + video + " --warn-pct -3 --clog-pct -2");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--clog-pct"), std::string::npos) << r.err;
-  r = RunCli("watch " + video + " --baseline-um 400", d);
+  r = run("watch " + video + " --baseline-um 400");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--baseline-um"), std::string::npos) << r.err;
-  r = RunCli("watch " + video + " --extruder direct-pla", d);
+  r = run("watch " + video + " --extruder direct-pla");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--extruder"), std::string::npos) << r.err;
-  for (const std::string& line : {r.err}) EXPECT_EQ(std::count(line.begin(), line.end(), '\n'), 1);
+  for (const std::string& e : errors) EXPECT_EQ(std::count(e.begin(), e.end(), '\n'), 1) << e;
 }
 
 }  // namespace

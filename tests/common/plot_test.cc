@@ -3,8 +3,9 @@
 #include <gtest/gtest.h>
 #include <sys/mount.h>
 
-#include <cstdlib>
 #include <filesystem>
+
+#include "common/spawn.h"
 
 namespace clogscope {
 namespace {
@@ -25,7 +26,7 @@ PlotSpec Spec() {
 }
 
 TEST(PlotTest, DrawsAPngOrSaysWhyNot) {
-  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) GTEST_SKIP() << "no gnuplot";
+  if (FindOnPath("gnuplot").empty()) GTEST_SKIP() << "no gnuplot";
   const fs::path d = fs::temp_directory_path() / "clogscope_plot";
   fs::remove_all(d);
   fs::create_directories(d);
@@ -43,6 +44,29 @@ TEST(PlotTest, DrawsAPngOrSaysWhyNot) {
   EXPECT_FALSE(fs::exists(small / "p.png"));
   EXPECT_FALSE(fs::exists(small / "p.png.partial.png"));
   ::umount(small.c_str());
+}
+
+// An output path is data, never a command: no shell sees it, and gnuplot reads it as a plain
+// string (no backquote or macro substitution).
+TEST(PlotTest, PathsWithShellOrGnuplotSyntaxAreOnlyNames) {
+  if (FindOnPath("gnuplot").empty()) GTEST_SKIP() << "no gnuplot";
+  const fs::path d = fs::temp_directory_path() / "clogscope_plot_names";
+  fs::remove_all(d);
+  fs::create_directories(d);
+  // The commands name files relative to the folder they would run in: this one.
+  const fs::path cwd = fs::current_path();
+  fs::current_path(d);
+  for (const std::string& name :
+       std::vector<std::string>{"p$(touch PWNED)", "q`touch PWNED2`", "r\"';@x"}) {
+    std::string why;
+    ASSERT_TRUE(PlotToPng(Spec(), (d / name).string(), &why)) << name << ": " << why;
+    EXPECT_TRUE(fs::exists(d / name)) << name;
+  }
+  fs::current_path(cwd);
+  EXPECT_FALSE(fs::exists(d / "PWNED"));
+  EXPECT_FALSE(fs::exists(d / "PWNED2"));
+  EXPECT_EQ(std::distance(fs::directory_iterator(d), fs::directory_iterator()), 3)
+      << "the plots only: no script, error or partial file left";
 }
 
 }  // namespace

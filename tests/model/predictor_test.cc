@@ -108,8 +108,9 @@ TEST(PredictorTest, DirectPlaReferenceNumbers) {
   EXPECT_FALSE(pr.steps[0].amplitude_m_s2.has_value());
   // Bar alone: 41 kHz for the Direct bar (predictor.md §5).
   EXPECT_NEAR(pr.beam_frequency_hz, 41046, 5);
-  EXPECT_NEAR(pr.steps[0].dp_total_pa, pr.steps[0].dp1_pa + pr.steps[0].dp2_pa + pr.steps[0].dp3_pa,
-              1e-6);
+  // The pressure behind the 1.2622 N on 1.75 mm filament (π·1.75²/4 = 2.4053 mm²): 0.5248 MPa.
+  const double filament_area_m2 = M_PI * 1.75e-3 * 1.75e-3 / 4;
+  EXPECT_NEAR(pr.steps[0].dp_total_pa, 1.2622 / filament_area_m2, 5e-5 / filament_area_m2);
 }
 
 TEST(PredictorTest, DifferenceModelFallsAsTheNozzleClogs) {

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -93,6 +94,27 @@ TEST_F(ExperimentTest, StepSamplesEvenlyAndMatchesTruth) {
   EXPECT_NEAR(r.mean_um, truth_sum / r.n_used, 0.15 * 3.0);
   EXPECT_NEAR(r.sem_um, r.std_um / std::sqrt(r.n_used), 1e-9);
   EXPECT_GT(r.ci95_um, 2 * r.sem_um);
+}
+
+// A frame that could not be read has no polarity: its row says why (reason) and leaves the
+// polarity empty rather than "auto".
+TEST(FrameFieldsTest, AnUnreadFrameHasNoPolarity) {
+  const auto& cols = FrameColumns();
+  const auto column = [&](const char* name) {
+    return std::find(cols.begin(), cols.end(), name) - cols.begin();
+  };
+  vision::StrandMeasurement m;
+  m.status = vision::FrameStatus::kUnreadable;
+  m.detail = "cannot decode";
+  const std::vector<std::string> f = FrameFields("a.png", 3, -1, m, std::nullopt);
+  ASSERT_EQ(f.size(), cols.size());
+  EXPECT_EQ(f[column("polarity")], "");
+  EXPECT_EQ(f[column("reason")], "unreadable");
+  EXPECT_EQ(f[column("detail")], "cannot decode");
+  // A measured frame keeps the polarity it was measured with.
+  m.status = vision::FrameStatus::kValid;
+  m.polarity = vision::Polarity::kDarkOnBright;
+  EXPECT_EQ(FrameFields("a.png", 3, -1, m, std::nullopt)[column("polarity")], "dark");
 }
 
 TEST_F(ExperimentTest, ShortStepsAndBadSourcesAreMarkedNotFatal) {

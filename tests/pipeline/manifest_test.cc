@@ -65,6 +65,23 @@ TEST(ManifestTest, CsvForm) {
   EXPECT_FALSE(m.steps[1].images.empty());  // a directory
 }
 
+// A folder of images has no frame times: start_s, end_s and settle_s cannot apply to it, and a
+// manifest that gives them is refused rather than measured as if they were not there.
+TEST(ManifestTest, TimesOnAFolderOfImagesAreRefused) {
+  const std::string step = "steps:\n  - {step: 1, temperature_c: 220, images: frames";
+  for (const std::string key : {"start_s: 2", "end_s: 5", "settle_s: 1"}) {
+    const std::string err = ErrorOf(Write("i.yaml", step + ", " + key + "}\n"));
+    EXPECT_NE(err.find("i.yaml:2: step 1: "), std::string::npos) << key << ": " << err;
+    EXPECT_NE(err.find("a folder of images has no frame times"), std::string::npos) << err;
+  }
+  // The manifest's settle_s reaches the step too; the step may set its own to 0.
+  std::string err = ErrorOf(Write("i2.yaml", "settle_s: 2\n" + step + "}\n"));
+  EXPECT_NE(err.find("i2.yaml:3: step 1: "), std::string::npos) << err;
+  EXPECT_NO_THROW(LoadManifest(Write("i3.yaml", "settle_s: 2\n" + step + ", settle_s: 0}\n")));
+  err = ErrorOf(Write("i.csv", "step,temperature_c,source,start_s,end_s\n1,220,frames,1,\n"));
+  EXPECT_NE(err.find("i.csv:2: step 1: "), std::string::npos) << err;
+}
+
 TEST(ManifestTest, ErrorsNameTheKeyAndLine) {
   EXPECT_NE(
       ErrorOf(Write("k.yaml", "samples: 10\nstepz: []\n")).find("k.yaml:2: unknown key 'stepz'"),

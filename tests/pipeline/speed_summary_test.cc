@@ -79,7 +79,15 @@ TEST(SpeedSummaryTest, ConsecutiveFramesHaveThePlainInterval) {
   for (int i = 0; i < 10; ++i) rows.push_back(Speed(10.0 + 0.1 * (i % 3 - 1), 1, 1));
   const FeedSpeedSummary s = SummariseFeedSpeeds(rows);
   EXPECT_EQ(s.used, 40);
-  EXPECT_NEAR(s.ci95_px_per_s, StudentT975(39) * s.std_px_per_s / std::sqrt(40.0), 1e-12);
+  // By hand from the rows: 297, 300 and 303 px/s (a shift of 9.9, 10 or 10.1 px in 1/30 s) 14,
+  // 13 and 13 times; t(0.975, 39) = 2.0227 from a table.
+  const double mean = (14 * 297.0 + 13 * 300.0 + 13 * 303.0) / 40;
+  const double sd = std::sqrt(
+      (14 * std::pow(297 - mean, 2) + 13 * std::pow(300 - mean, 2) + 13 * std::pow(303 - mean, 2)) /
+      39);
+  EXPECT_NEAR(s.mean_px_per_s, mean, 1e-9);
+  EXPECT_NEAR(s.std_px_per_s, sd, 1e-9);
+  EXPECT_NEAR(s.ci95_px_per_s, 2.0227 * sd / std::sqrt(40.0), 1e-4 * s.ci95_px_per_s);
   EXPECT_DOUBLE_EQ(s.sigma_scale, 1);  // the rows have no σ of their own here
 }
 

@@ -30,8 +30,16 @@ TEST(StatisticsTest, RobustStatsRejectsOnlyTheOutliers) {
   EXPECT_FALSE(s.used[49]);
   EXPECT_NEAR(s.mean, 133.3, 0.3);
   EXPECT_NEAR(s.std, 0.5, 0.15);
-  EXPECT_NEAR(s.sem, s.std / std::sqrt(48.0), 1e-12);
-  EXPECT_NEAR(s.ci95_half_width, StudentT975(47) * s.sem, 1e-12);
+  // The kept 48 by hand: their mean, sample standard deviation, its SEM, and t(0.975, 47) = 2.0117
+  // from a table.
+  double sum = 0, squares = 0;
+  for (int i = 0; i < 48; ++i) sum += v[i];
+  const double mean = sum / 48;
+  for (int i = 0; i < 48; ++i) squares += (v[i] - mean) * (v[i] - mean);
+  const double sem = std::sqrt(squares / 47) / std::sqrt(48.0);
+  EXPECT_NEAR(s.mean, mean, 1e-12);
+  EXPECT_NEAR(s.sem, sem, 1e-12);
+  EXPECT_NEAR(s.ci95_half_width, 2.0117 * sem, 1e-4 * s.ci95_half_width);
   // Identical values: the MAD floor keeps a 0.01 px difference from being an outlier.
   const SampleStats flat = RobustStats({5, 5, 5, 5, 5.01}, 3.5, 0.02);
   EXPECT_EQ(flat.n_rejected, 0);

@@ -110,8 +110,12 @@ TEST(WatchStateTest, TheWindowMeansCiCoversTheTruthAtItsConfidence) {
     covered += std::abs(s.diameter_um - 400) <= s.diameter_ci95_um;
   }
   const double coverage = static_cast<double>(covered) / windows;
+  // Against the nominal 95 %: with 400 windows the binomial σ of the coverage is 1.1 %. Above
+  // 95 % + 3σ the interval is too wide (a CI of ±∞ would cover every window); below, the known
+  // shortfall above is allowed down to 85 %.
+  const double sigma = std::sqrt(0.95 * 0.05 / windows);
   EXPECT_GT(coverage, 0.85);
-  EXPECT_LE(coverage, 1.0);
+  EXPECT_LT(coverage, 0.95 + 3 * sigma);
   RecordProperty("coverage", std::to_string(coverage));
   std::cout << "coverage of the 95 % CI: " << coverage << "\n";
 }
