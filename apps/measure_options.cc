@@ -30,6 +30,10 @@ void AddMeasurementOptions(CLI::App& app, MeasureCommandOptions* o, MeasureCliTe
       ->capture_default_str();
   app.add_option("--min-contrast", text->min_contrast_levels,
                  "Minimum edge contrast in 8-bit grey levels (default 15)");
+  app.add_option("--max-sigma-px", o->strand.max_sigma_px,
+                 "Widths whose σ is above this (or 0.17 % of the width, if more) are refused as "
+                 "imprecise: a valid width is good to max(0.3 px, 0.5 %) at 3σ")
+      ->capture_default_str();
   app.add_flag("--no-shading", text->no_shading,
                "Fit every edge as a plain blurred step (no shading term for front-lit strands)");
 }

@@ -172,34 +172,41 @@ bool PlateauStart(const std::vector<EdgeSample>& samples, double edge_guess_px, 
 
 }  // namespace
 
-EdgeFit FitBlurredStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
-                       double sigma_guess_px, double u_ref) {
+namespace {
+// A step model fitted from the plateaus' levels on either side of the guess (extra terms from 0).
+template <typename Model>
+EdgeFit FitStepModel(const std::vector<EdgeSample>& samples, double edge_guess_px,
+                     double sigma_guess_px, double u_ref, size_t min_samples, const Model& model) {
   EdgeFit fit;
   fit.samples = static_cast<int>(samples.size());
   double lo, hi;
-  if (samples.size() < 8 || !PlateauStart(samples, edge_guess_px, sigma_guess_px, &lo, &hi))
+  if (samples.size() < min_samples ||
+      !PlateauStart(samples, edge_guess_px, sigma_guess_px, &lo, &hi))
     return fit;
-  Vec<5> p;
-  p << lo, 0.0, hi - lo, edge_guess_px, std::max(sigma_guess_px, 0.5);
-  fit = Solve(samples, p, u_ref, StepModel());
-  fit.contrast = fit.step;
+  Vec<Model::kN> p = Vec<Model::kN>::Zero();
+  p[kA] = lo;
+  p[kC] = hi - lo;
+  p[kE] = edge_guess_px;
+  p[kS] = std::max(sigma_guess_px, 0.5);
+  fit = Solve(samples, p, u_ref, model);
   fit.u_ref = u_ref;
+  return fit;
+}
+}  // namespace
+
+EdgeFit FitBlurredStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
+                       double sigma_guess_px, double u_ref) {
+  EdgeFit fit = FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 8, StepModel());
+  fit.contrast = fit.step;
   return fit;
 }
 
 EdgeFit FitShadedStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
                       double sigma_guess_px, double u_ref, int object_side) {
-  EdgeFit fit;
-  fit.samples = static_cast<int>(samples.size());
-  double lo, hi;
-  if (samples.size() < 10 || !PlateauStart(samples, edge_guess_px, sigma_guess_px, &lo, &hi))
-    return fit;
-  Vec<6> p;
-  p << lo, 0.0, hi - lo, edge_guess_px, std::max(sigma_guess_px, 0.5), 0.0;
   ShadedStepModel model;
   model.iota = object_side > 0 ? 1.0 : -1.0;
-  fit = Solve(samples, p, u_ref, model);
-  fit.u_ref = u_ref;
+  EdgeFit fit = FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 10, model);
+  if (fit.samples < 10) return fit;
   fit.object_side = object_side > 0 ? 1 : -1;
   double g2, dg2;
   BlurredSqrt::Get()(2.0, &g2, &dg2);
@@ -209,18 +216,11 @@ EdgeFit FitShadedStep(const std::vector<EdgeSample>& samples, double edge_guess_
 
 EdgeFit FitTwoSlopeStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
                         double sigma_guess_px, double u_ref) {
-  EdgeFit fit;
-  fit.samples = static_cast<int>(samples.size());
-  double lo, hi;
-  if (samples.size() < 10 || !PlateauStart(samples, edge_guess_px, sigma_guess_px, &lo, &hi))
-    return fit;
-  Vec<6> p;
-  p << lo, 0.0, hi - lo, edge_guess_px, std::max(sigma_guess_px, 0.5), 0.0;
-  fit = Solve(samples, p, u_ref, TwoSlopeStepModel());
+  EdgeFit fit =
+      FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 10, TwoSlopeStepModel());
   fit.slope_change_per_px = fit.shading;
   fit.shading = 0;
   fit.contrast = fit.step;
-  fit.u_ref = u_ref;
   return fit;
 }
 

@@ -78,9 +78,26 @@ double BandEdgeDoubtPx(const GreyImage& img, const AxisFrame& f, const ClipLevel
   if (plain) {
     // Both models on the pooled profile, where the noise has averaged down: their difference is
     // the model's, not the noise's.
+    // The pooled profile in 0.1 px bins, far finer than any blur: the fits then cost what two
+    // calipers' do, not what the whole band's samples would.
+    const double bin_px = 0.1;
+    const int bins = static_cast<int>(std::ceil((below_px + above_px) / bin_px)) + 1;
+    std::vector<double> sum(bins, 0.0), count(bins, 0.0);
+    for (const EdgeSample& smp : pooled) {
+      const int b = static_cast<int>(std::lround((smp.u_px + below_px) / bin_px));
+      if (b < 0 || b >= bins) continue;
+      sum[b] += smp.value;
+      count[b] += 1;
+    }
+    std::vector<EdgeSample> profile;
+    for (int b = 0; b < bins; ++b) {
+      if (count[b] > 0)
+        profile.push_back(
+            {static_cast<float>(b * bin_px - below_px), static_cast<float>(sum[b] / count[b])});
+    }
     const double sigma = Median(blur);
-    const EdgeFit one = FitBlurredStep(pooled, 0.0, sigma, 0.0);
-    const EdgeFit two = FitTwoSlopeStep(pooled, 0.0, sigma, 0.0);
+    const EdgeFit one = FitBlurredStep(profile, 0.0, sigma, 0.0);
+    const EdgeFit two = FitTwoSlopeStep(profile, 0.0, sigma, 0.0);
     if (one.converged && two.converged && std::abs(two.edge_px) < std::min(below_px, above_px))
       slopes_px = std::abs(two.edge_px - one.edge_px);
   }

@@ -54,10 +54,11 @@ TEST(RobustnessTest, RandomisedScenesAgainstTruth) {
   }
   std::printf("%d of %d valid; unshaded %+.4f ± %.4f px (%d); shaded %+.4f ± %.4f px (%d)\n", valid,
               kFrames, plain.mean(), plain.sd(), plain.n, shaded.mean(), shaded.sd(), shaded.n);
-  // Measured on this suite: 195 of 200 valid; unshaded −0.010 ± 0.052 px; shaded −0.03 ± 0.19 px.
+  // Measured on this suite: 191 of 200 valid; unshaded −0.006 ± 0.038 px; shaded −0.03 ± 0.14 px.
   // (198 before issue 22's self-checks: a highlight clipped inside a shaded strand (seeds 20, 89)
-  // and a disc against the strand's edge (seed 31) are refused now, as the rules say.)
-  EXPECT_GE(valid, 0.97 * kFrames);
+  // and a disc against the strand's edge (seed 31) are refused now, as the rules say; 195 before
+  // the σ carried the edge model's doubt: seeds 14, 38, 133 and 194 are `imprecise`, ±0.2–0.4 px.)
+  EXPECT_GE(valid, 0.95 * kFrames);
   EXPECT_LE(std::abs(plain.mean()), 0.05);
   EXPECT_LE(plain.sd(), 0.06);
   EXPECT_LE(std::abs(shaded.mean()), 0.1);
