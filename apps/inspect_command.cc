@@ -8,6 +8,7 @@
 
 #include "apps/cli_util.h"
 #include "apps/commands.h"
+#include "common/path_check.h"
 #include "vision/frame_source.h"
 #include "vision/overlay.h"
 #include "vision/video_io.h"
@@ -75,6 +76,8 @@ bool InspectCommandOptions::Validate(std::string* why) const {
     *why = fmt::format("--frame {}: must not be negative", frame);
   else if (out_png.empty())
     *why = "--out must name a PNG file";
+  else if (!CheckInputPath("", input, PathExpect::kFileOrDirectory, why))
+    return false;
   else
     return strand.Validate(why);
   return false;

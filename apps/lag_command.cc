@@ -8,6 +8,7 @@
 #include "apps/cli_util.h"
 #include "apps/commands.h"
 #include "common/atomic_file.h"
+#include "common/path_check.h"
 #include "common/plot.h"
 #include "common/provenance.h"
 #include "model/clog_physics_io.h"
@@ -60,6 +61,10 @@ bool LagCommandOptions::Validate(std::string* why) const {
         "further apart)",
         fit.max_offset_s, model::kMaxLagOffsetS);
   else if (!fit.Validate(why))
+    return false;
+  else if (!CheckInputPath("--commanded", commanded, PathExpect::kFile, why))
+    return false;
+  else if (!frames.empty() && !CheckInputPath("--frames", frames, PathExpect::kFile, why))
     return false;
   else
     return true;

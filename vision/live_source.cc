@@ -13,6 +13,7 @@
 #include <tuple>
 #include <vector>
 
+#include "common/path_check.h"
 #include "vision/video_decoder.h"
 #include "vision/video_io.h"
 
@@ -278,11 +279,9 @@ std::unique_ptr<LiveSource> LiveSource::Open(const std::string& source,
       return std::make_unique<DecodedSource>(source, LiveSourceKind::kStream, options, stop);
     case LiveSourceKind::kFolder:
       return std::make_unique<FolderSource>(source, options, stop);
-    case LiveSourceKind::kFile: {
-      std::error_code ec;
-      if (!fs::exists(source, ec)) throw std::invalid_argument(source + ": no such file");
+    case LiveSourceKind::kFile:
+      RequireInputPath("", source, PathExpect::kFile);
       return std::make_unique<DecodedSource>(source, LiveSourceKind::kFile, options, stop);
-    }
   }
   throw std::invalid_argument(source + ": unknown kind of source");
 }
