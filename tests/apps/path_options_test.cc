@@ -16,7 +16,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using testing::RunCli;
-using testing::RunResult;
 
 const char* kTable =
     "step,temperature_c,mean_um\n1,220,400.0\n2,210,396.9\n3,200,390.1\n4,190,381.3\n";
@@ -72,7 +71,7 @@ TEST(PathOptionsTest, ASymlinkLoopIsRefusedInOneLineByEveryFileOption) {
   for (const Case& c : cases) {
     std::string args = c.args;
     args.replace(args.find('@'), 1, loop);
-    const RunResult r = RunCli(args, d);
+    const auto r = RunCli(args, d);
     EXPECT_EQ(r.exit_code, 1) << args << "\n" << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), c.lines) << args << "\n" << r.err;
     const std::string named = c.option.empty() ? loop : c.option + " " + loop;

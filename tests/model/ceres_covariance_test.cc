@@ -51,6 +51,16 @@ double ClosedFormVarianceOfA() {
   return 1 / jtj(0, 0);
 }
 
+::testing::AssertionResult Converges(ceres::Problem* problem) {
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, problem, &summary);
+  if (summary.termination_type == ceres::CONVERGENCE) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << summary.BriefReport();
+}
+
 TEST(CeresCovarianceTest, AConstantParameterBlockLeavesTheOthersCovarianceItsClosedForm) {
   for (auto algorithm : {ceres::DENSE_SVD, ceres::SPARSE_QR}) {
     double a = 1.0, b = 0.25;
@@ -61,12 +71,7 @@ TEST(CeresCovarianceTest, AConstantParameterBlockLeavesTheOthersCovarianceItsClo
           nullptr, &a, &b);
     }
     problem.SetParameterBlockConstant(&b);
-    ceres::Solver::Options so;
-    so.linear_solver_type = ceres::DENSE_QR;
-    so.logging_type = ceres::SILENT;
-    ceres::Solver::Summary summary;
-    ceres::Solve(so, &problem, &summary);
-    ASSERT_EQ(summary.termination_type, ceres::CONVERGENCE) << summary.BriefReport();
+    ASSERT_TRUE(Converges(&problem));
     ceres::Covariance::Options co;
     co.algorithm_type = algorithm;
     if (algorithm == ceres::DENSE_SVD) co.null_space_rank = -1;
@@ -89,12 +94,7 @@ TEST(CeresCovarianceTest, AHeldCoordinateOfABlockHasNoVariance) {
                              nullptr, ab);
   }
   problem.SetManifold(ab, new ceres::SubsetManifold(2, {1}));
-  ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_QR;
-  so.logging_type = ceres::SILENT;
-  ceres::Solver::Summary summary;
-  ceres::Solve(so, &problem, &summary);
-  ASSERT_EQ(summary.termination_type, ceres::CONVERGENCE) << summary.BriefReport();
+  ASSERT_TRUE(Converges(&problem));
   ceres::Covariance::Options co;
   co.algorithm_type = ceres::DENSE_SVD;
   co.null_space_rank = -1;
