@@ -59,19 +59,16 @@ bool CheckInputPath(const std::string& option, const std::string& path, PathExpe
       reason = "not a directory";
       break;
     case PathKind::kDirectory:
-      if (expect == PathExpect::kDirectory || expect == PathExpect::kFileOrDirectory ||
-          expect == PathExpect::kAnything)
-        return true;
+      if (expect == PathExpect::kDirectory || expect == PathExpect::kFileOrDirectory) return true;
       reason = "is a directory, not a file";
       break;
     case PathKind::kOther:
-      if (expect == PathExpect::kAnything) return true;
       reason = "not a regular file (a FIFO, socket or device)";
       break;
     case PathKind::kUnreachable:
       break;
   }
-  *why = (option.empty() ? path : option + " " + path) + ": " + reason;
+  *why = (option.empty() ? path : path.empty() ? option : option + " " + path) + ": " + reason;
   return false;
 }
 

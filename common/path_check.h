@@ -25,7 +25,6 @@ enum class PathExpect {
   kDirectory,
   kFileOrDirectory,
   kPresetOrFile,  // a name that is not a path (nothing there), or a regular file
-  kAnything,      // anything that can be reached (a device too): only unreachable paths fail
 };
 
 // True when `path` is what `expect` asks for. Else false and `why` is one line naming the option
