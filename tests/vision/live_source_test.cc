@@ -27,6 +27,14 @@ fs::path Fresh(const std::string& name) {
 
 cv::Mat Grey(int level) { return cv::Mat(48, 64, CV_8UC1, cv::Scalar(level)); }
 
+// A fresh folder holding one image already (not to be delivered), watched every 20 ms.
+std::unique_ptr<LiveSource> OpenFolderWithAnOldImage(const fs::path& d, std::atomic<bool>* stop) {
+  cv::imwrite((d / "old.png").string(), Grey(10));
+  LiveSourceOptions o;
+  o.folder_poll_s = 0.02;
+  return LiveSource::Open(d.string(), o, stop);
+}
+
 TEST(LiveSourceTest, KindFromTheSourceName) {
   const fs::path d = Fresh("clogscope_live_kind");
   EXPECT_EQ(LiveSource::KindOf("/dev/video0"), LiveSourceKind::kDevice);
@@ -40,11 +48,8 @@ TEST(LiveSourceTest, KindFromTheSourceName) {
 
 TEST(LiveSourceTest, AFolderDeliversNewImagesInOrderAndIgnoresThoseAlreadyThere) {
   const fs::path d = Fresh("clogscope_live_folder");
-  cv::imwrite((d / "old.png").string(), Grey(10));
   std::atomic<bool> stop{false};
-  LiveSourceOptions o;
-  o.folder_poll_s = 0.02;
-  auto source = LiveSource::Open(d.string(), o, &stop);
+  auto source = OpenFolderWithAnOldImage(d, &stop);
   EXPECT_TRUE(source->live());
   // A camera writes three frames, one after the other (names out of order on purpose: the
   // modification time decides), and a text file that is not an image.
@@ -106,11 +111,8 @@ class Watchdog {
 // still delivered, in the order they arrived (a folder is not read by a clock it cannot trust).
 TEST(LiveSourceTest, AnImageStampedInTheFutureDoesNotHideTheNextOnes) {
   const fs::path d = Fresh("clogscope_live_future");
-  cv::imwrite((d / "old.png").string(), Grey(10));
   std::atomic<bool> stop{false};
-  LiveSourceOptions o;
-  o.folder_poll_s = 0.01;
-  auto source = LiveSource::Open(d.string(), o, &stop);
+  auto source = OpenFolderWithAnOldImage(d, &stop);
   Watchdog watchdog(&stop);
   const auto now = fs::file_time_type::clock::now();
   struct Shot {
