@@ -32,7 +32,7 @@ sanitize: deps
 # inputs go to build-fuzz/corpus/, findings (crash-*, timeout-*, leak-*) to build-fuzz/.
 FUZZ_DIR ?= build-fuzz
 FUZZ_SECONDS ?= 60
-FUZZ_TARGETS = csv manifest calibration extruder frame step
+FUZZ_TARGETS = csv manifest calibration extruder frame step lag
 fuzz:
 	@scripts/install-deps.sh --fuzz
 	@CC=clang-14 CXX=clang++-14 cmake -S . -B $(FUZZ_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo \

@@ -14,6 +14,7 @@
 #include "calib/line_lattice.h"
 #include "common/atomic_file.h"
 #include "common/csv.h"
+#include "common/path_check.h"
 #include "common/plot.h"
 #include "common/provenance.h"
 #include "vision/micrometer.h"
@@ -28,7 +29,9 @@ namespace fs = std::filesystem;
 constexpr double kMinScaleUmPerPx = 0.05, kMaxScaleUmPerPx = 100;
 
 cv::Mat ReadImageOrThrow(const std::string& path, const std::string& where) {
-  if (!fs::exists(path)) throw std::invalid_argument(where + ": " + path + ": no such file");
+  std::string why;
+  if (!CheckInputPath("", path, PathExpect::kFile, &why))
+    throw std::invalid_argument(where + ": " + why);
   std::string error;
   cv::Mat img = vision::ReadImage(path, &error);
   if (img.empty()) throw std::invalid_argument(where + ": " + path + ": " + error);
@@ -151,8 +154,13 @@ bool CalibrateCommandOptions::Validate(std::string* why) const {
     *why = "--expect-scale-um-per-px must be positive";
   else if (out.empty())
     *why = "--out is required";
-  else
+  else if (pins && !CheckInputPath("--pins", pins_csv, PathExpect::kFile, why))
+    return false;
+  else {
+    for (const std::string& image : micrometer_images)
+      if (!CheckInputPath("--micrometer", image, PathExpect::kFile, why)) return false;
     return true;
+  }
   return false;
 }
 

@@ -8,6 +8,7 @@
 #include "apps/cli_util.h"
 #include "apps/commands.h"
 #include "common/atomic_file.h"
+#include "common/path_check.h"
 #include "common/provenance.h"
 #include "model/clog_physics_io.h"
 #include "model/io.h"
@@ -77,6 +78,10 @@ bool DriveCommandOptions::Validate(std::string* why) const {
     *why = "--feed-force-n must be ≥ 0";
   else if (filament_speed_mm_s && !(*filament_speed_mm_s >= 0))
     *why = "--filament-speed-mm-s must be ≥ 0";
+  else if (!diameters.empty() && !CheckInputPath("--diameters", diameters, PathExpect::kFile, why))
+    return false;
+  else if (!CheckInputPath("--extruder", extruder, PathExpect::kPresetOrFile, why))
+    return false;
   else
     return true;
   return false;

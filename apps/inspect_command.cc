@@ -8,6 +8,7 @@
 
 #include "apps/cli_util.h"
 #include "apps/commands.h"
+#include "common/path_check.h"
 #include "vision/frame_source.h"
 #include "vision/overlay.h"
 #include "vision/video_io.h"
@@ -77,6 +78,8 @@ bool InspectCommandOptions::Validate(std::string* why) const {
     *why = "--out must name a PNG file";
   else if (vision::LowerExtension(out_png) != ".png")
     *why = "--out " + out_png + ": must end in .png (the annotated frame is a PNG)";
+  else if (!CheckInputPath("", input, PathExpect::kFileOrDirectory, why))
+    return false;
   else
     return strand.Validate(why);
   return false;

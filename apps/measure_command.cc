@@ -189,7 +189,8 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
       ++summary.inputs_failed;
       continue;
     }
-    const bool from_video = vision::IsVideoPath(input) && !fs::is_directory(input);
+    std::error_code ec;
+    const bool from_video = vision::IsVideoPath(input) && !fs::is_directory(input, ec);
     const int every = o.overlay_every > 0 ? o.overlay_every : (from_video ? kVideoOverlayEvery : 1);
     std::vector<Row> rows;
     std::optional<OverlayWriter> overlays;

@@ -10,6 +10,7 @@
 #include "apps/cli_util.h"
 #include "apps/commands.h"
 #include "common/atomic_file.h"
+#include "common/path_check.h"
 #include "common/plot.h"
 #include "common/provenance.h"
 #include "model/io.h"
@@ -75,6 +76,11 @@ bool PredictCommandOptions::Validate(std::string* why) const {
     *why = "--out must not be empty";
   else if (fit_measured.empty() != fit_params.empty())
     *why = "--fit and --fit-params go together";
+  else if (!CheckInputPath("--diameters", diameters, PathExpect::kFile, why) ||
+           !CheckInputPath("--extruder", extruder, PathExpect::kPresetOrFile, why))
+    return false;
+  else if (!fit_measured.empty() && !CheckInputPath("--fit", fit_measured, PathExpect::kFile, why))
+    return false;
   else
     return true;
   return false;
@@ -82,6 +88,7 @@ bool PredictCommandOptions::Validate(std::string* why) const {
 
 model::ExtruderParams LoadExtruderWithOverrides(const std::string& extruder,
                                                 const std::vector<std::string>& set) {
+  RequireInputPath("--extruder", extruder, PathExpect::kPresetOrFile);
   model::ExtruderParams params = model::LoadExtruder(extruder);
   for (const std::string& kv : set) {
     const size_t eq = kv.find('=');

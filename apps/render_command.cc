@@ -11,6 +11,7 @@
 #include "apps/commands.h"
 #include "common/atomic_file.h"
 #include "common/csv.h"
+#include "common/path_check.h"
 #include "model/extrusion_lag.h"
 #include "vision/video_io.h"
 
@@ -30,6 +31,9 @@ bool RenderCommandOptions::Validate(std::string* why) const {
     *why = "--lag-um-per-mm3-s must be positive";
   else if (!(filament_diameter_mm > 0))
     *why = "--filament-diameter-mm must be positive";
+  else if (!lag_commanded.empty() &&
+           !CheckInputPath("--lag-commanded", lag_commanded, PathExpect::kFile, why))
+    return false;
   else
     return true;
   return false;

@@ -15,6 +15,7 @@
 #include "calib/calibration_file.h"
 #include "common/atomic_file.h"
 #include "common/library_text.h"
+#include "common/path_check.h"
 #include "common/provenance.h"
 
 namespace clogscope::apps {
@@ -142,6 +143,10 @@ bool ExperimentCommandOptions::Validate(std::string* why) const {
     *why = "--scale-um-per-px must be positive";
   else if (scale_um_per_px && !calib_path.empty())
     *why = "give either --scale-um-per-px or --calib, not both";
+  else if (!CheckInputPath(full_pipeline ? "" : "--manifest", manifest, PathExpect::kFile, why))
+    return false;
+  else if (!calib_path.empty() && !CheckInputPath("--calib", calib_path, PathExpect::kFile, why))
+    return false;
   else
     return true;
   return false;

@@ -8,6 +8,7 @@
 #include "apps/cli_util.h"
 #include "apps/commands.h"
 #include "common/atomic_file.h"
+#include "common/path_check.h"
 #include "common/provenance.h"
 #include "model/clog_physics_io.h"
 #include "model/io.h"
@@ -58,6 +59,10 @@ bool ThermalCommandOptions::Validate(std::string* why) const {
     *why = "--viscosity-pa-s must be positive";
   else if (hp_length_mm && !(*hp_length_mm > 0))
     *why = "--hp-length-mm must be positive";
+  else if (!diameters.empty() && !CheckInputPath("--diameters", diameters, PathExpect::kFile, why))
+    return false;
+  else if (!CheckInputPath("--extruder", extruder, PathExpect::kPresetOrFile, why))
+    return false;
   else
     return true;
   return false;

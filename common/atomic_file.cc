@@ -12,6 +12,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "common/path_check.h"
+
 namespace clogscope {
 
 FdStreamBuf::~FdStreamBuf() {
@@ -110,16 +112,20 @@ void WriteFileAtomically(const std::string& path, const std::string& content) {
 }
 
 bool IsRegularFile(const std::string& path, std::string* why) {
-  std::error_code ec;
-  const auto st = std::filesystem::status(path, ec);
-  if (ec || !std::filesystem::exists(st)) {
-    *why = ec && ec != std::errc::no_such_file_or_directory ? ec.message() : "no such file";
-  } else if (std::filesystem::is_directory(st)) {
-    *why = "is a directory";
-  } else if (!std::filesystem::is_regular_file(st)) {
-    *why = "not a regular file (a FIFO, socket or device)";
-  } else {
-    return true;
+  switch (InspectPath(path, why)) {
+    case PathKind::kFile:
+      return true;
+    case PathKind::kMissing:
+      *why = "no such file";
+      break;
+    case PathKind::kDirectory:
+      *why = "is a directory";
+      break;
+    case PathKind::kOther:
+      *why = "not a regular file (a FIFO, socket or device)";
+      break;
+    case PathKind::kUnreachable:  // why says it
+      break;
   }
   return false;
 }

@@ -4,8 +4,10 @@
 libFuzzer (`make fuzz`) drives each parser in-process; this drives the real binary, as a user's
 files reach it: every input kind (manifests YAML/CSV, pins CSV, calibration YAML, diameter tables,
 fit CSVs, temperature logs, extruder YAML, step JSON under --resume, images, micrometer images,
-videos, command-line numbers, file-system paths) is mutated from seeds the tool made itself, and
-each run is classified:
+videos, command-line numbers, file-system paths; and the newer surfaces: lag frames and profiles,
+thermal and drive tables, manifests with a feedstock block, filament speed with its gear, inspect,
+watch on video files and on a folder that mutated, half-written, junk and future-stamped images
+arrive in) is mutated from seeds the tool made itself, and each run is classified:
   crash     killed by a signal, or exit 134/136/139, or a sanitizer report in the output
   hang      still running after --timeout seconds (default 10)
   library   a line of library text (OpenCV, libpng, FFmpeg, glog, C++ runtime, ...) in the output
@@ -14,6 +16,7 @@ Use the sanitizer build (build-asan/bin/clogscope) to catch memory errors. Findi
 OUT/findings/<class>/<n>/ with the input, the command line and the output.
 
 Seeds: fuzz/campaign_seeds.py. Usage: fuzz/campaign.py --bin build-asan/bin/clogscope --runs 10000 --jobs 2
+(--kinds newer: only the newer surfaces; --kinds lag_frames,watch_folder: those.)
 """
 import argparse
 import collections
@@ -106,8 +109,9 @@ def library_lines(text):
     return [l for l in text.splitlines() if LIBRARY_TEXT.search(l) and not TOOL_LINE.match(l)]
 
 
-def run(cmd, cwd, timeout_s):
-    """Runs a command in its own process group; returns (status, rc, output, seconds)."""
+def run(cmd, cwd, timeout_s, during=None):
+    """Runs a command in its own process group; `during`, when given, runs beside it (writes
+    files into a watched folder). Returns (status, rc, output, seconds)."""
     env = dict(os.environ)
     env["ASAN_OPTIONS"] = "detect_leaks=1:abort_on_error=0:allocator_may_return_null=1"
     env["UBSAN_OPTIONS"] = "print_stacktrace=1:halt_on_error=1"
@@ -115,8 +119,10 @@ def run(cmd, cwd, timeout_s):
     t0 = time.monotonic()
     p = subprocess.Popen(cmd, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                          stdin=subprocess.DEVNULL, env=env, start_new_session=True)
+    if during:
+        during()
     try:
-        out, _ = p.communicate(timeout=timeout_s)
+        out, _ = p.communicate(timeout=max(0.1, timeout_s - (time.monotonic() - t0)))
     except subprocess.TimeoutExpired:
         os.killpg(p.pid, signal.SIGKILL)
         out, _ = p.communicate()
@@ -138,14 +144,16 @@ def build_case(kind, seeds, rng, work):
     r = seeds.root
     files = seeds.files.get(kind, [])
 
-    def mutated(ext):
-        src = rng.choice(files)
+    def mutated(ext, src=None):
+        src = src or rng.choice(files)
         data = open(src, "rb").read()
         others = [open(f, "rb").read() for f in files if f != src]
         path = os.path.join(work, "input" + ext)
         with open(path, "wb") as f:
             f.write(mutate(data, rng, others))
         return path, src
+    mutated.files = files
+    mutated.work = os.path.join(work, "input")
 
     if kind == "manifest_yaml":
         p, _ = mutated(".yaml")
@@ -204,11 +212,148 @@ def build_case(kind, seeds, rng, work):
         if rng.random() < 0.2:
             return [b, "inspect", p, "--frame", str(rng.choice([0, 5, 11, 1000])), "--out", "i.png"]
         return [b, "measure", p, "--out-frames", "f.csv"]
+    if kind in NEWER_KINDS:
+        return newer_case(kind, b, r, rng, mutated)
     if kind == "numbers":
         return numbers_case(b, r, rng)
     if kind == "paths":
         return paths_case(b, r, rng, work)
     raise ValueError(kind)
+
+
+def weird_option(rng, cmd, opts):
+    """Sets one of `opts` to an odd number (or leaves the command as it is, half the time)."""
+    if rng.random() < 0.5:
+        opt = rng.choice(opts)
+        v = rng.choice(WEIRD_NUMBERS)
+        if opt in cmd:
+            cmd[cmd.index(opt) + 1] = v
+        else:
+            cmd += [opt, v]
+    return cmd
+
+
+def newer_case(kind, b, r, rng, mutated):
+    """The newer surfaces: lag, thermal, drive, feedstock manifests, filament speed and gear,
+    inspect, watch on files and folders."""
+    if kind == "lag_frames":
+        p, _ = mutated(".csv")
+        cmd = [b, "lag", "--frames", p, "--commanded", f"{r}/profile.csv", "--out", "o",
+               "--no-plots"]
+        return weird_option(rng, cmd, ["--max-offset-s", "--max-k-s", "--filament-diameter-mm"])
+    if kind == "lag_profile":
+        p, _ = mutated(".csv")
+        form = ["--profile-form", rng.choice(["moves", "linear"])]
+        c = rng.random()
+        if c < 0.4:
+            cmd = [b, "lag", "--frames", f"{r}/lag_frames.csv", "--commanded", p, "--out", "o",
+                   "--no-plots", *form]
+            return weird_option(rng, cmd, ["--max-offset-s", "--max-k-s"])
+        if c < 0.8:
+            cmd = [b, "lag", "--commanded", p, "--k-s", "0.2", "--dt-s", "0.01", "--out", "o",
+                   "--no-plots", *form]
+            return weird_option(rng, cmd, ["--k-s", "--k-la-s", "--dt-s",
+                                           "--filament-diameter-mm"])
+        return [b, "render", "--out", "r", "--frames", "3", "--size", "160x120", "--tip-x-px",
+                "80", "--tip-y-px", "30", "--lag-commanded", p, "--lag-k-s", "0.1"]
+    if kind == "thermal":
+        p, _ = mutated(".csv")
+        cmd = [b, "thermal", "--material", rng.choice(["pla", "abs"]), "--fan-velocity-m-s",
+               "0.3", "--diameters", p, "--filament-modulus-pa", "5e7", "--out", "t"]
+        return weird_option(rng, cmd, ["--fan-velocity-m-s", "--t4-c", "--filament-modulus-pa",
+                                       "--viscosity-pa-s", "--hp-length-mm"])
+    if kind == "drive":
+        p, _ = mutated(".csv")
+        if rng.random() < 0.25:
+            cmd = [b, "drive", "--roller", rng.choice(["1", "3", "7", "hobb-goblin"]),
+                   "--pinch-force-n", "80", "--feed-force-n", "20"]
+            return weird_option(rng, cmd, ["--pinch-force-n", "--feed-force-n",
+                                           "--filament-speed-mm-s", "--friction-n",
+                                           "--k-p-pct", "--roller"])
+        cmd = [b, "drive", "--roller", "3", "--pinch-force-n", "80", "--diameters", p,
+               "--out", "d"]
+        return weird_option(rng, cmd, ["--pinch-force-n", "--friction-n", "--k-p-pct"])
+    if kind == "feedstock_manifest":
+        p, _ = mutated(".yaml")
+        if rng.random() < 0.5:
+            return [b, "run", p, "--out", "out", "--jobs", "1"]
+        return [b, "measure", "--manifest", p, "--out", "out", "--jobs", "1"]
+    if kind == "filament_speed":
+        if rng.random() < 0.7:
+            src = rng.choice(["feed.avi", "feed.mp4"])
+            p, _ = mutated(os.path.splitext(src)[1])
+        else:
+            p = f"{r}/feed.avi"
+        cmd = [b, "measure", p, "--target", "filament", "--speed", "--scale-um-per-px", "20",
+               "--gear-roi", "38,70,100,100", "--gear-radius-mm", "1", "--out-frames", "f.csv"]
+        if rng.random() < 0.3:
+            v = [rng.choice(WEIRD_NUMBERS + ["10", "100", "5000"]) for _ in range(4)]
+            cmd[cmd.index("--gear-roi") + 1] = ",".join(v)
+        if rng.random() < 0.3:
+            cmd += ["--gear-centre", ",".join(rng.choice(WEIRD_NUMBERS + ["88", "120"])
+                                               for _ in range(rng.choice([2, 3])))]
+        return weird_option(rng, cmd, ["--gear-radius-mm", "--scale-um-per-px"])
+    if kind == "inspect":
+        src = rng.choice(seeds_of(mutated))
+        p, _ = mutated(os.path.splitext(src)[1], src)
+        cmd = [b, "inspect", p, "--out", "i.png"]
+        if rng.random() < 0.4:
+            cmd += ["--target", rng.choice(["strand", "filament"])]
+        return weird_option(rng, cmd, ["--frame", "--roi", "--band-start-px", "--band-height-px"])
+    if kind == "watch_file":
+        src = rng.choice(seeds_of(mutated))
+        p, _ = mutated(os.path.splitext(src)[1], src)
+        cmd = [b, "watch", p, "--scale-um-per-px", "10", "--duration-s", "5", "--report-s", "0.5"]
+        if rng.random() < 0.3:
+            cmd += ["--extruder", "direct-pla"]
+        return cmd
+    if kind == "watch_folder":
+        os.makedirs(os.path.join(os.path.dirname(mutated.work), "cam"), exist_ok=True)
+        cmd = [b, "watch", "cam", "--duration-s", "2.5", "--report-s", "0.5"]
+        if rng.random() < 0.5:
+            cmd += ["--scale-um-per-px", "10"]
+        return cmd
+    raise ValueError(kind)
+
+
+def seeds_of(mutated):
+    return mutated.files
+
+
+def folder_writer(rng, seeds, work):
+    """While `watch` runs on WORK/cam: mutated, half-written, junk, empty and future-stamped
+    images arrive one after another, and one is replaced."""
+    def write():
+        cam = os.path.join(work, "cam")
+        files = seeds.files["watch_folder"]
+        datas = [open(f, "rb").read() for f in files]
+        time.sleep(0.4)
+        for i in range(rng.randint(2, 6)):
+            src = rng.randrange(len(files))
+            ext = os.path.splitext(files[src])[1] if rng.random() < 0.9 else ".png"
+            path = os.path.join(cam, f"shot{i:03d}{ext}")
+            data = mutate(datas[src], rng, datas) if rng.random() < 0.7 else datas[src]
+            how = rng.random()
+            if how < 0.15:  # half-written: the rest follows a little later
+                cut = rng.randrange(len(data) + 1)
+                with open(path, "wb") as f:
+                    f.write(data[:cut])
+                    f.flush()
+                    time.sleep(rng.choice([0.05, 0.2, 0.5]))
+                    f.write(data[cut:])
+            elif how < 0.25:  # junk under an image name
+                open(path, "wb").write(bytes(rng.randrange(256) for _ in range(rng.randrange(200))))
+            elif how < 0.3:
+                open(path, "wb").close()
+            else:
+                open(path, "wb").write(data)
+            if rng.random() < 0.2:  # a camera whose clock is off
+                t = time.time() + rng.choice([-86400.0, 86400.0, 3e8])
+                os.utime(path, (t, t))
+            if rng.random() < 0.1 and i > 0:  # one replaced in place
+                open(os.path.join(cam, f"shot{i - 1:03d}{ext}"), "wb").write(data)
+            time.sleep(rng.choice([0.0, 0.05, 0.15, 0.3]))
+    return write
 
 
 WEIRD_NUMBERS = ["inf", "-inf", "nan", "1e309", "-1e309", "4.9e-324", "1e308", "-1", "0", "-0",
@@ -307,9 +452,11 @@ def paths_case(b, r, rng, work):
     return cmd
 
 
+NEWER_KINDS = ["lag_frames", "lag_profile", "thermal", "drive", "feedstock_manifest",
+               "filament_speed", "inspect", "watch_file", "watch_folder"]
 KINDS = ["manifest_yaml", "manifest_csv", "temperature_log", "pins_csv", "calibration_yaml",
          "diameters_csv", "fit_csv", "extruder_yaml", "step_json", "image", "micrometer_image",
-         "video", "numbers", "paths"]
+         "video", "numbers", "paths"] + NEWER_KINDS
 
 
 def main():
@@ -321,7 +468,14 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--timeout", type=float, default=10.0)
     ap.add_argument("--jobs", type=int, default=os.cpu_count())
+    ap.add_argument("--kinds", default="all",
+                    help="comma-separated input kinds, 'newer' for the newer surfaces, or all")
     args = ap.parse_args()
+    kinds = (KINDS if args.kinds == "all" else NEWER_KINDS if args.kinds == "newer"
+             else args.kinds.split(","))
+    for k in kinds:
+        if k not in KINDS:
+            sys.exit(f"unknown kind {k}: one of {', '.join(KINDS)}")
     seeds = Seeds(args.bin, os.path.join(args.out, "seeds"))
     print("making seeds with", args.bin, flush=True)
     seeds.make()
@@ -336,12 +490,13 @@ def main():
     def one(n):
         # Each case from its own generator: the same seed gives the same cases at any --jobs.
         rng = random.Random(f"{args.seed}-{n}")
-        kind = KINDS[n % len(KINDS)]
+        kind = kinds[n % len(kinds)]
         work = os.path.join(os.path.abspath(args.out), "work", str(n))
         shutil.rmtree(work, ignore_errors=True)
         os.makedirs(work)
         cmd = build_case(kind, seeds, rng, work)
-        status, rc, out, secs = run(cmd, work, args.timeout)
+        during = folder_writer(rng, seeds, work) if kind == "watch_folder" else None
+        status, rc, out, secs = run(cmd, work, args.timeout, during)
         kept = None
         if status != "clean":
             kept = os.path.join(findings, status, f"{n:05d}_{kind}")
@@ -350,6 +505,8 @@ def main():
                 p = os.path.join(work, f)
                 if f.startswith("input") and os.path.isfile(p):
                     shutil.copy(p, kept)
+                if f == "cam" and os.path.isdir(p):
+                    shutil.copytree(p, os.path.join(kept, "cam"))
             open(os.path.join(kept, "command"), "w").write(
                 " ".join(a if re.fullmatch(r"[\w./,=:@-]+", a) else repr(a) for a in cmd)
                 + f"\nexit {rc}\n")
@@ -376,6 +533,7 @@ def main():
         total.update(c)
     report = {
         "runs": args.runs,
+        "kinds": kinds,
         "seconds": round(time.monotonic() - t_start),
         "binary": args.bin,
         "totals": dict(total),

@@ -2,6 +2,7 @@
 a calibration, a finished run with its step files) plus a JPEG cut from the MJPEG video and a
 16-bit TIFF written here."""
 import json
+import math
 import os
 import shutil
 import struct
@@ -82,6 +83,7 @@ video: {self.root}/step1.mp4
                    "damping_ratio: 0.04\nload_model: sum\n")
         self.sh("run", "experiment.yaml", "--out", "runout")
         self.write("fit.csv", "step,amplitude_m_s2,current_ma\n1,0.5,600\n2,0.6,620\n3,0.7,650\n")
+        self.make_newer()
         steps = sorted(os.listdir(os.path.join(self.root, "runout", "steps")))
         kinds = {
             "manifest_yaml": ["experiment.yaml", "logged.yaml"],
@@ -97,10 +99,66 @@ video: {self.root}/step1.mp4
                       "colour/frame_000000.png", "frame.jpg", "frame.tif"],
             "micrometer_image": ["micro/frame_000000.png"],
             "video": ["step1.mp4", "step2.avi"],
+            # The newer surfaces (issue 27).
+            "lag_frames": ["lag_frames.csv", "measured_frames.csv"],
+            "lag_profile": ["profile.csv", "profile_speed.csv"],
+            "thermal": ["runout/diameters.csv", "drive.csv"],
+            "drive": ["drive.csv", "runout/diameters.csv"],
+            "feedstock_manifest": ["feed.yaml", "feed_steps.yaml"],
+            "filament_speed": ["feed.avi", "feed.mp4"],
+            "inspect": ["frames/frame_000000.png", "frame.jpg", "step1.mp4", "feed.avi"],
+            "watch_file": ["step1.mp4", "step2.avi"],
+            "watch_folder": ["frames/frame_000000.png", "frames16/frame_000000.png", "frame.jpg",
+                             "frame.tif"],
         }
         for k, names in kinds.items():
             self.files[k] = [os.path.join(self.root, n) for n in names]
         json.dump(self.files, open(os.path.join(self.root, "seeds.json"), "w"), indent=1)
+
+    def make_newer(self):
+        """Seeds of the newer commands: lag profiles and frames, drive tables, a filament video
+        with its drive gear, manifests with a feedstock block."""
+        self.write("profile.csv", "time_s,flow_mm3_s\n0,5\n1.0,10\n2.5,6\n4.0,11\n5.5,5\n")
+        self.write("profile_speed.csv", "time_s,filament_speed_mm_s\n0,1\n1,2\n1,3\n2.5,1.5\n"
+                   "4,3.5\n")
+        # A width that follows the first-order lag (K 0.2 s) of profile.csv, 25 frames/s.
+        knots = [(0, 5), (1.0, 10), (2.5, 6), (4.0, 11), (5.5, 5)]
+        rows, y, t_prev = [], 5.0, 0.0
+        for i in range(175):
+            t = 0.02 + i / 25
+            q = [f for (k, f) in knots if k <= t][-1]
+            y = q + (y - q) * math.exp(-(t - t_prev) / 0.2)
+            t_prev = t
+            rows.append(f"lag.avi,{i},{t:.3f},1,{40 * y / 3:.3f},{40 * y:.3f}\n")
+        self.write("lag_frames.csv", "source,frame,time_s,valid,width_px,width_um\n" + "".join(rows))
+        self.sh("measure", "step1.mp4", "--scale-um-per-px", "10", "--out-frames",
+                "measured_frames.csv")
+        self.write("drive.csv", "step,temperature_c,mean_um,slip_pct\n1,220,400.0,\n"
+                   "2,210,396.9,0.9\n3,200,390.1,\n4,190,381.3,1.5\n")
+        feed = ["--no-nozzle", "--scale-um-per-px", "20", "--size", "320x240", "--tip-x-px",
+                "160", "--tip-y-px", "0", "--fps", "30", "--frames", "8", "--surface-texture", "8",
+                "--strand-width-um", "1750", "--feed-speed-mm-s", "4.5", "--drive-gear",
+                "88,120,50", "--gear-surface-speed-mm-s", "5"]
+        self.sh("render", "--out", "feed.avi", *feed)
+        self.sh("render", "--out", "feed.mp4", *feed)
+        block = ("feedstock:\n  scale_um_per_px: 20\n  gear_roi: 38,70,100,100\n"
+                 "  gear_radius_mm: 1\n")
+        self.write("feed.yaml", f"""name: feed
+samples: 3
+scale_um_per_px: 10
+extruder: direct-pla
+{block}steps:
+  - {{step: 1, temperature_c: 220, video: {self.root}/step1.mp4, feedstock_video: {self.root}/feed.avi}}
+  - {{step: 2, temperature_c: 210, video: {self.root}/step2.avi, feedstock_video: {self.root}/feed.mp4}}
+""")
+        self.write("feed_steps.yaml", f"""name: feed2
+samples: 2
+scale_um_per_px: 10
+feedstock:
+  scale_um_per_px: 20
+steps:
+  - {{step: 1, temperature_c: 220, images: {self.root}/frames, feedstock_video: {self.root}/feed.avi}}
+""")
 
 
 def tiff16(w, h):

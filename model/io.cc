@@ -4,7 +4,6 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
-#include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -12,6 +11,7 @@
 
 #include "common/atomic_file.h"
 #include "common/csv.h"
+#include "common/path_check.h"
 
 namespace clogscope::model {
 namespace {
@@ -165,8 +165,10 @@ ExtruderParams LoadExtruder(const std::string& preset_or_file) {
   for (const auto& name : ExtruderParams::PresetNames()) {
     if (preset_or_file == name) return ExtruderParams::Preset(name);
   }
-  if (!std::filesystem::is_regular_file(preset_or_file))
+  std::string why;
+  if (InspectPath(preset_or_file, &why) == PathKind::kMissing)
     return ExtruderParams::Preset(preset_or_file);
+  RequireInputPath("", preset_or_file, PathExpect::kPresetOrFile);
   return ParseExtruderYaml(ReadFile(preset_or_file), preset_or_file);
 }
 

@@ -35,8 +35,12 @@ double Median(std::vector<double> v) {
 std::array<double, 3> GridStart(const FlowProfile& p, const std::vector<WidthSample>& s,
                                 const LagFitOptions& o) {
   double dt = (s.back().time_s - s.front().time_s) / (s.size() - 1);
-  const double offset_step = std::max(std::min(dt / 2, o.max_offset_s / 10), 1e-4);
-  const int offsets = static_cast<int>(std::floor(o.max_offset_s / offset_step));
+  // Half a frame interval, at most a tenth of the range; coarser when the range would need more
+  // than kMaxGridOffsets steps a side (the solver refines the start).
+  const double offset_step =
+      std::max({std::min(dt / 2, o.max_offset_s / 10), o.max_offset_s / kMaxGridOffsets, 1e-4});
+  const int offsets = static_cast<int>(
+      std::min(std::floor(o.max_offset_s / offset_step), static_cast<double>(kMaxGridOffsets)));
   std::array<double, 3> best{1, 1, 0};
   double best_sse = INFINITY;
   std::vector<double> times(s.size());
@@ -112,12 +116,16 @@ Solved Solve(const FlowProfile& p, const std::vector<WidthSample>& s, std::array
 bool LagFitOptions::Validate(std::string* why) const {
   if (!(min_k_s > 0 && max_k_s > min_k_s && std::isfinite(max_k_s)))
     *why = "K bounds: need 0 < min < max";
-  else if (!(max_offset_s >= 0 && std::isfinite(max_offset_s)))
-    *why = "maximum time offset must be ≥ 0 s";
+  else if (!(max_offset_s >= 0 && max_offset_s <= kMaxLagOffsetS))
+    *why = fmt::format(
+        "maximum time offset {:g} s: must be in [0, {:g}] s (shift the profile's times for clocks "
+        "further apart)",
+        max_offset_s, kMaxLagOffsetS);
   else if (!(outlier_threshold_sigma > 1))
     *why = "outlier threshold must exceed 1 σ";
-  else if (max_iterations < 1)
-    *why = "at least one iteration";
+  else if (!(max_iterations >= 1 && max_iterations <= kMaxLagIterations))
+    *why =
+        fmt::format("solver iterations {}: must be in [1, {}]", max_iterations, kMaxLagIterations);
   else
     return true;
   return false;

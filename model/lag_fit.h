@@ -15,11 +15,18 @@ struct WidthSample {
   double width = 0;  // any unit (px or µm): the gain carries it
 };
 
+// The bounds of every search the fit makes: the time offset range (clocks further apart must be
+// aligned first, by shifting the profile's times), the offsets tried by the coarse grid (its step
+// grows with the range past this count) and the solver's iterations.
+inline constexpr double kMaxLagOffsetS = 60;
+inline constexpr int kMaxGridOffsets = 600;  // on each side of 0
+inline constexpr int kMaxLagIterations = 1000;
+
 struct LagFitOptions {
   double min_k_s = 1e-3, max_k_s = 10;  // bounds of K
-  double max_offset_s = 0.5;            // |time offset| between the profile's and video's clocks
-  double outlier_threshold_sigma = 5;   // residuals beyond this many robust σ are left out, once
-  int max_iterations = 100;
+  double max_offset_s = 0.5;  // |time offset| between the profile's and video's clocks, ≤ 60 s
+  double outlier_threshold_sigma = 5;  // residuals beyond this many robust σ are left out, once
+  int max_iterations = 100;            // ≤ kMaxLagIterations
   bool Validate(std::string* why) const;
 };
 

@@ -12,6 +12,7 @@
 
 #include "common/atomic_file.h"
 #include "common/csv.h"
+#include "common/path_check.h"
 #include "pipeline/statistics.h"
 
 namespace clogscope::pipeline {
@@ -135,7 +136,8 @@ Manifest LoadCsvManifest(const std::string& path) {
     if (c_b >= 0 && !r[c_b].empty()) s.end_s = ParseNumberField(r[c_b], where, "end_s");
     if (r[c_src].empty()) throw std::invalid_argument(where + ": source is empty");
     const std::string src = Resolve(base, r[c_src]);
-    (fs::is_directory(src) ? s.images : s.video) = src;
+    std::string unused;
+    (InspectPath(src, &unused) == PathKind::kDirectory ? s.images : s.video) = src;
     m.steps.push_back(s);
   }
   return m;
@@ -205,7 +207,9 @@ Manifest LoadManifest(const std::string& path) {
     }
     if (root["extruder"]) {
       m.extruder = y.Text(root["extruder"], "extruder");
-      if (fs::exists(Resolve(base, m.extruder))) m.extruder = Resolve(base, m.extruder);
+      std::string unused;
+      if (InspectPath(Resolve(base, m.extruder), &unused) != PathKind::kMissing)
+        m.extruder = Resolve(base, m.extruder);
     }
     if (root["extruder_set"]) m.extruder_set = y.TextList(root["extruder_set"], "extruder_set");
     if (root["roi"]) m.roi = y.Text(root["roi"], "roi");

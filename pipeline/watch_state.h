@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cmath>
 #include <deque>
 #include <optional>
 #include <string>
@@ -58,13 +59,14 @@ struct WatchStatus {
 
   // Mean effective diameter over the window's valid frames after robust outlier rejection. Its
   // 95 % CI has the frame-to-frame spread (t · s/√n_eff, n_eff from the autocorrelation time)
-  // and the calibration's σ in quadrature. µm fields need a scale (has_scale).
+  // and the calibration's σ in quadrature. µm fields need a scale (has_scale): NaN until known,
+  // and always without a scale (null in JSON, empty in CSV, absent from the metrics).
   bool has_diameter = false;
   bool has_scale = false;
   double diameter_px = 0;
-  double diameter_um = 0;
-  double diameter_ci95_um = 0;
-  double diameter_std_um = 0;  // frame-to-frame
+  double diameter_um = NAN;
+  double diameter_ci95_um = NAN;
+  double diameter_std_um = NAN;  // frame-to-frame
   int n_used = 0, n_rejected = 0;
   double n_effective = 0;
 
@@ -72,11 +74,11 @@ struct WatchStatus {
   // cancels in the ratio.
   bool baseline_ready = false;
   std::string baseline_source;  // "measured" or "given"
-  double baseline_px = 0, baseline_um = 0, baseline_ci95_um = 0;
+  double baseline_px = 0, baseline_um = NAN, baseline_ci95_um = NAN;
   double baseline_start_s = 0;
-  double drift_um = 0, drift_pct = 0, drift_ci95_pct = 0;  // window
+  double drift_um = NAN, drift_pct = 0, drift_ci95_pct = 0;  // window
   bool has_recent = false;
-  double recent_diameter_um = 0, recent_drift_pct = 0, recent_drift_ci95_pct = 0;  // alert window
+  double recent_diameter_um = NAN, recent_drift_pct = 0, recent_drift_ci95_pct = 0;  // alert window
   double recent_diameter_px = 0;
 };
 

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "common/atomic_file.h"
+#include "common/path_check.h"
 #include "vision/video_decoder.h"
 #include "vision/video_io.h"
 
@@ -93,19 +94,17 @@ class VideoSource : public FrameSource {
 }  // namespace
 
 std::unique_ptr<FrameSource> FrameSource::Open(const std::string& path) {
-  std::error_code ec;
-  const fs::file_status st = fs::status(path, ec);
-  // The system's own reason: no such file, a name too long, a loop of symbolic links.
-  if (!fs::exists(st) && (!ec || ec == std::errc::no_such_file_or_directory))
-    throw std::invalid_argument(path + ": no such file or directory");
-  if (ec) throw std::invalid_argument(path + ": " + ec.message());
-  if (fs::is_directory(st)) {
+  // No such file, a name too long, a loop of symbolic links: the one path check's line.
+  RequireInputPath("", path, PathExpect::kFileOrDirectory);
+  std::string unused;
+  if (InspectPath(path, &unused) == PathKind::kDirectory) {
+    std::error_code ec;
     std::vector<std::string> files;
-    for (const auto& entry : fs::directory_iterator(path, ec)) {
+    for (fs::directory_iterator it(path, ec), end; !ec && it != end; it.increment(ec)) {
       // An entry that cannot be followed (a link to itself, a dangling link) is not an image.
       std::error_code entry_ec;
-      if (entry.is_regular_file(entry_ec) && !entry_ec && IsImagePath(entry.path().string()))
-        files.push_back(entry.path().string());
+      if (it->is_regular_file(entry_ec) && !entry_ec && IsImagePath(it->path().string()))
+        files.push_back(it->path().string());
     }
     if (ec) throw std::invalid_argument(path + ": cannot list directory");
     if (files.empty()) throw std::invalid_argument(path + ": directory holds no images");

@@ -1,6 +1,7 @@
 #include "vision/live_source.h"
 
 #include <fmt/format.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <filesystem>
@@ -10,9 +11,9 @@
 #include <optional>
 #include <stdexcept>
 #include <thread>
-#include <tuple>
 #include <vector>
 
+#include "common/path_check.h"
 #include "vision/video_decoder.h"
 #include "vision/video_io.h"
 
@@ -139,10 +140,12 @@ class DeviceSource : public LiveSource {
   int64_t index_ = 0;
 };
 
-// A folder a camera writes images into. Only files newer than the newest one present at Open are
-// taken, in order of modification time (then name); a file is taken once its size has held for
-// one poll, so a half-written image is not read. Memory stays bounded however many files pile up:
-// only the newest file taken and the candidates of one listing are kept.
+// A folder a camera writes images into. The images there at Open are not taken; every image that
+// appears afterwards (a new name, or a name whose file was replaced or rewritten: another inode,
+// size or modification time) is taken once, in order of arrival — the poll that first saw it, then
+// its name — never by its modification time, which a camera whose clock is off puts anywhere. An
+// image is taken once its size and time have held for one poll, so a half-written one is not read.
+// What is remembered is one entry per image in the folder: names that vanish are forgotten.
 class FolderSource : public LiveSource {
  public:
   FolderSource(const std::string& source, const LiveSourceOptions& options,
@@ -153,7 +156,7 @@ class FolderSource : public LiveSource {
         opened_(Clock::now()) {
     std::error_code ec;
     if (!fs::is_directory(source, ec)) throw std::invalid_argument(source + ": not a directory");
-    for (const Entry& e : List()) mark_ = std::max(mark_, e.key);
+    for (const auto& [name, stamp] : List()) seen_[name] = {stamp, 0, /*taken=*/true, true};
   }
 
   LiveRead Next(LiveFrame* out, std::string* why) override {
@@ -163,26 +166,23 @@ class FolderSource : public LiveSource {
         *why = "the folder is gone";
         return LiveRead::kDropped;
       }
-      std::vector<Entry> fresh;
-      for (Entry& e : List())
-        if (e.key > mark_) fresh.push_back(std::move(e));
-      std::sort(fresh.begin(), fresh.end(),
-                [](const Entry& a, const Entry& b) { return a.key < b.key; });
-      if (!fresh.empty()) {
-        Entry& e = fresh.front();
-        const auto seen = sizes_.find(e.path);
-        if (seen != sizes_.end() && seen->second == e.size) {
-          mark_ = e.key;
-          sizes_.clear();
-          out->arrival = Clock::now();
-          out->image = ReadImage(e.path, &out->error);
-          out->time_s = SecondsSince(opened_);
-          out->index = index_++;
-          out->name = fs::path(e.path).filename().string();
-          return LiveRead::kFrame;
-        }
-        sizes_.clear();
-        sizes_[e.path] = e.size;  // take it at the next poll if it holds
+      Update(List());
+      // The earliest arrival not taken yet (names in order within one poll); it waits until it
+      // has held still for a poll, and the later ones wait behind it.
+      auto next = seen_.end();
+      for (auto it = seen_.begin(); it != seen_.end(); ++it) {
+        if (!it->second.taken && (next == seen_.end() || it->second.arrival < next->second.arrival))
+          next = it;
+      }
+      if (next != seen_.end() && next->second.held) {
+        next->second.taken = true;
+        const std::string path = (fs::path(source_) / next->first).string();
+        out->arrival = Clock::now();
+        out->image = ReadImage(path, &out->error);
+        out->time_s = SecondsSince(opened_);
+        out->index = index_++;
+        out->name = next->first;
+        return LiveRead::kFrame;
       }
       if (!SleepUnlessStopped(
               Clock::now() + std::chrono::duration_cast<Clock::duration>(
@@ -194,29 +194,61 @@ class FolderSource : public LiveSource {
   }
 
  private:
-  struct Entry {
-    std::tuple<fs::file_time_type, std::string> key;  // modification time, then name
-    std::string path;
-    uintmax_t size = 0;
+  // What tells one file under a name from another: not a clock to order by.
+  struct Stamp {
+    uintmax_t inode = 0, size = 0;
+    int64_t mtime_ns = 0;
+    bool operator==(const Stamp& o) const {
+      return inode == o.inode && size == o.size && mtime_ns == o.mtime_ns;
+    }
   };
-  std::vector<Entry> List() const {
-    std::vector<Entry> out;
+  struct Seen {
+    Stamp stamp;
+    int64_t arrival = 0;  // the poll that first saw this file
+    bool taken = false;
+    bool held = false;  // unchanged since the poll before
+  };
+
+  // The folder's regular image files by name (a looping or dangling link, a file that vanished
+  // between listing and looking: skipped).
+  std::map<std::string, Stamp> List() const {
+    std::map<std::string, Stamp> out;
     std::error_code ec;
     for (fs::directory_iterator it(source_, ec), end; !ec && it != end; it.increment(ec)) {
-      if (!it->is_regular_file(ec) || !IsImagePath(it->path().string())) continue;
-      const auto t = it->last_write_time(ec);
-      const auto size = it->file_size(ec);
-      if (ec) continue;  // vanished between listing and looking
-      out.push_back({{t, it->path().filename().string()}, it->path().string(), size});
+      const std::string path = it->path().string();
+      if (!IsImagePath(path)) continue;
+      struct stat st;
+      if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) continue;
+      out[it->path().filename().string()] = {
+          static_cast<uintmax_t>(st.st_ino), static_cast<uintmax_t>(st.st_size),
+          static_cast<int64_t>(st.st_mtim.tv_sec) * 1'000'000'000 + st.st_mtim.tv_nsec};
     }
     return out;
+  }
+
+  void Update(const std::map<std::string, Stamp>& listing) {
+    ++polls_;
+    std::map<std::string, Seen> updated;
+    for (const auto& [name, stamp] : listing) {
+      const auto it = seen_.find(name);
+      if (it == seen_.end() || it->second.stamp.inode != stamp.inode ||
+          (it->second.taken && !(it->second.stamp == stamp))) {
+        updated[name] = {stamp, polls_, false, false};  // arrived (or arrived anew)
+      } else {
+        Seen s = it->second;
+        if (!s.taken) s.held = s.stamp == stamp;
+        s.stamp = stamp;
+        updated[name] = s;
+      }
+    }
+    seen_.swap(updated);
   }
 
   LiveSourceOptions options_;
   const std::atomic<bool>* stop_;
   Clock::time_point opened_;
-  std::tuple<fs::file_time_type, std::string> mark_{fs::file_time_type::min(), ""};
-  std::map<std::string, uintmax_t> sizes_;  // the candidate's size at the last poll
+  std::map<std::string, Seen> seen_;  // by file name
+  int64_t polls_ = 0;
   int64_t index_ = 0;
 };
 
@@ -278,11 +310,9 @@ std::unique_ptr<LiveSource> LiveSource::Open(const std::string& source,
       return std::make_unique<DecodedSource>(source, LiveSourceKind::kStream, options, stop);
     case LiveSourceKind::kFolder:
       return std::make_unique<FolderSource>(source, options, stop);
-    case LiveSourceKind::kFile: {
-      std::error_code ec;
-      if (!fs::exists(source, ec)) throw std::invalid_argument(source + ": no such file");
+    case LiveSourceKind::kFile:
+      RequireInputPath("", source, PathExpect::kFile);
       return std::make_unique<DecodedSource>(source, LiveSourceKind::kFile, options, stop);
-    }
   }
   throw std::invalid_argument(source + ": unknown kind of source");
 }

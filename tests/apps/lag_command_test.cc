@@ -100,6 +100,11 @@ TEST(LagCommandTest, BadInputsFailWithOneLineAndNoOutput) {
       {"--frames " + f + " --commanded " + (d / "missing.csv").string(), "missing.csv"},
       {"--commanded " + (d / "profile.csv").string() + " --k-s 0", "--k-s"},
       {"--commanded " + f + " --k-s 0.1", "time_s column and one of flow_mm3_s"},
+      {"--frames " + f + " --commanded " + (d / "profile.csv").string() +
+           " --max-offset-s 2147483648",
+       "--max-offset-s 2.14748e+09: must be in [0, 60] s"},
+      {"--frames " + f + " --commanded " + (d / "profile.csv").string() + " --max-offset-s 1e5",
+       "--max-offset-s 100000: must be in [0, 60] s"},
   };
   for (const auto& c : cases) {
     const RunResult r = RunCli("lag " + c.args + " --out " + out, d);

@@ -107,5 +107,40 @@ TEST(LagFitTest, WidthsUnrelatedToTheFlowAreNotUsable) {
   EXPECT_FALSE(f.message.empty());
 }
 
+// Every search has a stated bound: the offset range is limited to 60 s (the count of offsets tried
+// once overflowed an int at 2147483648 s, and 1e5 s took minutes), refused in one line past it.
+TEST(LagFitTest, OffsetRangesPastTheLimitAreRefusedInOneLine) {
+  std::mt19937 rng(5);
+  const auto s = Widths(Steps(), 0.2, 10.0, 0.0, 0.1, &rng);
+  for (double max_offset_s : {2147483648.0, 1e5, 60.5}) {
+    LagFitOptions o;
+    o.max_offset_s = max_offset_s;
+    std::string why;
+    EXPECT_FALSE(o.Validate(&why)) << max_offset_s;
+    EXPECT_NE(why.find("must be in [0, 60] s"), std::string::npos) << why;
+    EXPECT_EQ(why.find('\n'), std::string::npos) << why;
+  }
+  LagFitOptions o;
+  o.max_offset_s = 2147483648.0;
+  EXPECT_THROW(FitLag(Steps(), s, o), std::invalid_argument);
+  o.max_offset_s = 60;
+  std::string why;
+  EXPECT_TRUE(o.Validate(&why)) << why;
+}
+
+// At the widest allowed range (and with the offset held at 0) the fit still finds the truth.
+TEST(LagFitTest, TheWidestOffsetRangeAndAHeldOffsetStillRecoverTheTruth) {
+  std::mt19937 rng(6);
+  for (const auto& [max_offset_s, offset_s] : {std::pair{60.0, 0.05}, std::pair{0.0, 0.0}}) {
+    LagFitOptions o;
+    o.max_offset_s = max_offset_s;
+    const auto f = FitLag(Steps(), Widths(Steps(), 0.3, 12.0, offset_s, 0.1, &rng), o);
+    ASSERT_TRUE(f.usable) << max_offset_s << ": " << f.message;
+    EXPECT_NEAR(f.k_s, 0.3, 0.02 * 0.3) << max_offset_s;
+    EXPECT_NEAR(f.offset_s, offset_s, 0.005) << max_offset_s;
+    EXPECT_GT(f.k_sigma_s, 0) << max_offset_s;
+  }
+}
+
 }  // namespace
 }  // namespace clogscope::model

@@ -5,9 +5,11 @@
 #include <cmath>
 #include <functional>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <random>
 
 #include "pipeline/experiment.h"
+#include "pipeline/watch_report.h"
 
 namespace clogscope::pipeline {
 namespace {
@@ -255,6 +257,27 @@ TEST(WatchStateTest, InvalidThresholdsNameTheirOption) {
   WatchOptions zero_window;
   zero_window.window_s = 0;
   EXPECT_THROW(WatchState(zero_window, std::nullopt), std::invalid_argument);
+}
+
+// Without a scale the µm quantities are unknown: null in the status JSON (never 0.0), while the px
+// quantities are there.
+TEST(WatchStateTest, WithoutAScaleTheMicrometreFieldsAreNull) {
+  WatchState state(WatchOptions{}, std::nullopt);
+  for (int i = 0; i < 30 * 25; ++i) state.Add(i / 25.0, FrameView::kStrand, 100.0 + (i % 3));
+  const WatchStatus& s = state.status();
+  ASSERT_TRUE(s.has_diameter);
+  ASSERT_TRUE(s.baseline_ready);
+  ASSERT_FALSE(s.has_scale);
+  const auto j = nlohmann::json::parse(StatusJson(s, std::nullopt, WatchCounters{}, "status"));
+  // Widths cycle 100, 101, 102 px: any window's mean is within a third of a pixel-cycle of 101.
+  EXPECT_NEAR(j["diameter"]["px"].get<double>(), 101.0, 0.01);
+  EXPECT_NEAR(j["baseline"]["px"].get<double>(), 101.0, 0.01);
+  for (const char* key : {"um", "ci95_um", "std_um"})
+    EXPECT_TRUE(j["diameter"][key].is_null()) << key << ": " << j["diameter"][key];
+  for (const char* key : {"um", "ci95_um"})
+    EXPECT_TRUE(j["baseline"][key].is_null()) << key << ": " << j["baseline"][key];
+  EXPECT_TRUE(j["drift"]["um"].is_null()) << j["drift"]["um"];
+  EXPECT_NEAR(j["drift"]["pct"].get<double>(), 0.0, 0.02);
 }
 
 }  // namespace

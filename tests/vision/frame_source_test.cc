@@ -76,7 +76,7 @@ TEST(FrameSourceTest, BadPathsNameThePathAndTheProblem) {
   EXPECT_NE(huge.find("huge.png: frames are 65535x65535"), std::string::npos) << huge;
   // A name longer than the system allows; a directory whose one entry is a link to itself.
   const std::string long_name = (dir / (std::string(300, 'a') + ".png")).string();
-  EXPECT_NE(MessageOf(long_name).find("File name too long"), std::string::npos);
+  EXPECT_NE(MessageOf(long_name).find("file name too long"), std::string::npos);
   const fs::path loop = dir / "loop";
   fs::create_directories(loop);
   fs::create_symlink(loop / "self.png", loop / "self.png");

@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <condition_variable>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
 
@@ -25,6 +27,14 @@ fs::path Fresh(const std::string& name) {
 
 cv::Mat Grey(int level) { return cv::Mat(48, 64, CV_8UC1, cv::Scalar(level)); }
 
+// A fresh folder holding one image already (not to be delivered), watched every 20 ms.
+std::unique_ptr<LiveSource> OpenFolderWithAnOldImage(const fs::path& d, std::atomic<bool>* stop) {
+  cv::imwrite((d / "old.png").string(), Grey(10));
+  LiveSourceOptions o;
+  o.folder_poll_s = 0.02;
+  return LiveSource::Open(d.string(), o, stop);
+}
+
 TEST(LiveSourceTest, KindFromTheSourceName) {
   const fs::path d = Fresh("clogscope_live_kind");
   EXPECT_EQ(LiveSource::KindOf("/dev/video0"), LiveSourceKind::kDevice);
@@ -38,11 +48,8 @@ TEST(LiveSourceTest, KindFromTheSourceName) {
 
 TEST(LiveSourceTest, AFolderDeliversNewImagesInOrderAndIgnoresThoseAlreadyThere) {
   const fs::path d = Fresh("clogscope_live_folder");
-  cv::imwrite((d / "old.png").string(), Grey(10));
   std::atomic<bool> stop{false};
-  LiveSourceOptions o;
-  o.folder_poll_s = 0.02;
-  auto source = LiveSource::Open(d.string(), o, &stop);
+  auto source = OpenFolderWithAnOldImage(d, &stop);
   EXPECT_TRUE(source->live());
   // A camera writes three frames, one after the other (names out of order on purpose: the
   // modification time decides), and a text file that is not an image.
@@ -71,6 +78,63 @@ TEST(LiveSourceTest, AFolderDeliversNewImagesInOrderAndIgnoresThoseAlreadyThere)
   });
   EXPECT_EQ(source->Next(&f, &why), LiveRead::kStopped);
   stopper.join();
+  fs::remove_all(d);
+}
+
+// Raises the stop flag if the test is not over within a generous limit, so that a read that would
+// wait forever fails the test instead of hanging it. Not pacing: a passing test never waits on it.
+class Watchdog {
+ public:
+  explicit Watchdog(std::atomic<bool>* stop)
+      : thread_([this, stop] {
+          std::unique_lock<std::mutex> lock(mutex_);
+          if (!done_cv_.wait_for(lock, std::chrono::seconds(30), [this] { return done_; }))
+            *stop = true;
+        }) {}
+  ~Watchdog() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      done_ = true;
+    }
+    done_cv_.notify_all();
+    thread_.join();
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable done_cv_;
+  bool done_ = false;
+  std::thread thread_;
+};
+
+// A camera whose clock runs ahead stamps one image a day into the future: the images after it are
+// still delivered, in the order they arrived (a folder is not read by a clock it cannot trust).
+TEST(LiveSourceTest, AnImageStampedInTheFutureDoesNotHideTheNextOnes) {
+  const fs::path d = Fresh("clogscope_live_future");
+  std::atomic<bool> stop{false};
+  auto source = OpenFolderWithAnOldImage(d, &stop);
+  Watchdog watchdog(&stop);
+  const auto now = fs::file_time_type::clock::now();
+  struct Shot {
+    std::string name;
+    int level;
+    fs::file_time_type mtime;
+  };
+  const Shot shots[] = {{"c.png", 40, now + std::chrono::hours(24)},
+                        {"b.png", 80, now - std::chrono::hours(1)},
+                        {"a.png", 120, now - std::chrono::hours(2)}};
+  LiveFrame f;
+  std::string why;
+  for (size_t k = 0; k < std::size(shots); ++k) {
+    const std::string path = (d / shots[k].name).string();
+    WriteImageAtomically(path, Grey(shots[k].level));
+    fs::last_write_time(path, shots[k].mtime);
+    ASSERT_EQ(source->Next(&f, &why), LiveRead::kFrame) << shots[k].name << ": " << why;
+    ASSERT_FALSE(f.image.empty()) << f.error;
+    EXPECT_EQ(f.name, shots[k].name);
+    EXPECT_EQ(f.image.at<uchar>(0, 0), shots[k].level);
+    EXPECT_EQ(f.index, static_cast<int64_t>(k));
+  }
   fs::remove_all(d);
 }
 
