@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
 #include "apps/commands.h"
@@ -23,7 +24,10 @@ std::string Render(const fs::path& dir, const std::string& name, const vision::S
 // a PNG under a name nothing will open it by.
 TEST(InspectCommandTest, OutMustBeAPngName) {
   InspectCommandOptions o;
-  o.input = "frame.png";
+  // An input that exists: the input's own check (common/path_check.h) comes after --out's.
+  const fs::path d = testing::FreshDir("clogscope_inspect_out");
+  o.input = (d / "frame.png").string();
+  std::ofstream(o.input) << "x";
   for (const std::string name : {"inspect", "dir/inspect.jpg", "x.png.partial"}) {
     o.out_png = name;
     std::string why;
