@@ -83,7 +83,7 @@ MatrixResult RunAdversarialMatrix(const MatrixOptions& o) {
         r.strand = truth.strand;
         if (m.valid()) {
           const double err = std::abs(m.width_px - truth.width_px);
-          r.wrong = !truth.strand || err > std::max(kWrongPx, kWrongFraction * truth.width_px);
+          r.wrong = !truth.strand || err > WrongTolerancePx(truth.width_px);
           r.wrong_beyond_sigma =
               r.wrong && (!truth.strand || err > kCoveredSigmas * m.width_sigma_px);
         }

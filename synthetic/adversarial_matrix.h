@@ -1,5 +1,6 @@
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -23,6 +24,9 @@ struct MatrixOptions {
 // A valid width is confidently wrong when it is off by more than max(0.3 px, 0.5 %); its σ is
 // honest about it when the error is within 4 σ.
 inline constexpr double kWrongPx = 0.3, kWrongFraction = 0.005, kCoveredSigmas = 4.0;
+inline double WrongTolerancePx(double truth_px) {
+  return std::max(kWrongPx, kWrongFraction * truth_px);
+}
 
 struct FrameRecord {
   TroubleClass trouble = TroubleClass::kPlain;

@@ -131,8 +131,6 @@ double InnerEdgeDistance(const GreyImage& img, const AxisFrame& f, double s0, do
   const int edge_i = static_cast<int>(kBehindPx / kStepPx);
   const double sign =
       profile[std::min(n - 1, edge_i + 6)] >= profile[std::max(0, edge_i - 6)] ? 1.0 : -1.0;
-  std::vector<double> g(n, 0.0);
-  for (int i = 1; i + 1 < n; ++i) g[i] = -sign * (profile[i + 1] - profile[i - 1]);
   std::vector<double> along(n, 0.0);
   for (int i = 1; i + 1 < n; ++i) along[i] = sign * (profile[i + 1] - profile[i - 1]);
   // The edge's own peak near the edge; then an opposite peak, an edge in its own right: at least
@@ -154,8 +152,9 @@ double InnerEdgeDistance(const GreyImage& img, const AxisFrame& f, double s0, do
     if (along[i] > along[peak]) peak = i;
   // Past the silhouette's own step (the ±3 px the step is read over).
   for (int i = peak + reach + 1; i + 1 < n; ++i) {
-    const bool local_max = g[i] > 0 && g[i] >= g[i - 1] && g[i] >= g[i + 1];
-    if (!local_max || g[i] < 0.25 * along[peak]) continue;
+    // The gradient turned back: a peak of −along.
+    const bool local_max = -along[i] > 0 && along[i] <= along[i - 1] && along[i] <= along[i + 1];
+    if (!local_max || -along[i] < 0.25 * along[peak]) continue;
     const double step =
         std::abs(profile[std::min(n - 1, i + reach)] - profile[std::max(0, i - reach)]);
     if (step >= min_step) return (i - edge_i) * kStepPx;

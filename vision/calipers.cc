@@ -205,8 +205,14 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     inner_edge_px[side] = InnerEdgeDistance(img, f, band_s0, band_s1, e, side == 0 ? 1 : -1,
                                             std::min(0.45 * width0, 40.0), min_contrast);
   }
-  const auto inner_reach = [&](int side, double inner, double sigma) {
-    return std::min(inner, std::max(3.0, inner_edge_px[side] - 2.5 * sigma - 1.0));
+  // One side's edge window about e0: `outer` px into the background, `inner` into the object
+  // but short of an edge inside it by the blur (sigma_guess as it stands).
+  struct Window {
+    double u0, u1;
+  };
+  const auto window = [&](int side, double e0, double outer, double inner) {
+    const double in = std::min(inner, std::max(3.0, inner_edge_px[side] - 2.5 * sigma_guess - 1.0));
+    return side == 0 ? Window{e0 - outer, e0 + in} : Window{e0 - in, e0 + outer};
   };
   // Saturation is judged on the decoded frame: where a codec put the clipped plateau.
   const double mid_s = 0.5 * (band_s0 + band_s1), reach_px = 12.0;
@@ -240,9 +246,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       cf = CaliperFit{};
       for (int side = 0; side < 2; ++side) {
         const double e0 = (side == 0 ? left_guess : right_guess) + slope_guess * sc;
-        const double in = inner_reach(side, inner, sigma_guess);
-        const double u0 = side == 0 ? e0 - outer : e0 - in;
-        const double u1 = side == 0 ? e0 + in : e0 + outer;
+        const auto [u0, u1] = window(side, e0, outer, inner);
         if (!GatherEdgeSamples(img, f, s0, s1, u0, u1, clip, &samples, &cf.saturated)) {
           cf.inside_roi = false;
           break;
@@ -328,11 +332,12 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   }
   if (border)
     return fail(FrameStatus::kTouchesBorder, "edge windows reach the frame or ROI border");
+  // The windows from here on, at the blur and models the passes settled on.
+  const double outer = std::max(6.5, 3.0 * sigma_guess + 2.5) + (shade[0] || shade[1] ? 3.5 : 0);
+  const double inner = std::min(outer, std::max(4.0, 0.3 * width0));
   // A strand's edges may curve out of windows placed on straight lines near the tip (die swell):
   // from the bottom up, a caliper that found no edge looks again where the two below point.
   if (!filament) {
-    const double outer = std::max(6.5, 3.0 * sigma_guess + 2.5) + (shade[0] || shade[1] ? 3.5 : 0);
-    const double inner = std::min(outer, std::max(4.0, 0.3 * width0));
     for (int k = n_cal - 3; k >= 0; --k) {
       CaliperFit& cf = fits[k];
       const CaliperFit& b1 = fits[k + 1];
@@ -347,9 +352,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
         const double e1 = (side == 0 ? b1.left : b1.right).edge_px;
         const double e2 = (side == 0 ? b2.left : b2.right).edge_px;
         const double e0 = 2 * e1 - e2;
-        const double in = inner_reach(side, inner, sigma_guess);
-        const double u0 = side == 0 ? e0 - outer : e0 - in;
-        const double u1 = side == 0 ? e0 + in : e0 + outer;
+        const auto [u0, u1] = window(side, e0, outer, inner);
         int clipped = 0;
         if (!GatherEdgeSamples(img, f, s0, s1, u0, u1, clip, &samples, &clipped)) break;
         const EdgeFit again = shade[side] == 1
@@ -554,8 +557,6 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   }
   m->model_sigma_px = 0.5 * (shading_doubt_px[0] + shading_doubt_px[1]);
   {
-    const double outer = std::max(6.5, 3.0 * sigma_guess + 2.5) + (shade[0] || shade[1] ? 3.5 : 0);
-    const double inner = std::min(outer, std::max(4.0, 0.3 * width0));
     // The inlier calipers' own edge models (calipers refitted as cylinders have none).
     double structure_doubt_px[2];
     for (int side = 0; side < 2; ++side) {
@@ -566,9 +567,9 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
         edges.push_back(
             {s0, s0 + opt.caliper_spacing_px, side == 0 ? fits[k].left : fits[k].right});
       }
-      const double in = inner_reach(side, inner, sigma_guess);
-      structure_doubt_px[side] =
-          BandEdgeDoubtPx(img, f, clip, edges, side == 0 ? outer : in, side == 0 ? in : outer);
+      // About each caliper's fitted edge: the window's reach either side of it.
+      const Window w = window(side, 0.0, outer, inner);
+      structure_doubt_px[side] = BandEdgeDoubtPx(img, f, clip, edges, -w.u0, w.u1);
     }
     // And where the band starts, when the width changes along it (die swell relaxing): a tip set
     // by the nozzle's face on both sides is good to a fraction of a px; one inferred from where
@@ -589,8 +590,6 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     const double lo = m->band_end_px + 2 * opt.caliper_spacing_px;
     const double hi = g.s_end - 10.0 - 12.0 * std::abs(f.dx);
     std::vector<double> elsewhere;
-    const double outer = std::max(6.5, 3.0 * sigma_guess + 2.5) + (shade[0] || shade[1] ? 3.5 : 0);
-    const double inner = std::min(outer, std::max(4.0, 0.3 * width0));
     for (int i = 0; i < kReferenceCalipers && hi - lo > opt.caliper_spacing_px; ++i) {
       const double s0 = lo + (hi - lo - opt.caliper_spacing_px) * (i + 0.5) / kReferenceCalipers;
       const double s1 = s0 + opt.caliper_spacing_px, sc = 0.5 * (s0 + s1);
@@ -598,9 +597,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       bool ok = true;
       for (int side = 0; side < 2 && ok; ++side) {
         const double e0 = (side == 0 ? left_guess : right_guess) + slope_guess * sc;
-        const double in = inner_reach(side, inner, sigma_guess);
-        const double u0 = side == 0 ? e0 - outer : e0 - in;
-        const double u1 = side == 0 ? e0 + in : e0 + outer;
+        const auto [u0, u1] = window(side, e0, outer, inner);
         int clipped = 0;
         ok = GatherEdgeSamples(img, f, s0, s1, u0, u1, clip, &samples, &clipped);
         if (!ok) break;

@@ -56,7 +56,12 @@ double SharedStructureEdgeDoubtPx(double shared_rms, double rms, double edge_sig
 double BandEdgeDoubtPx(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
                        const std::vector<CaliperEdge>& edges, double below_px, double above_px) {
   ResidualStructure structure(std::max(below_px, above_px));
-  std::vector<EdgeSample> samples, pooled;
+  // The pooled profile in 0.1 px bins, far finer than any blur: the fits then cost what two
+  // calipers' do, not what the whole band's samples would.
+  constexpr double kBinPx = 0.1;
+  const int bins = static_cast<int>(std::ceil((below_px + above_px) / kBinPx)) + 1;
+  std::vector<double> sum(bins, 0.0), count(bins, 0.0);
+  std::vector<EdgeSample> samples;
   std::vector<double> per_unit, blur;
   bool plain = true;
   for (const CaliperEdge& c : edges) {
@@ -65,8 +70,13 @@ double BandEdgeDoubtPx(const GreyImage& img, const AxisFrame& f, const ClipLevel
     int clipped = 0;
     if (!GatherEdgeSamples(img, f, c.s0_px, c.s1_px, u0, u1, clip, &samples, &clipped)) continue;
     for (const EdgeSample& smp : samples) {
-      structure.Add(smp.u_px - e.edge_px, smp.value - EdgeModelValue(e, smp.u_px));
-      pooled.push_back({static_cast<float>(smp.u_px - e.edge_px), smp.value});
+      const double u = smp.u_px - e.edge_px;
+      structure.Add(u, smp.value - EdgeModelValue(e, smp.u_px));
+      // The same float distance the pooled samples were binned by.
+      const int b = static_cast<int>(std::lround((static_cast<float>(u) + below_px) / kBinPx));
+      if (b < 0 || b >= bins) continue;
+      sum[b] += smp.value;
+      count[b] += 1;
     }
     per_unit.push_back(SharedStructureEdgeDoubtPx(1.0, e.rms, e.edge_sigma_px, e.samples, u1 - u0));
     blur.push_back(e.sigma_px);
@@ -78,22 +88,11 @@ double BandEdgeDoubtPx(const GreyImage& img, const AxisFrame& f, const ClipLevel
   if (plain) {
     // Both models on the pooled profile, where the noise has averaged down: their difference is
     // the model's, not the noise's.
-    // The pooled profile in 0.1 px bins, far finer than any blur: the fits then cost what two
-    // calipers' do, not what the whole band's samples would.
-    const double bin_px = 0.1;
-    const int bins = static_cast<int>(std::ceil((below_px + above_px) / bin_px)) + 1;
-    std::vector<double> sum(bins, 0.0), count(bins, 0.0);
-    for (const EdgeSample& smp : pooled) {
-      const int b = static_cast<int>(std::lround((smp.u_px + below_px) / bin_px));
-      if (b < 0 || b >= bins) continue;
-      sum[b] += smp.value;
-      count[b] += 1;
-    }
     std::vector<EdgeSample> profile;
     for (int b = 0; b < bins; ++b) {
       if (count[b] > 0)
         profile.push_back(
-            {static_cast<float>(b * bin_px - below_px), static_cast<float>(sum[b] / count[b])});
+            {static_cast<float>(b * kBinPx - below_px), static_cast<float>(sum[b] / count[b])});
     }
     const double sigma = Median(blur);
     const EdgeFit one = FitBlurredStep(profile, 0.0, sigma, 0.0);

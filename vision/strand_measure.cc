@@ -223,16 +223,13 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
     if (s1 - s0 < min_band) s0 = band_s0, s1 = band_s1;
   }
   const GreyImage img{channel, channel.depth() == CV_16U};
-  if (opt.target == MeasureTarget::kStrand) {
-    // A strand's calipers cover its whole band (its width may change along it: die swell), the
-    // spacing stretched to a whole number of calipers.
-    StrandMeasureOptions whole = opt;
-    whole.caliper_spacing_px =
+  // A strand's calipers cover its whole band (its width may change along it: die swell), the
+  // spacing stretched to a whole number of calipers.
+  StrandMeasureOptions calipers = opt;
+  if (opt.target == MeasureTarget::kStrand)
+    calipers.caliper_spacing_px =
         (s1 - s0) / std::max(1.0, std::round((s1 - s0) / opt.caliper_spacing_px));
-    MeasureCalipers(img, data_max, g, s0, s1, whole, &m);
-  } else {
-    MeasureCalipers(img, data_max, g, s0, s1, opt, &m);
-  }
+  MeasureCalipers(img, data_max, g, s0, s1, calipers, &m);
   if (m.valid() && opt.target == MeasureTarget::kStrand) {
     if (g.tip_width_px > 0) m.swell_ratio = std::max(1.0, g.tip_width_px / m.width_px);
     const SelfCheck check =

@@ -18,7 +18,7 @@ struct TipTrace {
 };
 
 // Follows the edges u = left_u0 + slope·s and right_u0 + slope·s of axis frame `a` upward (−s)
-// from s_from, each re-found every px within ±2 px of where its curve is heading, until its
+// from s_from, each re-found every px within ±3 px of where its curve is heading, until its
 // contrast (sign·step, `ref_*` the edge's usual contrast) stays below half for three px, or the
 // level inside it changes; then refines the end on the nozzle's face beside the strand where
 // that face steps by at least min_face_step.

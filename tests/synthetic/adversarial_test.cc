@@ -19,8 +19,6 @@ vision::StrandMeasurement RenderAndMeasure(const AdversarialScene& p, Adversaria
   return MeasureAdversarialFrame(f, p);
 }
 
-double Tolerance(double truth_px) { return std::max(0.3, 0.005 * truth_px); }
-
 TEST(AdversarialTest, RendererKeepsTheGeometricWidthOfAPlainStrand) {
   // The renderer's own honesty: a flat strand, no noise, lossless, measured within 0.05 px.
   AdversarialScene p = RandomAdversarialScene(TroubleClass::kPlain, 3);
@@ -48,7 +46,7 @@ TEST(AdversarialTest, BacklitLensIsMeasuredAtItsOuterSilhouette) {
     if (!m.valid()) continue;
     ++valid;
     EXPECT_EQ(m.polarity, vision::Polarity::kDarkOnBright) << Describe(p);
-    EXPECT_NEAR(m.width_px, t.width_px, Tolerance(t.width_px)) << Describe(p);
+    EXPECT_NEAR(m.width_px, t.width_px, WrongTolerancePx(t.width_px)) << Describe(p);
   }
   EXPECT_GE(valid, 5);
 }
@@ -85,7 +83,7 @@ TEST(AdversarialTest, ClippedStrandThroughH264IsSaturatedNotMeasured) {
     p.codec = Codec::kH264;
     AdversarialTruth t;
     const vision::StrandMeasurement m = RenderAndMeasure(p, &t);
-    EXPECT_FALSE(m.valid() && std::abs(m.width_px - t.width_px) > Tolerance(t.width_px))
+    EXPECT_FALSE(m.valid() && std::abs(m.width_px - t.width_px) > WrongTolerancePx(t.width_px))
         << m.width_px << " px, truth " << t.width_px << ": " << Describe(p);
     if (!m.valid()) {
       EXPECT_EQ(m.status, vision::FrameStatus::kSaturated) << m.detail;
@@ -113,7 +111,7 @@ TEST(AdversarialTest, AHairBesideTheStrandIsNeverMeasuredAsIt) {
   AdversarialTruth t;
   const vision::StrandMeasurement m = RenderAndMeasure(p, &t);
   ASSERT_TRUE(m.valid() || m.status == vision::FrameStatus::kImprecise) << m.detail;
-  EXPECT_NEAR(m.width_px, t.width_px, Tolerance(t.width_px));
+  EXPECT_NEAR(m.width_px, t.width_px, WrongTolerancePx(t.width_px));
   EXPECT_GE(valid, 8);
 }
 

@@ -58,23 +58,30 @@ TEST(SyntheticTest, EdgesHoldTheTruthExactly) {
   ExpectRowsHoldTheTruth(odd);
 }
 
-// A stage micrometer's ticks: each holds exactly its line's area at its lattice position, and the
-// ticks are as long as asked (short 40 µm, every 5th 60 µm, every 10th 80 µm).
-TEST(SyntheticTest, MicrometerTicksHoldTheLattice) {
+// A noiseless 10 µm stage micrometer (2 µm lines, 40 µm short ticks) at 0.5 µm/px, 360 px tall,
+// as a silhouette.
+SceneParams NoiselessMicrometer(int width_px, double tip_x_px, double tip_y_px) {
   SceneParams p;
   p.target = Target::kMicrometer;
-  p.width_px = 640;
+  p.width_px = width_px;
   p.height_px = 360;
-  p.tip_x_px = 320.3;
-  p.tip_y_px = 180;
+  p.tip_x_px = tip_x_px;
+  p.tip_y_px = tip_y_px;
   p.scale_um_per_px = 0.5;
   p.pitch_um = 10;
   p.line_width_um = 2;
   p.tick_length_um = 40;
-  p.tilt_deg = 3;
   p.noise_sigma = 0;
-  p.bit_depth = 16;
   p.SetSilhouette();
+  return p;
+}
+
+// A stage micrometer's ticks: each holds exactly its line's area at its lattice position, and the
+// ticks are as long as asked (short 40 µm, every 5th 60 µm, every 10th 80 µm).
+TEST(SyntheticTest, MicrometerTicksHoldTheLattice) {
+  SceneParams p = NoiselessMicrometer(640, 320.3, 180);
+  p.tilt_deg = 3;
+  p.bit_depth = 16;
   const cv::Mat img = RenderFrame(p, 0, nullptr);
   const double th = p.tilt_deg * M_PI / 180, pitch = 20, w = 4, tick = 80;
   // Coverage summed across tick k on the row where the tick's centre line is at s (px below the
@@ -106,18 +113,7 @@ TEST(SyntheticTest, MicrometerTicksHoldTheLattice) {
 }
 
 TEST(SyntheticTest, MicrometerNumeralsDustAndTwelveBitData) {
-  SceneParams p;
-  p.target = Target::kMicrometer;
-  p.width_px = 480;
-  p.height_px = 360;
-  p.tip_x_px = 240;
-  p.tip_y_px = 220;
-  p.scale_um_per_px = 0.5;
-  p.pitch_um = 10;
-  p.line_width_um = 2;
-  p.tick_length_um = 40;
-  p.noise_sigma = 0;
-  p.SetSilhouette();
+  SceneParams p = NoiselessMicrometer(480, 240, 220);
   const cv::Mat plain = RenderFrame(p, 0, nullptr);
   p.numerals = true;
   const cv::Mat numbered = RenderFrame(p, 0, nullptr);
