@@ -95,9 +95,10 @@ calib::ScaleCalibration CalibrateFromMicrometer(const CalibrateCommandOptions& o
     for (const auto& l : found.lines) marks.push_back({l.position_px, l.sigma_px, l.length_px});
     const calib::LatticeIndexing lattice = calib::IndexLinesOnLattice(marks, static_cast<int>(i));
     if (!lattice.ok()) throw std::invalid_argument(path + ": " + lattice.reason);
+    const std::string left_out = lattice.LeftOutSummary();
     spdlog::info("{}: {} lines, spacing {:.3f} px, tilt {:.2f}°; {}", path, lattice.lines.size(),
-                 lattice.pitch_px, found.angle_deg, lattice.LeftOutSummary());
-    if (lattice.left_out() > 0) notes.push_back(path + ": " + lattice.LeftOutSummary());
+                 lattice.pitch_px, found.angle_deg, left_out);
+    if (lattice.left_out() > 0) notes.push_back(path + ": " + left_out);
     all.insert(all.end(), lattice.lines.begin(), lattice.lines.end());
     inputs->push_back(path);
   }

@@ -7,7 +7,10 @@
 #include <complex>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
+
+#include "common/robust.h"
 
 namespace clogscope::calib {
 namespace {
@@ -28,12 +31,6 @@ constexpr double kChanceSpacings = 0.05, kSameSpacing = 0.03;
 // (marks × frequencies) for it.
 constexpr size_t kPeaks = 6;
 constexpr double kMaxPeriodogramTerms = 1e8;
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
 
 // The marks in one slot and which of them is the line: the longest (dust, or a numeral's stroke
 // above the line, is shorter); of equal ones, the nearest to the slot.
@@ -59,90 +56,99 @@ struct Lattice {
   double score() const { return b > 0 ? occupied() * fill() * fill() : 0; }
 };
 
-// Slots by the nearest and a Huber-reweighted line fit over the marks within the tolerance,
-// repeated until the marks on the lattice no longer change. The fit, not the start, sets the
-// spacing: a start from the periodogram is good to a small fraction of a spacing across the marks.
-// A few marks cut off from the rest by more than kMaxHoleSlots empty slots are not lines (a
-// numeral or another scale's line beyond the end of this one, on a slot by chance): off the
-// lattice.
+// Every mark to its nearest slot of lat (a, b); those farther than `tol` spacings, and those of a
+// run of fewer than kMinRunSlots slots more than kMaxHoleSlots empty slots away from the longest
+// run (a numeral or another scale's line beyond the end of this one, on a slot by chance), off the
+// lattice. Sets lat's slots and off_mark.
+void AssignSlots(const std::vector<LineMark>& m, double tol, Lattice* lat) {
+  lat->slots.clear();
+  lat->off_mark.assign(m.size(), false);
+  std::map<int, std::vector<int>> in_slot;
+  for (size_t i = 0; i < m.size(); ++i) {
+    const double t = (m[i].position_px - lat->a) / lat->b;
+    const int k = static_cast<int>(std::lround(t));
+    if (std::abs(t - k) > tol) {
+      lat->off_mark[i] = true;
+    } else {
+      in_slot[k].push_back(static_cast<int>(i));
+    }
+  }
+  // Runs of slots with at most kMaxHoleSlots empty ones between neighbours; the longest stays.
+  struct Run {
+    int first, last, occupied;
+  };
+  std::vector<Run> runs;
+  for (const auto& [k, marks] : in_slot) {
+    if (runs.empty() || k - runs.back().last > kMaxHoleSlots + 1) runs.push_back({k, k, 0});
+    runs.back().last = k;
+    ++runs.back().occupied;
+  }
+  const auto main_run = std::max_element(
+      runs.begin(), runs.end(), [](const Run& p, const Run& q) { return p.occupied < q.occupied; });
+  auto run = runs.begin();
+  for (const auto& [k, marks] : in_slot) {
+    while (k > run->last) ++run;
+    if (run != main_run && run->occupied < kMinRunSlots) {
+      for (int i : marks) lat->off_mark[i] = true;
+      continue;
+    }
+    Slot slot{marks[0], marks};
+    auto residual = [&](int i) { return std::abs((m[i].position_px - lat->a) / lat->b - k); };
+    for (int i : marks) {
+      const double li = m[i].length_px, lb = m[slot.line].length_px;
+      if (li > lb || (li == lb && residual(i) < residual(slot.line))) slot.line = i;
+    }
+    lat->slots[k] = slot;
+  }
+}
+
+// lat's a and b from a line fit index → position over its slots' lines, Huber-reweighted at 2.5
+// robust σ (floored: centres agree to a few hundredths of a px).
+void HuberFit(const std::vector<LineMark>& m, Lattice* lat) {
+  std::vector<double> w(lat->slots.size(), 1.0);
+  for (int round = 0; round < 4; ++round) {
+    double sw = 0, sk = 0, skk = 0, sx = 0, skx = 0;
+    size_t j = 0;
+    for (const auto& [k, slot] : lat->slots) {
+      const double x = m[slot.line].position_px;
+      sw += w[j];
+      sk += w[j] * k;
+      skk += w[j] * k * k;
+      sx += w[j] * x;
+      skx += w[j] * k * x;
+      ++j;
+    }
+    const double det = sw * skk - sk * sk;
+    if (!(det > 0)) break;
+    lat->b = (sw * skx - sk * sx) / det;
+    lat->a = (sx - lat->b * sk) / sw;
+    std::vector<double> abs_res;
+    for (const auto& [k, slot] : lat->slots)
+      abs_res.push_back(std::abs(m[slot.line].position_px - lat->a - lat->b * k));
+    const double c = 2.5 * std::max(1.4826 * UpperMedian(abs_res), 0.01);
+    for (size_t q = 0; q < abs_res.size(); ++q)
+      w[q] = std::min(1.0, c / std::max(abs_res[q], 1e-12));
+  }
+}
+
+// Slots by the nearest (AssignSlots) and a line fit over the marks on them (HuberFit), repeated
+// until the marks on the lattice no longer change. The fit, not the start, sets the spacing: a
+// start from the periodogram is good to a small fraction of a spacing across the marks.
 Lattice FitFrom(const std::vector<LineMark>& m, double b0, double a0, double tol) {
   Lattice lat;
   lat.a = a0;
   lat.b = b0;
   std::map<int, Slot> previous;
   for (int iter = 0; iter < 20; ++iter) {
-    lat.slots.clear();
-    lat.off_mark.assign(m.size(), false);
     if (!(lat.b >= kMinGapPx)) {  // no lattice: marks closer are pieces of one line
+      lat.slots.clear();
       lat.off_mark.assign(m.size(), true);
       break;
     }
-    std::map<int, std::vector<int>> in_slot;
-    for (size_t i = 0; i < m.size(); ++i) {
-      const double t = (m[i].position_px - lat.a) / lat.b;
-      const int k = static_cast<int>(std::lround(t));
-      if (std::abs(t - k) > tol) {
-        lat.off_mark[i] = true;
-      } else {
-        in_slot[k].push_back(static_cast<int>(i));
-      }
-    }
-    // Runs of slots with at most kMaxHoleSlots empty ones between neighbours; the longest stays.
-    std::vector<std::pair<int, int>> runs;  // first, last slot
-    for (const auto& [k, marks] : in_slot) {
-      if (runs.empty() || k - runs.back().second > kMaxHoleSlots + 1) runs.push_back({k, k});
-      runs.back().second = k;
-    }
-    auto count = [&](const std::pair<int, int>& r) {
-      return std::distance(in_slot.lower_bound(r.first), in_slot.upper_bound(r.second));
-    };
-    const auto main_run =
-        std::max_element(runs.begin(), runs.end(),
-                         [&](const auto& p, const auto& q) { return count(p) < count(q); });
-    for (const auto& [k, marks] : in_slot) {
-      const bool isolated = main_run != runs.end() && (k < main_run->first || k > main_run->second);
-      const auto run = std::find_if(runs.begin(), runs.end(),
-                                    [&](const auto& r) { return k >= r.first && k <= r.second; });
-      if (isolated && count(*run) < kMinRunSlots) {
-        for (int i : marks) lat.off_mark[i] = true;
-        continue;
-      }
-      Slot slot{marks[0], marks};
-      auto residual = [&](int i) { return std::abs((m[i].position_px - lat.a) / lat.b - k); };
-      for (int i : marks) {
-        const double li = m[i].length_px, lb = m[slot.line].length_px;
-        if (li > lb || (li == lb && residual(i) < residual(slot.line))) slot.line = i;
-      }
-      lat.slots[k] = slot;
-    }
+    AssignSlots(m, tol, &lat);
     if (lat.slots.size() < 2 || lat.slots == previous) break;
     previous = lat.slots;
-    // Huber weights at 2.5 robust σ (floored: centres agree to a few hundredths of a px).
-    std::vector<double> w(lat.slots.size(), 1.0);
-    for (int round = 0; round < 4; ++round) {
-      double sw = 0, sk = 0, skk = 0, sx = 0, skx = 0;
-      size_t j = 0;
-      for (const auto& [k, slot] : lat.slots) {
-        const double x = m[slot.line].position_px;
-        sw += w[j];
-        sk += w[j] * k;
-        skk += w[j] * k * k;
-        sx += w[j] * x;
-        skx += w[j] * k * x;
-        ++j;
-      }
-      const double det = sw * skk - sk * sk;
-      if (!(det > 0)) break;
-      lat.b = (sw * skx - sk * sx) / det;
-      lat.a = (sx - lat.b * sk) / sw;
-      std::vector<double> res;
-      for (const auto& [k, slot] : lat.slots)
-        res.push_back(m[slot.line].position_px - lat.a - lat.b * k);
-      std::vector<double> abs_res(res.size());
-      std::transform(res.begin(), res.end(), abs_res.begin(), [](double r) { return std::abs(r); });
-      const double c = 2.5 * std::max(1.4826 * Median(abs_res), 0.01);
-      for (size_t q = 0; q < res.size(); ++q) w[q] = std::min(1.0, c / std::max(abs_res[q], 1e-12));
-    }
+    HuberFit(m, &lat);
     if (!(lat.b > 0)) break;
   }
   return lat;
@@ -152,8 +158,8 @@ Lattice FitFrom(const std::vector<LineMark>& m, double b0, double a0, double tol
 // spacings, and the best of the others that is not the same lattice.
 struct Search {
   bool ok = false;
-  Lattice best, second;
-  bool has_second = false;
+  Lattice best;
+  std::optional<Lattice> second;  // none: every other start reached the best
 };
 
 // The same lattice reached twice: the same spacing, slots in the same places.
@@ -173,7 +179,7 @@ Search FindLattice(const std::vector<LineMark>& m, double tol, double min_ratio,
     if (x[i] - x[i - 1] >= kMinGapPx) gaps.push_back(x[i] - x[i - 1]);
   if (gaps.empty()) return out;
   // Spacings between min_ratio and max_ratio times `spacing_px`, or the median gap.
-  const double gap = spacing_px > 0 ? spacing_px : Median(gaps);
+  const double gap = spacing_px > 0 ? spacing_px : UpperMedian(gaps);
   const double mean = std::accumulate(x.begin(), x.end(), 0.0) / x.size();
   const double span = std::max(x.back() - x.front(), gap);
   // Frequency steps of an eighth of the peak's width (1/span): no peak is missed. Coarser steps
@@ -225,8 +231,47 @@ Search FindLattice(const std::vector<LineMark>& m, double tol, double min_ratio,
   for (size_t i = 1; i < found.size(); ++i) {
     if (SameLattice(out.best, found[i], tol)) continue;
     out.second = found[i];
-    out.has_second = true;
     break;
+  }
+  return out;
+}
+
+// A candidate line: pieces of one line (a line split by dust, a mark right on it) combined, its
+// position weighted by the pieces' σ, its length theirs together; and the marks it came from.
+struct Candidate {
+  LineMark line;
+  std::vector<int> marks;
+};
+
+// The marks by position, those that agree to within kSamePieceSigmas of their σ (kSamePiecePx to
+// kSamePieceMaxPx) combined.
+std::vector<Candidate> CombinePieces(const std::vector<LineMark>& marks) {
+  std::vector<int> order(marks.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(),
+            [&](int i, int j) { return marks[i].position_px < marks[j].position_px; });
+  std::vector<Candidate> out;
+  std::vector<double> weights;  // Σ 1/σ² of each candidate's marks
+  for (int i : order) {
+    const LineMark& mk = marks[i];
+    const double sigma = std::max(mk.sigma_px, kMinPieceSigmaPx);
+    if (!out.empty()) {
+      LineMark& c = out.back().line;
+      const double same = std::clamp(kSamePieceSigmas * std::hypot(sigma, c.sigma_px), kSamePiecePx,
+                                     kSamePieceMaxPx);
+      if (mk.position_px - c.position_px <= same) {
+        const double w = 1 / (sigma * sigma);
+        c.position_px =
+            (c.position_px * weights.back() + mk.position_px * w) / (weights.back() + w);
+        weights.back() += w;
+        c.sigma_px = std::sqrt(1 / weights.back());
+        c.length_px += mk.length_px;
+        out.back().marks.push_back(i);
+        continue;
+      }
+    }
+    out.push_back({{mk.position_px, sigma, mk.length_px}, {i}});
+    weights.push_back(1 / (sigma * sigma));
   }
   return out;
 }
@@ -305,55 +350,25 @@ LatticeIndexing IndexLinesOnLattice(const std::vector<LineMark>& marks, int imag
     return out;
   }
   const double tol = opt.tolerance_spacings;
-  // Pieces of one line (a line split by dust, a mark right on it) become one candidate: its
-  // position weighted by the pieces' σ, its length theirs together.
-  std::vector<int> order(marks.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(),
-            [&](int i, int j) { return marks[i].position_px < marks[j].position_px; });
-  std::vector<LineMark> pieces;
-  std::vector<std::vector<int>> members;  // the marks of each candidate
-  std::vector<double> weights;            // Σ 1/σ² of each candidate's marks
-  for (int i : order) {
-    const LineMark& mk = marks[i];
-    const double sigma = std::max(mk.sigma_px, kMinPieceSigmaPx);
-    if (!pieces.empty()) {
-      LineMark& c = pieces.back();
-      const double same = std::clamp(kSamePieceSigmas * std::hypot(sigma, c.sigma_px), kSamePiecePx,
-                                     kSamePieceMaxPx);
-      if (mk.position_px - c.position_px <= same) {
-        const double w = 1 / (sigma * sigma);
-        c.position_px =
-            (c.position_px * weights.back() + mk.position_px * w) / (weights.back() + w);
-        weights.back() += w;
-        c.sigma_px = std::sqrt(1 / weights.back());
-        c.length_px += mk.length_px;
-        members.back().push_back(i);
-        continue;
-      }
-    }
-    pieces.push_back({mk.position_px, sigma, mk.length_px});
-    members.push_back({i});
-    weights.push_back(1 / (sigma * sigma));
-  }
+  const std::vector<Candidate> candidates = CombinePieces(marks);
   // Candidates far shorter than the lines are no lines: a speck of dust, a numeral's stroke (one
   // on the slot of a line hidden or cut by the border would pass the lattice). Most candidates are
   // lines and most lines are the short ticks: the upper quartile of the lengths is a short tick's.
   std::vector<double> lengths;
-  for (const auto& c : pieces)
-    if (c.length_px > 0) lengths.push_back(c.length_px);
+  for (const auto& c : candidates)
+    if (c.line.length_px > 0) lengths.push_back(c.line.length_px);
   std::sort(lengths.begin(), lengths.end());
   const double line_length_px = lengths.empty() ? 0 : lengths[lengths.size() * 3 / 4];
   const double min_length_px = opt.min_length_fraction * line_length_px;
   std::vector<LineMark> m;
   std::vector<const std::vector<int>*> m_marks;  // the marks of each m
-  for (size_t j = 0; j < pieces.size(); ++j) {
-    if (pieces[j].length_px < min_length_px) {
-      out.too_short += static_cast<int>(members[j].size());
+  for (const Candidate& c : candidates) {
+    if (c.line.length_px < min_length_px) {
+      out.too_short += static_cast<int>(c.marks.size());
       continue;
     }
-    m.push_back(pieces[j]);
-    m_marks.push_back(&members[j]);
+    m.push_back(c.line);
+    m_marks.push_back(&c.marks);
   }
   if (static_cast<int>(m.size()) < opt.min_lines) {
     out.reason =
@@ -398,7 +413,7 @@ LatticeIndexing IndexLinesOnLattice(const std::vector<LineMark>& marks, int imag
         lat.occupied(), lat.b, o.occupied(), o.b);
     return out;
   };
-  if (s.has_second && ambiguous(s.second)) return refuse_ambiguous(s.second);
+  if (s.second && ambiguous(*s.second)) return refuse_ambiguous(*s.second);
   for (double ratio : {0.5, 1.0 / 3, 2.0, 3.0}) {
     const int starts = ratio > 1 ? static_cast<int>(ratio) : 1;
     for (int j = 0; j < starts; ++j) {

@@ -16,6 +16,14 @@ inline double Median(std::vector<double> v) {
   return m;
 }
 
+// The middle value, the upper of the two middle ones for an even count (no mean of them: always a
+// value of `v`); 0 for no values.
+inline double UpperMedian(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
 // Median absolute deviation from `median` (unscaled: σ ≈ 1.4826·MAD for normal data).
 inline double Mad(const std::vector<double>& v, double median) {
   std::vector<double> dev;

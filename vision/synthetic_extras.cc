@@ -135,7 +135,10 @@ double ShadingProfile::At(double u) const {
   return values_[i] * (1 - t) + values_[i + 1] * t;
 }
 
-MicrometerMarks::MicrometerMarks(const MicrometerMarkParams& p) : p_(p) {
+MicrometerMarks::MicrometerMarks(const MicrometerMarkParams& p)
+    : p_(p),
+      reach_px_(1 + 6 * p.sigma_px),
+      fibre_sigma_px_(std::sqrt(p.sigma_px * p.sigma_px + 1.0 / 12)) {
   const double tick = p.tick_length_px;
   digit_h_ = 0.5 * tick;
   digit_w_ = 0.6 * digit_h_;
@@ -150,7 +153,6 @@ MicrometerMarks::MicrometerMarks(const MicrometerMarkParams& p) : p_(p) {
     o.radius_px = std::max(1.5, p.line_width_px * (1 + 2 * u01(rng)));
     specks_.push_back(o);
   }
-  const double reach = 1 + 6 * p.sigma_px;
   for (int i = 0; i < p.dust_fibres; ++i) {
     Fibre f;
     f.width_px = std::max(1.0, 0.5 * p.line_width_px);
@@ -165,7 +167,7 @@ MicrometerMarks::MicrometerMarks(const MicrometerMarkParams& p) : p_(p) {
       y += step * std::sin(angle);
       angle += 0.4 * (u01(rng) - 0.5);
     }
-    const double r = f.width_px + reach;
+    const double r = f.width_px + reach_px_;
     f.x_min = *std::min_element(f.x.begin(), f.x.end()) - r;
     f.x_max = *std::max_element(f.x.begin(), f.x.end()) + r;
     f.y_min = *std::min_element(f.y.begin(), f.y.end()) - r;
@@ -175,7 +177,7 @@ MicrometerMarks::MicrometerMarks(const MicrometerMarkParams& p) : p_(p) {
 }
 
 double MicrometerMarks::BoxCoverage(const Box& b, double u, double s) const {
-  const double r = 1 + 6 * p_.sigma_px;
+  const double r = reach_px_;
   if (u < b.u0 - r || u > b.u1 + r || s < b.s0 - r || s > b.s1 + r) return 0;
   // Across: exact for the pixel's footprint; along: the same with the footprint's other
   // projection (the product is exact away from the box's corners).
@@ -189,12 +191,15 @@ double MicrometerMarks::BoxCoverage(const Box& b, double u, double s) const {
 double MicrometerMarks::NumeralCoverage(long tick, double du, double s) const {
   // Seven segments a–g, bit i for segment 'a' + i, for the digits 0–9.
   static const int kSegments[10] = {0x3f, 0x06, 0x5b, 0x4f, 0x66, 0x6d, 0x7d, 0x07, 0x7f, 0x6f};
-  const std::string label = std::to_string(std::labs(tick));
-  const int n = static_cast<int>(label.size());
+  // Called for every pixel: the label is written out only near it.
+  const long value = std::labs(tick);
+  int n = 1;
+  for (long v = value; v >= 10; v /= 10) ++n;
   const double total = n * digit_w_ + (n - 1) * digit_gap_;
-  const double r = 1 + 6 * p_.sigma_px;
+  const double r = reach_px_;
   const double sb = numeral_bottom_, st = sb - digit_h_, sm = 0.5 * (st + sb);
   if (std::abs(du) > 0.5 * total + r || s < st - r || s > sb + r) return 0;
+  const std::string label = std::to_string(value);
   const double t = p_.line_width_px;
   double clear = 1;
   for (int i = 0; i < n; ++i) {
@@ -233,7 +238,7 @@ double MicrometerMarks::Coverage(double x, double y) const {
     if (a > 0) clear *= 1 - a;
   }
   // A fibre's profile across it is a blurred box at the distance to its centre line.
-  const double se = std::sqrt(p_.sigma_px * p_.sigma_px + 1.0 / 12);
+  const double se = fibre_sigma_px_;
   for (const auto& f : fibres_) {
     if (x < f.x_min || x > f.x_max || y < f.y_min || y > f.y_max) continue;
     double d2 = 1e30;

@@ -93,6 +93,8 @@ class MicrometerMarks {
   double BoxCoverage(const Box& b, double u, double s) const;
   double NumeralCoverage(long tick, double u, double s) const;
   MicrometerMarkParams p_;
+  double reach_px_;        // a mark's blurred edge reaches this far beyond it
+  double fibre_sigma_px_;  // the PSF and the pixel's footprint together, across a fibre
   double digit_h_ = 0, digit_w_ = 0, digit_gap_ = 0, numeral_bottom_ = 0;
   std::vector<ClutterObject> specks_;
   std::vector<Fibre> fibres_;

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <random>
+#include <string>
 
 #include "calib/line_lattice.h"
 #include "calib/pixel_scale.h"
@@ -143,6 +145,16 @@ Calibrated Calibrate(const cv::Mat& img, double pitch_um) {
   return c;
 }
 
+// The calibrated scale's relative error against the rendered one, printed after `label` with the
+// lattice's lines and what it left out.
+double ReportScaleError(const Calibrated& c, const vision::SceneParams& p,
+                        const std::string& label) {
+  const double error = c.cal.scale_um_per_px / p.scale_um_per_px - 1;
+  std::printf("%s: scale error %+.5f %%, %zu lines, %s\n", label.c_str(), 100 * error,
+              c.lattice.lines.size(), c.lattice.LeftOutSummary().c_str());
+  return error;
+}
+
 struct StageCase {
   double tilt_deg;
   int bit_depth;
@@ -165,12 +177,11 @@ TEST_P(StageMicrometerTest, ScaleWithinTwoHundredthsOfAPercent) {
   const Calibrated c = Calibrate(img, p.pitch_um);
   ASSERT_TRUE(c.lattice.ok()) << c.lattice.reason;
   ASSERT_TRUE(c.cal.usable) << c.cal.message;
-  const double error = c.cal.scale_um_per_px / p.scale_um_per_px - 1;
+  char label[64];
+  std::snprintf(label, sizeof label, "tilt %.1f°, %d bit", sc.tilt_deg, sc.bit_depth);
+  const double error = ReportScaleError(c, p, label);
   RecordProperty("scale_error_pct", std::to_string(100 * error));
   RecordProperty("left_out", c.lattice.LeftOutSummary());
-  std::printf("tilt %.1f°, %d bit: scale error %+.5f %%, %zu lines, %s\n", sc.tilt_deg,
-              sc.bit_depth, 100 * error, c.lattice.lines.size(),
-              c.lattice.LeftOutSummary().c_str());
   EXPECT_LE(std::abs(error), 2e-4);
   // 64 ticks in the frame (65 reach into it when tilted); a few at the borders or under dust may
   // be lost, no more.
@@ -203,9 +214,7 @@ TEST(StageMicrometerCoarseTest, HundredMicronPitch) {
   p.tick_length_um = 300;
   const Calibrated c = Calibrate(vision::RenderFrame(p, 0, nullptr), p.pitch_um);
   ASSERT_TRUE(c.lattice.ok()) << c.lattice.reason;
-  const double error = c.cal.scale_um_per_px / p.scale_um_per_px - 1;
-  std::printf("100 µm pitch: scale error %+.5f %%, %zu lines, %s\n", 100 * error,
-              c.lattice.lines.size(), c.lattice.LeftOutSummary().c_str());
+  const double error = ReportScaleError(c, p, "100 µm pitch");
   EXPECT_LE(std::abs(error), 2e-4);
   EXPECT_GE(c.lattice.left_out(), 10);
 }
@@ -219,9 +228,7 @@ TEST(StageMicrometerCoarseTest, NumeralStrokesOnSlotsDoNotBias) {
   p.tick_length_um = (21.6 + 2) / 0.15 * p.scale_um_per_px;
   const Calibrated c = Calibrate(vision::RenderFrame(p, 0, nullptr), p.pitch_um);
   ASSERT_TRUE(c.lattice.ok()) << c.lattice.reason;
-  const double error = c.cal.scale_um_per_px / p.scale_um_per_px - 1;
-  std::printf("numerals on slots: scale error %+.5f %%, %zu lines, %s\n", 100 * error,
-              c.lattice.lines.size(), c.lattice.LeftOutSummary().c_str());
+  const double error = ReportScaleError(c, p, "numerals on slots");
   EXPECT_LE(std::abs(error), 2e-4);
   EXPECT_GE(c.lattice.left_out(), 2);  // the "0"'s two strokes, at least
   // Every line where the lattice puts it: a stroke taken for a tick (or averaged into it) would be
