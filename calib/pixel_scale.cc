@@ -9,6 +9,8 @@
 #include <set>
 #include <stdexcept>
 
+#include "common/robust.h"
+
 namespace clogscope::calib {
 namespace {
 constexpr double kMinPitchUm = 1.0, kMaxPitchUm = 10000.0;  // stage micrometers in use
@@ -16,12 +18,6 @@ constexpr double kMinPitchUm = 1.0, kMaxPitchUm = 10000.0;  // stage micrometers
 // Floor on a target's standard deviation, px: below this, measured σ reflects only pixel noise,
 // not the unmodelled effects (pin roundness, line quality) that dominate real residuals.
 constexpr double kSigmaFloorPx = 0.002;
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
 
 // A line centre's σ in px, floored.
 double LineSigma(const LineObservation& l) {
@@ -95,7 +91,7 @@ void SolveRobust(RobustProblem& rp, int max_iterations, ceres::Solver::Summary* 
       problem.EvaluateResidualBlock(id, /*apply_loss_function=*/false, nullptr, &r, nullptr);
       abs_r.push_back(std::abs(r));
     }
-    const double spread = std::max(1.0, 1.4826 * Median(abs_r));
+    const double spread = std::max(1.0, 1.4826 * UpperMedian(abs_r));
     for (auto id : blocks) problem.RemoveResidualBlock(id);
     for (size_t i = 0; i < costs.size(); ++i) {
       blocks[i] = problem.AddResidualBlock(costs[i], new ceres::HuberLoss(3.0 * spread), params[i]);
@@ -246,7 +242,7 @@ ScaleCalibration FitPinScale(const std::vector<PinObservation>& pins, const Scal
   const bool ok = ParameterSigmas(problem, blocks, residual_var, &sig);
   cal.scale_sigma_um_per_px = ok ? sig[0] : NAN;
   cal.edge_bias_sigma_px = ok && with_bias ? sig[1] : 0.0;
-  Summarise(&cal, opt, std::max(1.4826 * Median(abs_res), kSigmaFloorPx));
+  Summarise(&cal, opt, std::max(1.4826 * UpperMedian(abs_res), kSigmaFloorPx));
   const bool converged = summary.termination_type == ceres::CONVERGENCE;
   cal.usable = converged && ok;
   if (!converged) {
@@ -268,7 +264,7 @@ std::vector<LineObservation> IndexLines(const std::vector<double>& pos,
   if (pos.size() < 2) throw std::invalid_argument("fewer than 2 lines to index");
   std::vector<double> gaps;
   for (size_t i = 1; i < pos.size(); ++i) gaps.push_back(pos[i] - pos[i - 1]);
-  const double spacing = Median(gaps);
+  const double spacing = UpperMedian(gaps);
   if (!(spacing > 0)) throw std::invalid_argument("line positions are not increasing");
   std::vector<LineObservation> out;
   for (size_t i = 0; i < pos.size(); ++i) {
@@ -384,7 +380,7 @@ ScaleCalibration FitMicrometerScale(const std::vector<LineObservation>& lines, d
   const bool ok = ParameterSigmas(problem, blocks, chi2 / dof, &sig);
   cal.scale_sigma_um_per_px = ok ? sig[0] : NAN;
   cal.distortion_sigma_px = ok && opt.fit_distortion ? sig[1] : 0.0;
-  Summarise(&cal, opt, std::max(1.4826 * Median(abs_res), kSigmaFloorPx));
+  Summarise(&cal, opt, std::max(1.4826 * UpperMedian(abs_res), kSigmaFloorPx));
   const bool converged = summary.termination_type == ceres::CONVERGENCE;
   cal.usable = converged && ok;
   cal.message = !converged ? "the fit did not converge: " + summary.message

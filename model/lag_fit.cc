@@ -7,6 +7,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "common/robust.h"
+
 namespace clogscope::model {
 namespace {
 
@@ -24,11 +26,6 @@ struct WidthResiduals {
     return true;
   }
 };
-
-double Median(std::vector<double> v) {
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
 
 // Coarse search over K (log grid) and offset, the gain in closed form at each: a start that does
 // not depend on the user's guess.
@@ -174,9 +171,9 @@ LagFitSummary FitLag(const FlowProfile& p, const std::vector<WidthSample>& sampl
   std::vector<double> r(samples.size());
   all(fit.x.data(), r.data());
   std::vector<double> abs_dev(r.size());
-  const double med = Median(r);
+  const double med = UpperMedian(r);
   for (size_t i = 0; i < r.size(); ++i) abs_dev[i] = std::abs(r[i] - med);
-  const double robust_sigma = 1.4826 * Median(abs_dev);
+  const double robust_sigma = 1.4826 * UpperMedian(abs_dev);
   out.outlier.assign(samples.size(), false);
   std::vector<WidthSample> inliers;
   for (size_t i = 0; i < samples.size(); ++i) {
