@@ -69,7 +69,7 @@ std::vector<std::string> SpeedFields(const vision::FeedSpeedSample& v,
   if (!v.valid) return {"", "", v.reason, "", "0", left_out};
   const double mm_per_px = conv.scale_um_per_px * 1e-3;
   const double speed = v.SpeedPxPerS() * mm_per_px;
-  const double sigma = std::hypot(v.SigmaPxPerS() * summary.sigma_scale * mm_per_px,
+  const double sigma = std::hypot(summary.RowSigmaPxPerS(v) * mm_per_px,
                                   speed * conv.scale_sigma_um_per_px / conv.scale_um_per_px);
   return {CsvNumber(speed, 5),
           CsvNumber(sigma, 5),

@@ -558,7 +558,7 @@ void BenchFeedSpeedCodec(int first_seed) {
   };
   const std::vector<double> speeds = {0.3, 0.8, 2, 5, 15};
   constexpr int kSeeds = 6, kFrames = 61;
-  constexpr double kMmPerPx = 20e-3;
+  const double kMmPerPx = clogscope::vision::FeedstockScene(0).scale_um_per_px / 1e3;
   fmt::print(
       "\n## Feed speed through codecs (640x480, 20 µm/px, 30 frames/s, {} frames, seeds {}-{} "
       "per row)\n\nError: the logged mean against the rendered speed (mean over seeds, worst); "
@@ -592,8 +592,8 @@ void BenchFeedSpeedCodec(int first_seed) {
         pairs += st.pairs;
         for (size_t i = 0; i < rows.size(); ++i) {
           if (st.use[i] != clogscope::pipeline::SpeedUse::kUsed) continue;
-          const double z = (rows[i].SpeedPxPerS() * kMmPerPx - v) /
-                           (rows[i].SigmaPxPerS() * st.sigma_scale * kMmPerPx);
+          const double z =
+              (rows[i].SpeedPxPerS() * kMmPerPx - v) / (st.RowSigmaPxPerS(rows[i]) * kMmPerPx);
           sum_z2 += z * z;
         }
       }

@@ -46,10 +46,13 @@ FeedSpeedSummary SummariseFeedSpeeds(const std::vector<vision::FeedSpeedSample>&
   }
   if (speeds.empty()) return s;
   const SampleStats st = RobustStats(speeds);
+  double sum_sigma2 = 0;  // of the used rows' own σ, px²/s²
   for (size_t j = 0; j < rows.size(); ++j) {
     s.use[rows[j]] = st.used[j] ? SpeedUse::kUsed : SpeedUse::kOutlier;
     if (!st.used[j]) continue;
-    s.baseline_frames = std::max(s.baseline_frames, samples[rows[j]].baseline_frames);
+    const vision::FeedSpeedSample& v = samples[rows[j]];
+    s.baseline_frames = std::max(s.baseline_frames, v.baseline_frames);
+    sum_sigma2 += std::pow(v.SigmaPxPerS(), 2);
   }
   s.used = st.n_used;
   s.outliers = st.n_rejected;
@@ -81,10 +84,6 @@ FeedSpeedSummary SummariseFeedSpeeds(const std::vector<vision::FeedSpeedSample>&
   // The rows' own σ (from the residuals of each comparison) misses what a codec does to a whole
   // frame (an H.264 frame's texture sits where its motion vectors put it): when the used rows
   // scatter more than their σ say, the σ are scaled up to that scatter.
-  double sum_sigma2 = 0;
-  for (size_t j = 0; j < rows.size(); ++j) {
-    if (st.used[j]) sum_sigma2 += std::pow(samples[rows[j]].SigmaPxPerS(), 2);
-  }
   const double rms_sigma = std::sqrt(sum_sigma2 / n);
   if (rms_sigma > 0) s.sigma_scale = std::max(1.0, s.std_px_per_s / rms_sigma);
   return s;

@@ -30,6 +30,10 @@ struct FeedSpeedSummary {
   // What the rows' own σ are multiplied by to match the used rows' scatter (1 when they already
   // cover it).
   double sigma_scale = 1;
+  // A row's σ as the summary sees it: its own, times sigma_scale.
+  double RowSigmaPxPerS(const vision::FeedSpeedSample& row) const {
+    return row.SigmaPxPerS() * sigma_scale;
+  }
 };
 
 // Rows with a speed whose baseline is shorter than they want are left out when any row reaches

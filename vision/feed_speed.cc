@@ -126,38 +126,53 @@ AxisProfile SampleAxisProfile(const cv::Mat& grey, const StrandMeasurement& m,
   return p;
 }
 
+PreparedAxisProfile PrepareAxisProfile(const AxisProfile& p, const FeedSpeedOptions& o) {
+  PreparedAxisProfile out;
+  out.start_s_px = p.start_s_px;
+  out.samples = p.values.size();
+  out.noise = p.noise;
+  if (p.values.empty()) return out;
+  const std::vector<double> high_passed = HighPass(p.values, o.highpass_sigma_px);
+  out.texture_sd_grey = StdDev(high_passed);
+  // Near the ends the high-pass sees a truncated window, which distorts the texture at fixed
+  // places in the frame: compared there, that part stays put and pulls the shift toward zero
+  // (−0.006 px, −0.02 % at 25 px per frame). Only the inner part is compared.
+  const int edge = std::min(static_cast<int>(std::lround(2 * o.highpass_sigma_px)),
+                            static_cast<int>(high_passed.size()) / 4);
+  const std::vector<double> smooth = Smooth(high_passed, o.smooth_sigma_px);
+  out.inner.assign(smooth.begin() + edge, smooth.end() - edge);
+  return out;
+}
+
 AxisShift EstimateAxisShift(const AxisProfile& pa, const AxisProfile& pb,
                             const FeedSpeedOptions& o) {
   std::string why;
   if (!o.Validate(&why)) throw std::invalid_argument("feed speed: " + why);
+  return EstimateAxisShift(PrepareAxisProfile(pa, o), PrepareAxisProfile(pb, o), o);
+}
+
+AxisShift EstimateAxisShift(const PreparedAxisProfile& pa, const PreparedAxisProfile& pb,
+                            const FeedSpeedOptions& o) {
+  std::string why;
+  if (!o.Validate(&why)) throw std::invalid_argument("feed speed: " + why);
   AxisShift out;
-  if (pa.values.empty() || pb.values.empty()) {
+  if (pa.samples == 0 || pb.samples == 0) {
     out.detail = "no stretch of filament to sample";
     return out;
   }
-  if (pa.start_s_px != pb.start_s_px || pa.values.size() != pb.values.size()) {
+  if (pa.start_s_px != pb.start_s_px || pa.samples != pb.samples) {
     throw std::invalid_argument("feed speed: the two profiles must share their sampling");
   }
-  const std::vector<double> a_hp = HighPass(pa.values, o.highpass_sigma_px);
-  const std::vector<double> b_hp = HighPass(pb.values, o.highpass_sigma_px);
   const double noise = std::max(0.5 * (pa.noise + pb.noise), 1e-9);
-  out.texture_ratio = StdDev(a_hp) / noise;
+  out.texture_ratio = pa.texture_sd_grey / noise;
   if (out.texture_ratio < o.min_texture_ratio) {
     out.status = FeedShiftStatus::kNoTexture;
     out.detail = fmt::format("surface texture σ is {:.1f}× its noise (needs {:g}×)",
                              out.texture_ratio, o.min_texture_ratio);
     return out;
   }
-  // Near the ends the high-pass sees a truncated window, which distorts the texture at fixed
-  // places in the frame: compared there, that part stays put and pulls the shift toward zero
-  // (−0.006 px, −0.02 % at 25 px per frame). Only the inner part is compared.
-  const int edge = std::min(static_cast<int>(std::lround(2 * o.highpass_sigma_px)),
-                            static_cast<int>(a_hp.size()) / 4);
-  auto inner = [&](const std::vector<double>& v) {
-    const std::vector<double> smooth = Smooth(v, o.smooth_sigma_px);
-    return std::vector<double>(smooth.begin() + edge, smooth.end() - edge);
-  };
-  const std::vector<double> a = inner(a_hp), b = inner(b_hp);
+  const std::vector<double>& a = pa.inner;
+  const std::vector<double>& b = pb.inner;
   const int n = static_cast<int>(a.size());
   // Whole pixels: b(s + k) = a(s) when the surface moved k px down the axis. At least half the
   // profile must overlap.
@@ -267,18 +282,20 @@ FeedSpeedSample FeedSpeedTracker::Next(const cv::Mat& frame, double time_s,
     out.detail = "no filament measured in the frame before";
   } else {
     sampled = true;
-    const double stretch = history_.empty() ? 0.0 : history_.back().profile.values.size();
-    if (history_.empty() || history_.back().profile.values.empty() ||
-        !SameGeometry(reference_, previous_m_, stretch)) {
+    const size_t stretch = history_.empty() ? 0 : history_.back().profile.samples;
+    if (stretch == 0 || !SameGeometry(reference_, previous_m_, stretch)) {
       // The filament moved (or this is the first pair): a new reference, the previous frame
       // sampled along it; frames before it are not on this axis.
       reference_ = previous_m_;
       history_.clear();
-      history_.push_back({SampleAxisProfile(previous_, reference_, options_), previous_t_});
+      history_.push_back(
+          {PrepareAxisProfile(SampleAxisProfile(previous_, reference_, options_), options_),
+           previous_t_});
     }
-    const AxisProfile current = SampleAxisProfile(grey, reference_, options_);
-    const AxisProfile& before = history_.back().profile;
-    const AxisShift shift = current.values.size() == before.values.size()
+    const PreparedAxisProfile current =
+        PrepareAxisProfile(SampleAxisProfile(grey, reference_, options_), options_);
+    const PreparedAxisProfile& before = history_.back().profile;
+    const AxisShift shift = current.samples == before.samples
                                 ? EstimateAxisShift(before, current, options_)
                                 : AxisShift{};
     out.dt_s = time_s - previous_t_;
@@ -290,36 +307,9 @@ FeedSpeedSample FeedSpeedTracker::Next(const cv::Mat& frame, double time_s,
     out.shift_px = shift.shift_px;
     out.sigma_px = shift.sigma_px;
     if (out.valid) {
-      out.baseline_frames = 1;
-      // The baseline follows the speed of the rows before (this pair's own shift only when
-      // there are none), and holds while that speed stays within a quarter of it: chosen from
-      // this frame's own shift, a frame that looks behind would get the longer baseline and one
-      // ahead the shorter, a bias (−0.09 % at 1.33 px per frame through MJPEG); held, every
-      // frame ends one comparison and starts another, and its own error cancels along the video.
-      const int wanted = WantedBaselineFrames(
-          std::isnan(shift_per_frame_px_) ? shift.shift_px : shift_per_frame_px_, options_);
-      if (!(baseline_frames_ > 0 &&
-            std::abs(wanted - baseline_frames_) <= std::max(1, baseline_frames_ / 4))) {
-        baseline_frames_ = wanted;
-      }
-      out.wanted_baseline_frames = baseline_frames_;
-      const int k = std::min(out.wanted_baseline_frames, static_cast<int>(history_.size()));
-      const PastFrame& far = history_[history_.size() - k];
-      if (k > 1 && far.profile.values.size() == current.values.size()) {
-        const AxisShift longer = EstimateAxisShift(far.profile, current, options_);
-        // The two must agree on the movement (a loose check: a wrong whole-pixel match is
-        // several px off, k times the frame pair's own error is a fraction of that).
-        const double expected_px = k * shift.shift_px;
-        if (longer.valid() &&
-            std::abs(longer.shift_px - expected_px) <= 2 + 0.5 * std::abs(expected_px)) {
-          out.shift_px = longer.shift_px;
-          out.sigma_px = longer.sigma_px;
-          out.dt_s = time_s - far.time_s;
-          out.baseline_frames = k;
-        }
-      }
+      CompareFurtherBack(current, time_s, shift.shift_px, &out);
+      shift_per_frame_px_ = out.shift_px / out.baseline_frames;
     }
-    if (out.valid) shift_per_frame_px_ = out.shift_px / out.baseline_frames;
     history_.push_back({current, time_s});
     while (static_cast<int>(history_.size()) > options_.max_baseline_frames) history_.pop_front();
   }
@@ -328,6 +318,38 @@ FeedSpeedSample FeedSpeedTracker::Next(const cv::Mat& frame, double time_s,
   previous_m_ = m;
   previous_t_ = time_s;
   return out;
+}
+
+void FeedSpeedTracker::CompareFurtherBack(const PreparedAxisProfile& current, double time_s,
+                                          double pair_shift_px, FeedSpeedSample* out) {
+  out->baseline_frames = 1;
+  // The baseline follows the speed of the rows before (this pair's own shift only when there are
+  // none), and holds while that speed stays within a quarter of it: chosen from this frame's own
+  // shift, a frame that looks behind would get the longer baseline and one ahead the shorter, a
+  // bias (−0.09 % at 1.33 px per frame through MJPEG); held, every frame ends one comparison and
+  // starts another, and its own error cancels along the video.
+  const int wanted = WantedBaselineFrames(
+      std::isnan(shift_per_frame_px_) ? pair_shift_px : shift_per_frame_px_, options_);
+  if (!(baseline_frames_ > 0 &&
+        std::abs(wanted - baseline_frames_) <= std::max(1, baseline_frames_ / 4))) {
+    baseline_frames_ = wanted;
+  }
+  out->wanted_baseline_frames = baseline_frames_;
+  const int k = std::min(baseline_frames_, static_cast<int>(history_.size()));
+  const PastFrame& far = history_[history_.size() - k];
+  if (k <= 1 || far.profile.samples != current.samples) return;
+  const AxisShift longer = EstimateAxisShift(far.profile, current, options_);
+  // The two must agree on the movement (a loose check: a wrong whole-pixel match is several px
+  // off, k times the frame pair's own error is a fraction of that).
+  const double expected_px = k * pair_shift_px;
+  if (!(longer.valid() &&
+        std::abs(longer.shift_px - expected_px) <= 2 + 0.5 * std::abs(expected_px))) {
+    return;
+  }
+  out->shift_px = longer.shift_px;
+  out->sigma_px = longer.sigma_px;
+  out->dt_s = time_s - far.time_s;
+  out->baseline_frames = k;
 }
 
 }  // namespace clogscope::vision

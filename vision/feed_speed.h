@@ -65,11 +65,26 @@ struct AxisShift {
   bool valid() const { return status == FeedShiftStatus::kValid; }
 };
 
-// The shift of profile b against profile a (same axis, same sampling). Both are high-passed and
-// smoothed; the shift is measured on their inner part only, 2 high-pass σ (at most a quarter of
-// the profile) in from either end, where the high-pass saw its whole window. Expected failures
-// come back as a status: no_texture (texture too weak for its noise), too_fast (a clear texture
-// but no match inside the search range, or the best match on its limit).
+// A profile as EstimateAxisShift compares it: high-passed (the texture's σ taken there), then
+// smoothed and cut to its inner part, 2 high-pass σ (at most a quarter of the profile) in from
+// either end, where the high-pass saw its whole window. A frame's profile is prepared once however
+// many frames it is compared with.
+struct PreparedAxisProfile {
+  double start_s_px = 0;
+  size_t samples = 0;          // the profile's length before its ends were cut (0: empty)
+  double noise = 0;            // the profile's
+  double texture_sd_grey = 0;  // σ of the high-passed profile, grey levels
+  std::vector<double> inner;
+};
+PreparedAxisProfile PrepareAxisProfile(const AxisProfile& p, const FeedSpeedOptions& options);
+
+// The shift of profile b against profile a (same axis, same sampling), measured on their prepared
+// inner parts. Expected failures come back as a status: no_texture (texture too weak for its
+// noise), too_fast (a clear texture but no match inside the search range, or the best match on
+// its limit).
+AxisShift EstimateAxisShift(const PreparedAxisProfile& a, const PreparedAxisProfile& b,
+                            const FeedSpeedOptions& options);
+// The same for profiles not yet prepared.
 AxisShift EstimateAxisShift(const AxisProfile& a, const AxisProfile& b,
                             const FeedSpeedOptions& options);
 
@@ -116,12 +131,18 @@ class FeedSpeedTracker {
   double previous_t_ = -1;
   StrandMeasurement reference_;  // has_geometry false: none yet
   struct PastFrame {
-    AxisProfile profile;  // along reference_
+    PreparedAxisProfile profile;  // along reference_
     double time_s = 0;
   };
   std::deque<PastFrame> history_;    // the last frames along reference_, oldest first
   int baseline_frames_ = 0;          // the baseline the speed wants (0: none yet)
   double shift_per_frame_px_ = NAN;  // the last speed measured, px per frame
+
+  // After a valid comparison with the frame before (its shift pair_shift_px): holds or renews the
+  // baseline the speed wants and, where the history reaches that far back and the two agree,
+  // measures `current` against that frame instead (out's shift, σ, dt and baseline).
+  void CompareFurtherBack(const PreparedAxisProfile& current, double time_s, double pair_shift_px,
+                          FeedSpeedSample* out);
 };
 
 }  // namespace clogscope::vision

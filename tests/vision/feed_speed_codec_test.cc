@@ -20,7 +20,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr double kMmPerPx = 20e-3;  // FeedstockScene's scale
+const double kMmPerPx = FeedstockScene(0).scale_um_per_px / 1e3;
 constexpr int kFrames = 61;
 
 fs::path FreshDir(const std::string& name) {

@@ -19,6 +19,32 @@ SceneParams Filament(double speed_mm_s, double texture = 8, double tilt_deg = 0)
   return p;
 }
 
+StrandMeasureOptions FilamentOptions() {
+  StrandMeasureOptions o;
+  o.target = MeasureTarget::kFilament;
+  return o;
+}
+
+// Frames through the filament tracker and a FeedSpeedTracker, as `measure --speed` takes them.
+class FilamentSpeeds {
+ public:
+  explicit FilamentSpeeds(const FeedSpeedOptions& fo = {})
+      : strand_(FilamentOptions()), speed_(fo) {}
+  FeedSpeedSample Next(const cv::Mat& frame, double time_s) {
+    return speed_.Next(frame, time_s, strand_.Measure(frame));
+  }
+  // Frame i of p, rendered.
+  FeedSpeedSample Next(const SceneParams& p, int i) {
+    FrameTruth t;
+    const cv::Mat f = RenderFrame(p, i, &t);
+    return Next(f, t.time_s);
+  }
+
+ private:
+  StrandTracker strand_;
+  FeedSpeedTracker speed_;
+};
+
 struct SpeedRun {
   int valid = 0, pairs = 0, within_4_sigma = 0;
   double error_over_sigma_sq = 0;  // Σ (error / σ)² over the valid pairs
@@ -27,9 +53,7 @@ struct SpeedRun {
 };
 
 SpeedRun MeasureSpeeds(const SceneParams& p, int frames, const FeedSpeedOptions& fo = {}) {
-  StrandMeasureOptions o;
-  o.target = MeasureTarget::kFilament;
-  StrandTracker tracker(o);
+  StrandTracker tracker(FilamentOptions());
   cv::Mat prev;
   StrandMeasurement prev_m;
   FrameTruth prev_t;
@@ -115,16 +139,11 @@ TEST(FeedSpeedTest, BeyondTheSearchRangeIsTooFast) {
 TEST(FeedSpeedTest, TrackerUsesTheFramesOwnTimesAndFollowsTheAxis) {
   SceneParams p = Filament(4.0);
   p.sway_deg = 0.3;
-  StrandMeasureOptions o;
-  o.target = MeasureTarget::kFilament;
-  StrandTracker tracker(o);
-  FeedSpeedTracker speed(FeedSpeedOptions{});
+  FilamentSpeeds speed;
   double sum = 0;
   int valid = 0;
   for (int i : {0, 1, 3, 4, 7, 8, 9, 12, 13, 15}) {
-    FrameTruth t;
-    const cv::Mat f = RenderFrame(p, i, &t);
-    const FeedSpeedSample v = speed.Next(f, t.time_s, tracker.Measure(f));
+    const FeedSpeedSample v = speed.Next(p, i);
     if (i == 0) {
       EXPECT_EQ(v.reason, "first_frame");
     }
@@ -135,10 +154,10 @@ TEST(FeedSpeedTest, TrackerUsesTheFramesOwnTimesAndFollowsTheAxis) {
   EXPECT_EQ(valid, 9);
   EXPECT_NEAR(sum / valid, 4.0, 0.04);
   // Still images have no times: no speed, a reason.
-  FeedSpeedTracker still(FeedSpeedOptions{});
+  FilamentSpeeds still;
   const cv::Mat f = RenderFrame(p, 0, nullptr);
-  EXPECT_EQ(still.Next(f, -1, tracker.Measure(f)).reason, "no_time");
-  EXPECT_EQ(still.Next(f, -1, tracker.Measure(f)).reason, "no_time");
+  EXPECT_EQ(still.Next(f, -1).reason, "no_time");
+  EXPECT_EQ(still.Next(f, -1).reason, "no_time");
 }
 
 // A slow filament (0.3 mm/s, 0.5 px per frame): each frame is compared with the one 16 back (8 px)
@@ -146,16 +165,11 @@ TEST(FeedSpeedTest, TrackerUsesTheFramesOwnTimesAndFollowsTheAxis) {
 // 0.2 % of the truth.
 TEST(FeedSpeedTest, TrackerComparesASlowFilamentOverLongerBaselines) {
   const SceneParams p = Filament(0.3);
-  StrandMeasureOptions o;
-  o.target = MeasureTarget::kFilament;
-  StrandTracker tracker(o);
-  FeedSpeedTracker speed(FeedSpeedOptions{});
+  FilamentSpeeds speed;
   double sum = 0;
   int full = 0;
   for (int i = 0; i < 24; ++i) {
-    FrameTruth t;
-    const cv::Mat f = RenderFrame(p, i, &t);
-    const FeedSpeedSample v = speed.Next(f, t.time_s, tracker.Measure(f));
+    const FeedSpeedSample v = speed.Next(p, i);
     if (i == 0) continue;
     ASSERT_TRUE(v.valid) << i << ": " << v.detail;
     EXPECT_EQ(v.wanted_baseline_frames, 16) << i;
@@ -170,12 +184,9 @@ TEST(FeedSpeedTest, TrackerComparesASlowFilamentOverLongerBaselines) {
   // Comparing consecutive frames only (the former behaviour) is an option.
   FeedSpeedOptions one;
   one.baseline_shift_px = 0;
-  FeedSpeedTracker consecutive(one);
-  StrandTracker tracker2(o);
+  FilamentSpeeds consecutive(one);
   for (int i = 0; i < 3; ++i) {
-    FrameTruth t;
-    const cv::Mat f = RenderFrame(p, i, &t);
-    const FeedSpeedSample v = consecutive.Next(f, t.time_s, tracker2.Measure(f));
+    const FeedSpeedSample v = consecutive.Next(p, i);
     if (i > 0) {
       EXPECT_EQ(v.baseline_frames, 1);
     }
