@@ -22,7 +22,6 @@
 #include "common/provenance.h"
 #include "pipeline/statistics.h"
 #include "vision/batch.h"
-#include "vision/overlay.h"
 #include "vision/video_io.h"
 
 namespace clogscope::apps {
@@ -30,8 +29,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// The reference band: from 50 µm to 200 µm below the tip; at the nominal 3 µm/px without a scale.
-constexpr int kVideoOverlayEvery = 25;
+constexpr int kVideoOverlayEvery = 25;  // --overlay-every's default for a video
 
 bool WritesToStdout(const MeasureCommandOptions& o) {
   return o.out_frames.empty() || o.out_frames == "-";
@@ -127,12 +125,13 @@ void MeasureCommandOptions::ResolveBand() {
   if (scale_um_per_px && calibration) {
     throw std::invalid_argument("give either --scale-um-per-px or --calib, not both");
   }
-  const BandResolution r =
-      ResolveBandPx(band, strand.target,
-                    calibration ? std::optional(calibration->scale_um_per_px) : scale_um_per_px);
-  if (r.problem != BandProblem::kNone) throw std::invalid_argument(BandProblemText(r));
-  strand.band_start_px = r.band.start_px;
-  strand.band_height_px = r.band.height_px;
+  ApplyBandPx(band, Conversion(), &strand);
+}
+
+std::optional<calib::ScaleCalibration> MeasureCommandOptions::Conversion() const {
+  if (calibration) return calibration;
+  if (scale_um_per_px) return pipeline::PlainScale(*scale_um_per_px);
+  return std::nullopt;
 }
 
 MeasureSummary MeasureInputs(MeasureCommandOptions o) {
@@ -153,11 +152,7 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
   std::optional<AtomicTextFile> file;
   if (!WritesToStdout(o)) file.emplace(o.out_frames, /*keep_partial=*/true);
   std::ostream& table = file ? file->stream() : std::cout;
-  // Widths to µm: the calibration's (w − b)·s with its σ, or a plain scale, or none.
-  const std::optional<calib::ScaleCalibration> conv =
-      o.calibration ? o.calibration
-                    : (o.scale_um_per_px ? std::optional(pipeline::PlainScale(*o.scale_um_per_px))
-                                         : std::nullopt);
+  const std::optional<calib::ScaleCalibration> conv = o.Conversion();
   table << ProvenanceCsvComment(CurrentProvenance());
   if (o.calibration) {
     table << fmt::format(
