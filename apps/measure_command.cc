@@ -359,24 +359,13 @@ int RunMeasure(int argc, char** argv) {
       "70,134,213,213 --gear-radius-mm 2\n"
       "Exit status: 0 all inputs read, 2 some inputs unreadable, 1 nothing measured.");
   if (!ParseCommandLine(app, argc, argv)) return 0;  // --help printed
-  RefuseOtherModesOptions(app, !exp.manifest.empty());
-  if (!exp.manifest.empty()) {
-    if (!o.inputs.empty())
-      throw std::invalid_argument("give either inputs or --manifest, not both");
-    ApplyMeasurementOptions(app, text, &o);
-    exp.scale_um_per_px = o.scale_um_per_px;
-    exp.calib_path = text.calib_path;
-    exp.strand = o.strand;
-    exp.roi_given = !text.roi.empty();
-    exp.polarity_given = app.count("--polarity") > 0;
-    exp.target_given = app.count("--target") > 0;
-    exp.band = o.band;
-    exp.overlay_dir = o.overlay_dir;
-    if (samples) exp.samples = samples;
-    return RunExperimentCli(exp);
-  }
-  if (o.inputs.empty())
+  const bool manifest = !exp.manifest.empty();
+  RefuseOtherModesOptions(app, manifest);
+  if (manifest && !o.inputs.empty())
+    throw std::invalid_argument("give either inputs or --manifest, not both");
+  if (!manifest && o.inputs.empty())
     throw std::invalid_argument("give inputs (images, directories, videos) or --manifest");
+  // The gear's options are refused with --manifest above: these two read the inputs mode's.
   if (!gear_roi.empty()) {
     try {
       o.gear_roi = ParseRoi(gear_roi);
@@ -393,7 +382,20 @@ int RunMeasure(int argc, char** argv) {
     }
     o.gear_centre_px = cv::Point2d(c.x, c.y);
   }
+  // The measurement options, read once for both modes.
   ApplyMeasurementOptions(app, text, &o);
+  if (manifest) {
+    exp.scale_um_per_px = o.scale_um_per_px;
+    exp.calib_path = text.calib_path;
+    exp.strand = o.strand;
+    exp.roi_given = !text.roi.empty();
+    exp.polarity_given = app.count("--polarity") > 0;
+    exp.target_given = app.count("--target") > 0;
+    exp.band = o.band;
+    exp.overlay_dir = o.overlay_dir;
+    if (samples) exp.samples = samples;
+    return RunExperimentCli(exp);
+  }
   o.flag_outliers = !no_outliers;
   const MeasureSummary s = MeasureInputs(o);
   // No input read: its error said it all; a line about an empty table would only add noise.
