@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <stdexcept>
+
 namespace clogscope::apps {
 
 BandRequest BandOver(const BandRequest& base, const BandRequest& top) {
@@ -68,6 +70,17 @@ std::string BandProblemText(const BandResolution& r) {
                          r.band.height_px);
   }
   return "";
+}
+
+void ApplyBandPx(const BandRequest& request,
+                 const std::optional<calib::ScaleCalibration>& conversion,
+                 vision::StrandMeasureOptions* strand) {
+  const BandResolution r =
+      ResolveBandPx(request, strand->target,
+                    conversion ? std::optional(conversion->scale_um_per_px) : std::nullopt);
+  if (r.problem != BandProblem::kNone) throw std::invalid_argument(BandProblemText(r));
+  strand->band_start_px = r.band.start_px;
+  strand->band_height_px = r.band.height_px;
 }
 
 }  // namespace clogscope::apps

@@ -3,6 +3,7 @@
 #include <optional>
 #include <string>
 
+#include "calib/pixel_scale.h"
 #include "vision/strand_measure.h"
 
 namespace clogscope::apps {
@@ -35,5 +36,11 @@ BandResolution ResolveBandPx(const BandRequest& request, vision::MeasureTarget t
 
 // The one line for a problem: "WHAT: a band in µm needs a pixel scale (…)".
 std::string BandProblemText(const BandResolution& r);
+
+// ResolveBandPx for strand->target at the conversion's scale (none: no scale), into the strand's
+// band fields; a problem throws std::invalid_argument with its BandProblemText.
+void ApplyBandPx(const BandRequest& request,
+                 const std::optional<calib::ScaleCalibration>& conversion,
+                 vision::StrandMeasureOptions* strand);
 
 }  // namespace clogscope::apps

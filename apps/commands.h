@@ -79,6 +79,8 @@ struct MeasureCommandOptions {
   bool Validate(std::string* why) const;
   // The band in px from the µm or px options (throws std::invalid_argument on a conflict).
   void ResolveBand();
+  // Widths to µm: the calibration's (w − b)·s with its σ, or a plain scale, or none.
+  std::optional<calib::ScaleCalibration> Conversion() const;
 };
 
 struct MeasureSummary {

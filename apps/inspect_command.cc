@@ -35,15 +35,19 @@ vision::InputFrame ReadFrame(const std::string& input, int index) {
       fmt::format("--frame {}: {} has only {} frame(s)", index, input, read));
 }
 
+// The band in px as asked for, the target's default (apps/band.h, no scale) for the rest. A band
+// that cannot be used is left to the strand options' Validate to name.
+void SetBandPx(const BandRequest& asked, vision::StrandMeasureOptions* o) {
+  const vision::BandPx band = ResolveBandPx(asked, o->target, std::nullopt).band;
+  o->band_start_px = band.start_px;
+  o->band_height_px = band.height_px;
+}
+
 // The options for a target, with its default band unless one was given.
 vision::StrandMeasureOptions ForTarget(vision::StrandMeasureOptions o, vision::MeasureTarget t,
                                        bool band_given) {
   o.target = t;
-  if (!band_given) {
-    const vision::BandPx band = vision::DefaultBand(t, vision::kNominalScaleUmPerPx);
-    o.band_start_px = band.start_px;
-    o.band_height_px = band.height_px;
-  }
+  if (!band_given) SetBandPx({}, &o);
   return o;
 }
 
@@ -208,10 +212,10 @@ int RunInspect(int argc, char** argv) {
   app.add_option("--roi", roi, "Search only inside x,y,w,h (px)");
   app.add_option("--polarity", polarity, "auto, bright or dark")->capture_default_str();
   app.add_option("--target", target, "strand or filament (default: strand if a tip is in view)");
-  std::optional<double> band_start_px, band_height_px;
-  app.add_option("--band-start-px", band_start_px,
+  BandRequest band;
+  app.add_option("--band-start-px", band.start_px,
                  "Band start below the tip or the top of the stretch (default: as measure)");
-  app.add_option("--band-height-px", band_height_px, "Band height (default: as measure)");
+  app.add_option("--band-height-px", band.height_px, "Band height (default: as measure)");
   app.footer(
       "Examples:\n"
       "  clogscope inspect step1.mp4 --out inspect.png\n"
@@ -226,10 +230,8 @@ int RunInspect(int argc, char** argv) {
     o.strand.target = vision::ParseMeasureTarget(target);
     o.target_given = true;
   }
-  if (band_start_px || band_height_px) {
-    const vision::BandPx band = vision::DefaultBand(o.strand.target, vision::kNominalScaleUmPerPx);
-    o.strand.band_start_px = band_start_px.value_or(band.start_px);
-    o.strand.band_height_px = band_height_px.value_or(band.height_px);
+  if (band.start_px || band.height_px) {
+    SetBandPx(band, &o.strand);
     o.band_given = true;
   }
   const InspectReport rep = InspectInput(o);

@@ -22,7 +22,6 @@
 #include "common/provenance.h"
 #include "pipeline/statistics.h"
 #include "vision/batch.h"
-#include "vision/overlay.h"
 #include "vision/video_io.h"
 
 namespace clogscope::apps {
@@ -30,8 +29,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// The reference band: from 50 µm to 200 µm below the tip; at the nominal 3 µm/px without a scale.
-constexpr int kVideoOverlayEvery = 25;
+constexpr int kVideoOverlayEvery = 25;  // --overlay-every's default for a video
 
 bool WritesToStdout(const MeasureCommandOptions& o) {
   return o.out_frames.empty() || o.out_frames == "-";
@@ -127,12 +125,13 @@ void MeasureCommandOptions::ResolveBand() {
   if (scale_um_per_px && calibration) {
     throw std::invalid_argument("give either --scale-um-per-px or --calib, not both");
   }
-  const BandResolution r =
-      ResolveBandPx(band, strand.target,
-                    calibration ? std::optional(calibration->scale_um_per_px) : scale_um_per_px);
-  if (r.problem != BandProblem::kNone) throw std::invalid_argument(BandProblemText(r));
-  strand.band_start_px = r.band.start_px;
-  strand.band_height_px = r.band.height_px;
+  ApplyBandPx(band, Conversion(), &strand);
+}
+
+std::optional<calib::ScaleCalibration> MeasureCommandOptions::Conversion() const {
+  if (calibration) return calibration;
+  if (scale_um_per_px) return pipeline::PlainScale(*scale_um_per_px);
+  return std::nullopt;
 }
 
 MeasureSummary MeasureInputs(MeasureCommandOptions o) {
@@ -153,11 +152,7 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
   std::optional<AtomicTextFile> file;
   if (!WritesToStdout(o)) file.emplace(o.out_frames, /*keep_partial=*/true);
   std::ostream& table = file ? file->stream() : std::cout;
-  // Widths to µm: the calibration's (w − b)·s with its σ, or a plain scale, or none.
-  const std::optional<calib::ScaleCalibration> conv =
-      o.calibration ? o.calibration
-                    : (o.scale_um_per_px ? std::optional(pipeline::PlainScale(*o.scale_um_per_px))
-                                         : std::nullopt);
+  const std::optional<calib::ScaleCalibration> conv = o.Conversion();
   table << ProvenanceCsvComment(CurrentProvenance());
   if (o.calibration) {
     table << fmt::format(
@@ -364,24 +359,13 @@ int RunMeasure(int argc, char** argv) {
       "70,134,213,213 --gear-radius-mm 2\n"
       "Exit status: 0 all inputs read, 2 some inputs unreadable, 1 nothing measured.");
   if (!ParseCommandLine(app, argc, argv)) return 0;  // --help printed
-  RefuseOtherModesOptions(app, !exp.manifest.empty());
-  if (!exp.manifest.empty()) {
-    if (!o.inputs.empty())
-      throw std::invalid_argument("give either inputs or --manifest, not both");
-    ApplyMeasurementOptions(app, text, &o);
-    exp.scale_um_per_px = o.scale_um_per_px;
-    exp.calib_path = text.calib_path;
-    exp.strand = o.strand;
-    exp.roi_given = !text.roi.empty();
-    exp.polarity_given = app.count("--polarity") > 0;
-    exp.target_given = app.count("--target") > 0;
-    exp.band = o.band;
-    exp.overlay_dir = o.overlay_dir;
-    if (samples) exp.samples = samples;
-    return RunExperimentCli(exp);
-  }
-  if (o.inputs.empty())
+  const bool manifest = !exp.manifest.empty();
+  RefuseOtherModesOptions(app, manifest);
+  if (manifest && !o.inputs.empty())
+    throw std::invalid_argument("give either inputs or --manifest, not both");
+  if (!manifest && o.inputs.empty())
     throw std::invalid_argument("give inputs (images, directories, videos) or --manifest");
+  // The gear's options are refused with --manifest above: these two read the inputs mode's.
   if (!gear_roi.empty()) {
     try {
       o.gear_roi = ParseRoi(gear_roi);
@@ -398,7 +382,20 @@ int RunMeasure(int argc, char** argv) {
     }
     o.gear_centre_px = cv::Point2d(c.x, c.y);
   }
+  // The measurement options, read once for both modes.
   ApplyMeasurementOptions(app, text, &o);
+  if (manifest) {
+    exp.scale_um_per_px = o.scale_um_per_px;
+    exp.calib_path = text.calib_path;
+    exp.strand = o.strand;
+    exp.roi_given = !text.roi.empty();
+    exp.polarity_given = app.count("--polarity") > 0;
+    exp.target_given = app.count("--target") > 0;
+    exp.band = o.band;
+    exp.overlay_dir = o.overlay_dir;
+    if (samples) exp.samples = samples;
+    return RunExperimentCli(exp);
+  }
   o.flag_outliers = !no_outliers;
   const MeasureSummary s = MeasureInputs(o);
   // No input read: its error said it all; a line about an empty table would only add noise.

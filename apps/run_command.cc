@@ -172,12 +172,7 @@ pipeline::FeedstockOptions FeedstockOptionsFor(const pipeline::Manifest& m,
     fo.conversion = conv;
   }
   fo.strand.target = vision::MeasureTarget::kFilament;
-  const vision::BandPx band =
-      ResolveBandPx({}, fo.strand.target,
-                    fo.conversion ? std::optional(fo.conversion->scale_um_per_px) : std::nullopt)
-          .band;
-  fo.strand.band_start_px = band.start_px;
-  fo.strand.band_height_px = band.height_px;
+  ApplyBandPx({}, fo.conversion, &fo.strand);  // a filament's default band: never a problem
   const auto where = [&](const std::string& key, const std::string& text) {
     try {
       return ParseRoi(text);
@@ -267,12 +262,7 @@ ExperimentReport RunExperimentCommand(const ExperimentCommandOptions& o,
   manifest_band.height_um = m.band_height_um;
   manifest_band.start_um_name = m.path + ": band_start_um";
   manifest_band.height_um_name = m.path + ": band_height_um";
-  const BandResolution band =
-      ResolveBandPx(BandOver(manifest_band, o.band), eo.strand.target,
-                    rep.conversion ? std::optional(rep.conversion->scale_um_per_px) : std::nullopt);
-  if (band.problem != BandProblem::kNone) throw std::invalid_argument(BandProblemText(band));
-  eo.strand.band_start_px = band.band.start_px;
-  eo.strand.band_height_px = band.band.height_px;
+  ApplyBandPx(BandOver(manifest_band, o.band), rep.conversion, &eo.strand);
   if (m.feedstock.enabled) eo.feedstock = FeedstockOptionsFor(m, rep.conversion, eo.samples);
   Progress progress(static_cast<int>(m.steps.size()));
   eo.on_step = [&](const pipeline::StepResult& r, int done, int) { progress.Step(r, done); };

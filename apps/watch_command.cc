@@ -29,9 +29,7 @@ WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* s
   m.ResolveBand();
   pipeline::LiveWatchOptions live = options.live;
   live.strand = m.strand;
-  live.conversion = m.calibration       ? m.calibration
-                    : m.scale_um_per_px ? std::optional(pipeline::PlainScale(*m.scale_um_per_px))
-                                        : std::nullopt;
+  live.conversion = m.Conversion();
   if (!options.extruder.empty()) {
     live.extruder = LoadExtruderWithOverrides(options.extruder, options.set);
     live.temperature_c =

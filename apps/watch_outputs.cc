@@ -92,8 +92,8 @@ std::vector<std::string> AlertCommand::Reap(bool wait) {
         ++it;
         continue;
       }
-      if (r == *it && !ExitProblem(status).empty())
-        failures.push_back("--on-alert command " + ExitProblem(status));
+      if (const std::string problem = r == *it ? ExitProblem(status) : ""; !problem.empty())
+        failures.push_back("--on-alert command " + problem);
       it = running_.erase(it);
     }
     if (!wait || running_.empty() || std::chrono::steady_clock::now() > deadline) break;

@@ -42,9 +42,7 @@ void RenderPins(const fs::path& dir, const std::vector<int>& diameters,
 }
 
 TEST(CalibrateCommandTest, PinsThenMeasureWithCalib) {
-  const fs::path d = fs::temp_directory_path() / "clogscope_calib_e2e";
-  fs::remove_all(d);
-  fs::create_directories(d);
+  const fs::path d = testing::FreshDir("clogscope_calib_e2e");
   RenderPins(d, {300, 400, 500});
   RunResult r = RunCli(
       "calibrate --pins " + (d / "pins.csv").string() + " --out " + (d / "cal.yaml").string(), d);
@@ -72,9 +70,7 @@ TEST(CalibrateCommandTest, PinsThenMeasureWithCalib) {
 }
 
 TEST(CalibrateCommandTest, MicrometerEndToEnd) {
-  const fs::path d = fs::temp_directory_path() / "clogscope_calib_micro";
-  fs::remove_all(d);
-  fs::create_directories(d);
+  const fs::path d = testing::FreshDir("clogscope_calib_micro");
   ASSERT_EQ(RunCli("render --target micrometer --pitch-um 100 --tilt-deg 4 --silhouette --out " +
                        (d / "m").string(),
                    d)
@@ -91,9 +87,7 @@ TEST(CalibrateCommandTest, MicrometerEndToEnd) {
 // A 10 µm stage micrometer as in issue 22 (ticks of three lengths, numerals, dust), 8 bit and 16
 // bit of 12-bit data: calibrated, the marks that are no lines left out and counted in the report.
 TEST(CalibrateCommandTest, StageMicrometerWithNumeralsAndDust) {
-  const fs::path d = fs::temp_directory_path() / "clogscope_calib_stage";
-  fs::remove_all(d);
-  fs::create_directories(d);
+  const fs::path d = testing::FreshDir("clogscope_calib_stage");
   const std::string stage =
       "render --target micrometer --scale-um-per-px 0.5 --line-width-um 2 "
       "--tick-length-um 80 --numerals --dust 25 --fibres 3 --tip-y-px 380 --tilt-deg -2.5 "
@@ -137,9 +131,7 @@ TEST(CalibrateCommandTest, StageMicrometerWithNumeralsAndDust) {
 }
 
 TEST(CalibrateCommandTest, BadInputsWriteNoCalibration) {
-  const fs::path d = fs::temp_directory_path() / "clogscope_calib_bad";
-  fs::remove_all(d);
-  fs::create_directories(d);
+  const fs::path d = testing::FreshDir("clogscope_calib_bad");
   RenderPins(d, {300, 400});
   const std::string good_rows =
       "pin300/frame_000000.png,300,0.5\npin400/frame_000000.png,400,0.5\n";
@@ -206,9 +198,7 @@ TEST(CalibrateCommandTest, BadInputsWriteNoCalibration) {
 }
 
 TEST(CalibrateCommandTest, MeasureRefusesBadCalibrationFiles) {
-  const fs::path d = fs::temp_directory_path() / "clogscope_calib_refuse";
-  fs::remove_all(d);
-  fs::create_directories(d);
+  const fs::path d = testing::FreshDir("clogscope_calib_refuse");
   WriteFileAtomically((d / "garbage.yaml").string(), "this: [is: not");
   WriteFileAtomically((d / "v9.yaml").string(),
                       "%YAML:1.0\n---\nclogscope_calibration_version: 9\nscale_um_per_px: 3\n");

@@ -4,6 +4,7 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
+#include "apps/band.h"
 #include "apps/commands.h"
 #include "tests/apps/cli_test_util.h"
 #include "vision/strand_measure.h"
@@ -78,9 +79,7 @@ TEST(InspectCommandTest, ExplainsTheFrameAndSuggestsOptions) {
   ASSERT_TRUE(fa.measurement.valid()) << fa.text;
   vision::StrandMeasureOptions mo;
   mo.target = vision::MeasureTarget::kFilament;
-  const vision::BandPx band = vision::DefaultBand(mo.target, vision::kNominalScaleUmPerPx);
-  mo.band_start_px = band.start_px;
-  mo.band_height_px = band.height_px;
+  ApplyBandPx({}, std::nullopt, &mo);  // measure's band without a scale (apps/band.h)
   const vision::StrandMeasurement direct = vision::MeasureStrand(cv::imread(o.input), mo);
   EXPECT_EQ(fa.measurement.calipers_total, direct.calipers_total);
   EXPECT_DOUBLE_EQ(fa.measurement.width_px, direct.width_px);

@@ -29,15 +29,20 @@ using testing::RunResult;
 
 fs::path FreshDir(const std::string& name) { return testing::FreshDir("clogscope_cli_" + name); }
 
-const std::string kSmall = "--size 640x360 --tip-x-px 320 --tip-y-px 100 ";
+// A small scene: 640x360 frames, the tip at (320, 100); as render's options (kSmall) and typed.
+constexpr int kSmallWidthPx = 640, kSmallHeightPx = 360, kSmallTipXPx = 320, kSmallTipYPx = 100;
+const std::string kSmall = "--size " + std::to_string(kSmallWidthPx) + "x" +
+                           std::to_string(kSmallHeightPx) + " --tip-x-px " +
+                           std::to_string(kSmallTipXPx) + " --tip-y-px " +
+                           std::to_string(kSmallTipYPx) + " ";
 
 // The kSmall scene through the typed function: `frames` frames to `out` (a folder or a video).
 std::string RenderSmall(const std::string& out, int frames) {
   RenderCommandOptions r;
-  r.scene.width_px = 640;
-  r.scene.height_px = 360;
-  r.scene.tip_x_px = 320;
-  r.scene.tip_y_px = 100;
+  r.scene.width_px = kSmallWidthPx;
+  r.scene.height_px = kSmallHeightPx;
+  r.scene.tip_x_px = kSmallTipXPx;
+  r.scene.tip_y_px = kSmallTipYPx;
   r.frames = frames;
   r.out = out;
   RenderToFiles(r);
@@ -511,21 +516,20 @@ TEST(MeasureCommandTest, AnOversizedFrameInsideAVideoIsSkipped) {
   const fs::path d = FreshDir("oversized_frame");
   ASSERT_EQ(RunCli("render --out " + (d / "a.avi").string() + " --frames 4 " + kSmall, d).exit_code,
             0);
-  const std::string ffmpeg = "ffmpeg -nostdin -v error -y ";
-  ASSERT_EQ(std::system((ffmpeg + "-i " + (d / "a.avi").string() + " -c:v copy -f mjpeg " +
-                         (d / "a.mjpeg").string())
-                            .c_str()),
-            0);
-  ASSERT_EQ(std::system((ffmpeg + "-f lavfi -i color=c=gray:s=12000x12000 -frames:v 1 -f mjpeg " +
-                         (d / "big.jpg").string())
-                            .c_str()),
+  const auto ffmpeg = [](const std::string& args) {
+    return std::system(("ffmpeg -nostdin -v error -y " + args).c_str());
+  };
+  ASSERT_EQ(
+      ffmpeg("-i " + (d / "a.avi").string() + " -c:v copy -f mjpeg " + (d / "a.mjpeg").string()),
+      0);
+  ASSERT_EQ(ffmpeg("-f lavfi -i color=c=gray:s=12000x12000 -frames:v 1 -f mjpeg " +
+                   (d / "big.jpg").string()),
             0);
   const std::string small = ReadFile((d / "a.mjpeg").string());
   WriteFileAtomically((d / "raw.mjpeg").string(),
                       small + ReadFile((d / "big.jpg").string()) + small);
-  ASSERT_EQ(std::system((ffmpeg + "-f mjpeg -framerate 25 -i " + (d / "raw.mjpeg").string() +
-                         " -c:v copy -r 25 " + (d / "v.avi").string())
-                            .c_str()),
+  ASSERT_EQ(ffmpeg("-f mjpeg -framerate 25 -i " + (d / "raw.mjpeg").string() + " -c:v copy -r 25 " +
+                   (d / "v.avi").string()),
             0);
   RunResult r =
       RunCli("measure " + (d / "v.avi").string() + " --out-frames " + (d / "f.csv").string(), d);

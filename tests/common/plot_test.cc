@@ -12,6 +12,14 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// An empty folder under the system's temporary directory.
+fs::path FreshDir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / name;
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
 PlotSpec Spec() {
   PlotSpec spec;
   spec.title = "t";
@@ -27,9 +35,7 @@ PlotSpec Spec() {
 
 TEST(PlotTest, DrawsAPngOrSaysWhyNot) {
   if (FindOnPath("gnuplot").empty()) GTEST_SKIP() << "no gnuplot";
-  const fs::path d = fs::temp_directory_path() / "clogscope_plot";
-  fs::remove_all(d);
-  fs::create_directories(d);
+  const fs::path d = FreshDir("clogscope_plot");
   std::string why;
   ASSERT_TRUE(PlotToPng(Spec(), (d / "ok.png").string(), &why)) << why;
   EXPECT_GT(fs::file_size(d / "ok.png"), 1000u);
@@ -50,9 +56,7 @@ TEST(PlotTest, DrawsAPngOrSaysWhyNot) {
 // string (no backquote or macro substitution).
 TEST(PlotTest, PathsWithShellOrGnuplotSyntaxAreOnlyNames) {
   if (FindOnPath("gnuplot").empty()) GTEST_SKIP() << "no gnuplot";
-  const fs::path d = fs::temp_directory_path() / "clogscope_plot_names";
-  fs::remove_all(d);
-  fs::create_directories(d);
+  const fs::path d = FreshDir("clogscope_plot_names");
   // The commands name files relative to the folder they would run in: this one.
   const fs::path cwd = fs::current_path();
   fs::current_path(d);
