@@ -9,12 +9,13 @@
 
 #include "apps/measure_rows.h"
 #include "calib/pixel_scale.h"
+#include "vision/strand_measure.h"
 
 namespace clogscope::apps {
 
 // The width-outlier window of `measure` (vision::FlagWidthOutliers): a frame's verdict depends on
 // the frames up to this many rows either side.
-inline constexpr int kOutlierHalfWindow = 25;
+inline constexpr int kOutlierHalfWindow = vision::kWidthOutlierHalfWindow;
 
 // `measure --overlay` for one input: each frame is drawn and written as soon as its row is final,
 // at once without outlier flags, else once the frames its outlier verdict depends on are in. So

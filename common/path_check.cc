@@ -34,7 +34,7 @@ PathKind InspectPath(const std::string& path, std::string* why) {
   if (::stat(path.c_str(), &st) != 0) {
     const int err = errno;
     if (err == ENOENT) return PathKind::kMissing;
-    *why = Reason(err);
+    if (why) *why = Reason(err);
     return PathKind::kUnreachable;
   }
   if (S_ISREG(st.st_mode)) return PathKind::kFile;

@@ -15,9 +15,9 @@ enum class PathKind {
   kUnreachable,  // the file system refused: a loop of links, no permission, a name too long, …
 };
 
-// What `path` is. For kUnreachable, `why` says why ("too many levels of symbolic links").
-// Never throws.
-PathKind InspectPath(const std::string& path, std::string* why);
+// What `path` is. For kUnreachable, `why` (when given) says why ("too many levels of symbolic
+// links"). Never throws.
+PathKind InspectPath(const std::string& path, std::string* why = nullptr);
 
 // What an input option takes.
 enum class PathExpect {

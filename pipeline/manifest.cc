@@ -14,6 +14,7 @@
 #include "common/csv.h"
 #include "common/path_check.h"
 #include "pipeline/statistics.h"
+#include "vision/video_io.h"
 
 namespace clogscope::pipeline {
 namespace {
@@ -136,8 +137,7 @@ Manifest LoadCsvManifest(const std::string& path) {
     if (c_b >= 0 && !r[c_b].empty()) s.end_s = ParseNumberField(r[c_b], where, "end_s");
     if (r[c_src].empty()) throw std::invalid_argument(where + ": source is empty");
     const std::string src = Resolve(base, r[c_src]);
-    std::string unused;
-    (InspectPath(src, &unused) == PathKind::kDirectory ? s.images : s.video) = src;
+    (InspectPath(src) == PathKind::kDirectory ? s.images : s.video) = src;
     m.steps.push_back(s);
   }
   return m;
@@ -146,8 +146,7 @@ Manifest LoadCsvManifest(const std::string& path) {
 }  // namespace
 
 Manifest LoadManifest(const std::string& path) {
-  std::string ext = fs::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+  const std::string ext = vision::LowerExtension(path);
   Manifest m;
   if (ext == ".csv") {
     m = LoadCsvManifest(path);
@@ -207,8 +206,7 @@ Manifest LoadManifest(const std::string& path) {
     }
     if (root["extruder"]) {
       m.extruder = y.Text(root["extruder"], "extruder");
-      std::string unused;
-      if (InspectPath(Resolve(base, m.extruder), &unused) != PathKind::kMissing)
+      if (InspectPath(Resolve(base, m.extruder)) != PathKind::kMissing)
         m.extruder = Resolve(base, m.extruder);
     }
     if (root["extruder_set"]) m.extruder_set = y.TextList(root["extruder_set"], "extruder_set");

@@ -96,8 +96,7 @@ class VideoSource : public FrameSource {
 std::unique_ptr<FrameSource> FrameSource::Open(const std::string& path) {
   // No such file, a name too long, a loop of symbolic links: the one path check's line.
   RequireInputPath("", path, PathExpect::kFileOrDirectory);
-  std::string unused;
-  if (InspectPath(path, &unused) == PathKind::kDirectory) {
+  if (InspectPath(path) == PathKind::kDirectory) {
     std::error_code ec;
     std::vector<std::string> files;
     for (fs::directory_iterator it(path, ec), end; !ec && it != end; it.increment(ec)) {

@@ -138,7 +138,9 @@ double DataMax(const cv::Mat& image);
 // Marks valid frames whose width is far from the median of the valid frames within ±half_window
 // frames (robust: more than k·1.4826·MAD and more than min_deviation_px away) as kWidthOutlier.
 // Returns how many it marked.
-int FlagWidthOutliers(std::vector<StrandMeasurement>& frames, int half_window = 25, double k = 6.0,
+inline constexpr int kWidthOutlierHalfWindow = 25;  // frames either side a width is judged by
+int FlagWidthOutliers(std::vector<StrandMeasurement>& frames,
+                      int half_window = kWidthOutlierHalfWindow, double k = 6.0,
                       double min_deviation_px = 1.0);
 
 }  // namespace clogscope::vision
