@@ -12,7 +12,7 @@
 #include <random>
 #include <stdexcept>
 
-#include "vision/video_io.h"
+#include "common/spawn.h"
 
 namespace clogscope::synthetic {
 namespace {
@@ -415,15 +415,25 @@ std::vector<cv::Mat> RenderAdversarial(const AdversarialScene& p, int frames,
   }
   if (p.codec == Codec::kH264) {
     namespace fs = std::filesystem;
-    const std::string path = (fs::path(temp_dir) / fmt::format("adversarial_{}_{}.mp4", p.seed,
-                                                               static_cast<int>(p.trouble)))
-                                 .string();
-    {
-      vision::VideoFileWriter writer(path, vision::VideoKind::kH264Mp4, 25.0,
-                                     cv::Size(p.width_px, p.height_px));
-      for (const cv::Mat& f : out) writer.Write(f);
-      writer.Commit();
-    }
+    const fs::path dir =
+        fs::path(temp_dir) / fmt::format("adversarial_{}_{}", p.seed, static_cast<int>(p.trouble));
+    const std::string path = (dir / "round_trip.mp4").string();
+    fs::create_directories(dir);
+    for (size_t i = 0; i < out.size(); ++i)
+      cv::imwrite((dir / fmt::format("{:03d}.png", i)).string(), out[i]);
+    // The ffmpeg program with one encoder thread: OpenCV's writer runs x264 on every core, and its
+    // output then changes from run to run, and with it the matrix's figures.
+    SpawnOptions encode;
+    encode.argv = {"ffmpeg", "-nostdin", "-v",
+                   "error",  "-y",       "-framerate",
+                   "25",     "-i",       (dir / "%03d.png").string(),
+                   "-c:v",   "libx264",  "-threads",
+                   "1",      "-pix_fmt", "yuv420p",
+                   path};
+    std::string why;
+    const pid_t pid = Spawn(encode, &why);
+    if (pid < 0 || !WaitForExit(pid, &why))
+      throw std::runtime_error(path + ": H.264 round trip: ffmpeg " + why);
     cv::VideoCapture cap(path, cv::CAP_FFMPEG);
     for (cv::Mat& f : out) {
       cv::Mat decoded;
@@ -433,7 +443,7 @@ std::vector<cv::Mat> RenderAdversarial(const AdversarialScene& p, int frames,
     }
     cap.release();
     std::error_code ec;
-    fs::remove(path, ec);
+    fs::remove_all(dir, ec);
   }
 
   if (truth) {
