@@ -60,7 +60,7 @@ double BandEdgeDoubtPx(const GreyImage& img, const AxisFrame& f, const ClipLevel
   // calipers' do, not what the whole band's samples would.
   constexpr double kBinPx = 0.1;
   const int bins = static_cast<int>(std::ceil((below_px + above_px) / kBinPx)) + 1;
-  std::vector<double> sum(bins, 0.0), count(bins, 0.0);
+  std::vector<double> sum(bins, 0.0), sum2(bins, 0.0), count(bins, 0.0);
   std::vector<EdgeSample> samples;
   std::vector<double> per_unit, blur;
   bool plain = true;
@@ -76,6 +76,7 @@ double BandEdgeDoubtPx(const GreyImage& img, const AxisFrame& f, const ClipLevel
       const int b = static_cast<int>(std::lround((static_cast<float>(u) + below_px) / kBinPx));
       if (b < 0 || b >= bins) continue;
       sum[b] += smp.value;
+      sum2[b] += static_cast<double>(smp.value) * smp.value;
       count[b] += 1;
     }
     per_unit.push_back(SharedStructureEdgeDoubtPx(1.0, e.rms, e.edge_sigma_px, e.samples, u1 - u0));
@@ -97,8 +98,24 @@ double BandEdgeDoubtPx(const GreyImage& img, const AxisFrame& f, const ClipLevel
     const double sigma = Median(blur);
     const EdgeFit one = FitBlurredStep(profile, 0.0, sigma, 0.0);
     const EdgeFit two = FitTwoSlopeStep(profile, 0.0, sigma, 0.0);
-    if (one.converged && two.converged && std::abs(two.edge_px) < std::min(below_px, above_px))
-      slopes_px = std::abs(two.edge_px - one.edge_px);
+    // The bins' means carry the samples' noise over the samples per bin: the two-slope fit's
+    // gain over the plain one in units of it is χ² with one degree of freedom when the sides
+    // slope alike, and the edges' difference is then noise too. Only the part of the difference
+    // the gain cannot put down to noise counts (its square less the noise's share, as above).
+    double within = 0, n = 0;
+    int occupied = 0;
+    for (int b = 0; b < bins; ++b) {
+      if (count[b] == 0) continue;
+      within += sum2[b] - sum[b] * sum[b] / count[b];
+      n += count[b];
+      ++occupied;
+    }
+    const double mean_var = n > occupied ? within / (n - occupied) / (n / occupied) : 0.0;
+    if (one.converged && two.converged && std::abs(two.edge_px) < std::min(below_px, above_px) &&
+        mean_var > 0) {
+      const double gain = (one.rms * one.rms - two.rms * two.rms) * profile.size() / mean_var;
+      if (gain > 1) slopes_px = std::abs(two.edge_px - one.edge_px) * std::sqrt(1 - 1 / gain);
+    }
   }
   return std::hypot(shared_px, slopes_px);
 }

@@ -51,7 +51,8 @@ struct CaliperEdge {
 // above_px after it along u) shows that one caliper's cannot: the structure the calipers share in
 // their residuals, and, when every caliper took the plain step, how far the edge moves when its
 // two sides may slope differently (FitTwoSlopeStep: a background gradient stopping at a flat
-// object). 0 with fewer than two calipers.
+// object); the plain step's two-slope check only counts the part of that move the pooled
+// profile's noise cannot explain. 0 with fewer than two calipers.
 double BandEdgeDoubtPx(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
                        const std::vector<CaliperEdge>& edges, double below_px, double above_px);
 

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <numeric>
 #include <opencv2/imgproc.hpp>
@@ -20,6 +21,7 @@ constexpr int kMaxCandidates = 40;       // pairs kept after scoring
 constexpr int kMaxFollowed = 6;          // pairs followed along the full-resolution image
 constexpr double kFollowOffsetPx = 3.0;  // edge contrast is read this far either side
 constexpr double kMixedPenalty = 0.5;    // a pair brighter on one side only is less likely
+constexpr double kParallelSine = 0.035;  // two axes within 2° of each other are parallel
 constexpr double kEndFraction = 0.3;     // an edge ends where its contrast falls below this share
 
 // The segment's line in an axis frame: u at s.
@@ -535,6 +537,40 @@ bool FollowPair(const GreyImage& img, const SceneOptions& o, const PairCandidate
   return true;
 }
 
+namespace {}  // namespace
+
+PairContest ContestPairs(const PairCandidate& b, const StrandGeometry& bg, const PairCandidate& c,
+                         const StrandGeometry& cg, const SceneOptions& o) {
+  const bool shares =
+      c.left == b.left || c.left == b.right || c.right == b.left || c.right == b.right;
+  const auto [bl, br] = Interval(b, b.axis);
+  const auto [cl, cr] = Interval(c, b.axis);
+  const bool disjoint = !shares && (cr < bl || cl > br);
+  // Two strands in one view look alike; a gap between objects (a mixed pair) is another thing.
+  if (!disjoint || c.polarity != b.polarity) return PairContest::kNotRivals;
+  // Two strand-like objects: the one hanging from the nozzle's face (the nozzle on both its
+  // sides) is the strand; a hair that ends at a flank, or in the open, is not.
+  if (o.target == MeasureTarget::kStrand && (bg.tip_face_sides == 2) != (cg.tip_face_sides == 2))
+    return bg.tip_face_sides == 2 ? PairContest::kFirstAtFace : PairContest::kSecondAtFace;
+  // Two parallel objects side by side, closer than either is wide, that the tip did not tell
+  // apart: one strand whose stripe matches the background, or a strand and its neighbour.
+  // Which is the strand, or whether their union is, the frame cannot say, whatever the scores.
+  const double gap_px = std::max(cl - br, bl - cr);
+  if (std::abs(c.axis.dx * b.axis.dy - c.axis.dy * b.axis.dx) < kParallelSine &&
+      gap_px < std::max(br - bl, cr - cl))
+    return PairContest::kSideBySide;
+  return c.score >= o.ambiguity_ratio * b.score ? PairContest::kSimilarScore
+                                                : PairContest::kOutscored;
+}
+
+std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const PairCandidate& c) {
+  assert(contest == PairContest::kSideBySide || contest == PairContest::kSimilarScore);
+  return fmt::format(contest == PairContest::kSideBySide
+                         ? "two strand-like objects side by side: {} and {}"
+                         : "two strand-like pairs of similar score: {} and {}",
+                     Describe(b), Describe(c));
+}
+
 namespace {
 
 // Follows the best candidates of one channel on its full-resolution image; the first that holds
@@ -578,33 +614,23 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
     }
     // A second pair that holds up: ambiguous when it is a separate object of similar score.
     const PairCandidate& b = r.candidates[r.chosen];
-    const bool shares =
-        c.left == b.left || c.left == b.right || c.right == b.left || c.right == b.right;
-    const auto [bl, br] = Interval(b, b.axis);
-    const auto [cl, cr] = Interval(c, b.axis);
-    const bool disjoint = !shares && (cr < bl || cl > br);
-    // Two strands in one view look alike; a gap between objects (a mixed pair) is another thing.
-    const bool alike = disjoint && c.polarity == b.polarity;
-    // Two strand-like objects: the one hanging from the nozzle's face (the nozzle on both its
-    // sides) is the strand; a hair that ends at a flank, or in the open, is not.
-    if (alike && o.target == MeasureTarget::kStrand &&
-        (r.geometry.tip_face_sides == 2) != (g.tip_face_sides == 2)) {
-      if (g.tip_face_sides == 2) {
-        r.candidates[r.chosen].verdict = "its top is not at the nozzle's face";
-        r.runners_up.clear();
-        r.chosen = i;
-        r.geometry = g;
-        c.verdict = "chosen";
-      } else {
-        c.verdict = "its top is not at the nozzle's face";
-      }
+    const PairContest contest = ContestPairs(b, r.geometry, c, g, o);
+    if (contest == PairContest::kSecondAtFace) {
+      r.candidates[r.chosen].verdict = "its top is not at the nozzle's face";
+      r.runners_up.clear();
+      r.chosen = i;
+      r.geometry = g;
+      c.verdict = "chosen";
       continue;
     }
-    if (alike && c.score >= o.ambiguity_ratio * b.score) {
+    if (contest == PairContest::kFirstAtFace) {
+      c.verdict = "its top is not at the nozzle's face";
+      continue;
+    }
+    if (contest == PairContest::kSideBySide || contest == PairContest::kSimilarScore) {
       c.verdict = "as likely as the chosen pair";
       r.status = FrameStatus::kAmbiguous;
-      r.detail = fmt::format("two strand-like pairs of similar score: {} and {}", Describe(b),
-                             Describe(c));
+      r.detail = AmbiguityDetail(contest, b, c);
       return;
     }
     c.verdict = fmt::format("scores {:.0f} % of the chosen pair", 100 * c.score / b.score);

@@ -85,6 +85,25 @@ struct SceneResult {
   std::vector<std::pair<int, StrandGeometry>> runners_up;
 };
 
+// How a second pair that held up (c, followed as cg) stands against the first (b, bg):
+// kNotRivals: not two separate objects of one polarity (a stripe inside, a gap beside);
+// kFirstAtFace / kSecondAtFace: the tip decides — only that one hangs from the nozzle's face;
+// kSideBySide: parallel and closer than either is wide (one strand with a stripe at the
+// background's level, or two strands): ambiguous whatever the scores;
+// kSimilarScore: c scores at least ambiguity_ratio of b: ambiguous; kOutscored: b wins.
+enum class PairContest {
+  kNotRivals,
+  kFirstAtFace,
+  kSecondAtFace,
+  kSideBySide,
+  kSimilarScore,
+  kOutscored
+};
+PairContest ContestPairs(const PairCandidate& b, const StrandGeometry& bg, const PairCandidate& c,
+                         const StrandGeometry& cg, const SceneOptions& options);
+// The `ambiguous` detail for a kSideBySide or kSimilarScore contest.
+std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const PairCandidate& c);
+
 // Finds the strand in one or more single-channel 8/16-bit views of the same ROI (grey, or a
 // colour frame's luma and channels): the channel whose best pair scores highest is used. Contrast
 // limits come from options.min_contrast, in the data's own range.

@@ -149,6 +149,29 @@ StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOption
       if (next.score < std::max(kMinFallbackScoreRatio * first.score,
                                 kMinFallbackScoreFactor * scene_options.min_score))
         break;
+      // The pairs the first one outranked were weighed against it, not against each other.
+      PairContest contest = PairContest::kNotRivals;
+      size_t rival = 0;
+      for (size_t j = 0; j < scene.runners_up.size(); ++j) {
+        if (j == k) continue;
+        const auto& [other, other_g] = scene.runners_up[j];
+        contest = ContestPairs(next, g, scene.candidates[other], other_g, scene_options);
+        rival = j;
+        if (contest == PairContest::kFirstAtFace || contest == PairContest::kNotRivals ||
+            contest == PairContest::kOutscored)
+          continue;
+        break;
+      }
+      if (contest == PairContest::kSecondAtFace) {
+        next.verdict = "its top is not at the nozzle's face";
+        continue;
+      }
+      if (contest == PairContest::kSideBySide || contest == PairContest::kSimilarScore) {
+        next.verdict = "as likely as another pair";
+        m.status = FrameStatus::kAmbiguous;
+        m.detail = AmbiguityDetail(contest, next, scene.candidates[scene.runners_up[rival].first]);
+        break;
+      }
       StrandMeasurement alt =
           MeasureInScene(channel, data_max, FrameStatus::kValid, "", g, roi, opt);
       if (!alt.valid()) {

@@ -23,18 +23,20 @@ TEST(AdversarialMatrixTest, FewConfidentlyWrongWidthsAndNoneWithoutAStrand) {
   SCOPED_TRACE(MatrixTable(r) + "confidently wrong:" + wrong);
   // No width where there is no strand, ever.
   EXPECT_EQ(r.classes[static_cast<int>(TroubleClass::kNoStrand)].valid, 0);
-  // Confidently wrong: 7 of 1200 frames when this was written, 5 of them beyond 4σ (four frames of
-  // one deeply shaded strand with a stripe, −8 px: its cylinder fit has no model doubt yet); 32
-  // before the σ carried the edge model's doubt and imprecise widths were refused, 120 before the
-  // object model's first round. The renders are the same from run to run (H.264 on one thread).
-  EXPECT_LE(r.all.wrong, 7);
-  EXPECT_LE(r.all.wrong_beyond_sigma, 5);
-  // What that costs: valid widths on 636 of the 1000 measurable strand frames when this was
+  // Confidently wrong: 3 of 1200 frames when this was written, 1 of them beyond 4σ (a swell
+  // whose tip the nozzle's face does not fix; a stringer and a Bayer frame 0.3-0.4 px off at
+  // 3-4σ); 7 before lit cylinders that disagree with the per-edge fits carried that as doubt,
+  // 32 before the σ carried the edge model's doubt and imprecise widths were refused, 120 before
+  // the object model's first round. The renders are the same from run to run (H.264 on one
+  // thread).
+  EXPECT_LE(r.all.wrong, 3);
+  EXPECT_LE(r.all.wrong_beyond_sigma, 1);
+  // What that costs: valid widths on 650 of the 1000 measurable strand frames when this was
   // written (the saturated and nozzle-alone classes are refused by design).
   const int measurable = r.all.frames -
                          r.classes[static_cast<int>(TroubleClass::kSaturated)].frames -
                          r.classes[static_cast<int>(TroubleClass::kNoStrand)].frames;
-  EXPECT_GE(r.all.valid, 0.6 * measurable);
+  EXPECT_GE(r.all.valid, 0.63 * measurable);
   // The classes the first round fixed stay fixed: the lens at its silhouette, clipping refused,
   // the tip of a swelling strand at the nozzle (1 % wrong measured; 10 % in the first round, 57 %
   // before).
@@ -51,7 +53,7 @@ TEST(AdversarialMatrixTest, FewConfidentlyWrongWidthsAndNoneWithoutAStrand) {
   EXPECT_GE(lens.valid, 0.8 * lens.frames);
   // Bias and spread of the valid widths that are not wrong.
   EXPECT_LT(std::abs(r.all.bias_px), 0.05);
-  EXPECT_LT(r.all.sd_px, 0.11);  // 0.081 measured
+  EXPECT_LT(r.all.sd_px, 0.11);  // 0.083 measured
 }
 
 }  // namespace
