@@ -564,7 +564,7 @@ PairContest ContestPairs(const PairCandidate& b, const StrandGeometry& bg, const
 }
 
 std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const PairCandidate& c) {
-  assert(contest == PairContest::kSideBySide || contest == PairContest::kSimilarScore);
+  assert(Ambiguous(contest));
   return fmt::format(contest == PairContest::kSideBySide
                          ? "two strand-like objects side by side: {} and {}"
                          : "two strand-like pairs of similar score: {} and {}",
@@ -616,7 +616,7 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
     const PairCandidate& b = r.candidates[r.chosen];
     const PairContest contest = ContestPairs(b, r.geometry, c, g, o);
     if (contest == PairContest::kSecondAtFace) {
-      r.candidates[r.chosen].verdict = "its top is not at the nozzle's face";
+      r.candidates[r.chosen].verdict = kNotAtFaceVerdict;
       r.runners_up.clear();
       r.chosen = i;
       r.geometry = g;
@@ -624,10 +624,10 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
       continue;
     }
     if (contest == PairContest::kFirstAtFace) {
-      c.verdict = "its top is not at the nozzle's face";
+      c.verdict = kNotAtFaceVerdict;
       continue;
     }
-    if (contest == PairContest::kSideBySide || contest == PairContest::kSimilarScore) {
+    if (Ambiguous(contest)) {
       c.verdict = "as likely as the chosen pair";
       r.status = FrameStatus::kAmbiguous;
       r.detail = AmbiguityDetail(contest, b, c);

@@ -101,6 +101,11 @@ enum class PairContest {
 };
 PairContest ContestPairs(const PairCandidate& b, const StrandGeometry& bg, const PairCandidate& c,
                          const StrandGeometry& cg, const SceneOptions& options);
+inline bool Ambiguous(PairContest c) {
+  return c == PairContest::kSideBySide || c == PairContest::kSimilarScore;
+}
+// The verdict of a pair that loses to one hanging from the nozzle's face.
+inline constexpr const char* kNotAtFaceVerdict = "its top is not at the nozzle's face";
 // The `ambiguous` detail for a kSideBySide or kSimilarScore contest.
 std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const PairCandidate& c);
 

@@ -163,10 +163,10 @@ StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOption
         break;
       }
       if (contest == PairContest::kSecondAtFace) {
-        next.verdict = "its top is not at the nozzle's face";
+        next.verdict = kNotAtFaceVerdict;
         continue;
       }
-      if (contest == PairContest::kSideBySide || contest == PairContest::kSimilarScore) {
+      if (Ambiguous(contest)) {
         next.verdict = "as likely as another pair";
         m.status = FrameStatus::kAmbiguous;
         m.detail = AmbiguityDetail(contest, next, scene.candidates[scene.runners_up[rival].first]);
