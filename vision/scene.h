@@ -7,7 +7,7 @@
 
 #include "vision/frame_status.h"
 #include "vision/grey_image.h"
-#include "vision/synthetic.h"
+#include "vision/edges/polarity.h"
 
 namespace clogscope::vision {
 

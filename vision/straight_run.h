@@ -2,7 +2,7 @@
 
 #include <vector>
 
-#include "vision/strand_measure.h"
+#include "vision/edges/caliper.h"
 
 namespace clogscope::vision {
 

@@ -5,7 +5,8 @@
 #include <vector>
 
 #include "vision/frame_status.h"
-#include "vision/synthetic.h"
+#include "vision/edges/caliper.h"
+#include "vision/edges/polarity.h"
 
 namespace clogscope::vision {
 
@@ -48,17 +49,6 @@ struct BandPx {
 inline constexpr double kWholeStretchPx = 1e6;  // band height meaning "as far as the stretch goes"
 inline constexpr double kNominalScaleUmPerPx = 3.0;  // the reference camera's, when none is given
 BandPx DefaultBand(MeasureTarget target, double scale_um_per_px);
-
-// One caliper: a thin slab across the strand. Positions are across (u) and along (s) the axis.
-struct Caliper {
-  double s_px = 0;       // slab centre below the tip
-  double left_u_px = 0;  // fitted edges
-  double right_u_px = 0;
-  double width_px = 0;        // perpendicular width (edges corrected for the axis tilt)
-  double width_sigma_px = 0;  // its standard error from the two edge fits' residuals
-  bool fitted = false;        // both edges fitted
-  bool inlier = false;        // used in the frame's width
-};
 
 // The result for one frame. Geometry is in full-frame pixel coordinates (ROI offset added).
 struct StrandMeasurement {

@@ -65,27 +65,6 @@ Target ParseTarget(const std::string& name) {
   throw std::invalid_argument("target '" + name + "': expected strand, pin or micrometer");
 }
 
-const char* PolarityName(Polarity p) {
-  switch (p) {
-    case Polarity::kAuto:
-      return "auto";
-    case Polarity::kBrightOnDark:
-      return "bright";
-    case Polarity::kDarkOnBright:
-      return "dark";
-    case Polarity::kMixed:
-      return "mixed";
-  }
-  return "?";
-}
-
-Polarity ParsePolarity(const std::string& name) {
-  if (name == "auto") return Polarity::kAuto;
-  if (name == "bright") return Polarity::kBrightOnDark;
-  if (name == "dark") return Polarity::kDarkOnBright;
-  throw std::invalid_argument("polarity '" + name + "': expected auto, bright or dark");
-}
-
 bool SceneParams::Validate(std::string* why) const {
   auto fail = [&](const std::string& msg) {
     if (why) *why = msg;

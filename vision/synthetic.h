@@ -6,18 +6,9 @@
 #include <string>
 #include <vector>
 
-namespace clogscope::vision {
+#include "vision/edges/polarity.h"
 
-// Which way the strand differs from the background.
-enum class Polarity {
-  kAuto,          // measurement only: decide from the frame
-  kBrightOnDark,  // lit strand on a dark background
-  kDarkOnBright,  // silhouette on a backlight
-  kMixed,         // measured only: brighter than the background on one side, darker on the other
-};
-const char* PolarityName(Polarity p);
-// Parses "auto", "bright" or "dark"; throws std::invalid_argument otherwise.
-Polarity ParsePolarity(const std::string& name);
+namespace clogscope::vision {
 
 // What the scene shows: the strand below a nozzle, a calibration pin gauge (a cylinder across the
 // whole frame, no nozzle), or a stage micrometer (parallel lines at a known pitch).
