@@ -17,8 +17,8 @@
 #include "common/path_check.h"
 #include "common/plot.h"
 #include "common/provenance.h"
-#include "vision/micrometer.h"
-#include "vision/video_io.h"
+#include "vision/io/video_io.h"
+#include "vision/scene/micrometer.h"
 
 namespace clogscope::apps {
 namespace {

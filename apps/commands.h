@@ -16,11 +16,11 @@
 #include "model/thermal.h"
 #include "pipeline/experiment.h"
 #include "pipeline/live_watch.h"
-#include "vision/feed_speed.h"
-#include "vision/gear_speed.h"
-#include "vision/scene.h"
-#include "vision/strand_measure.h"
-#include "vision/synthetic.h"
+#include "synthetic/synthetic.h"
+#include "vision/motion/feed_speed.h"
+#include "vision/motion/gear_speed.h"
+#include "vision/scene/scene.h"
+#include "vision/scene/strand_measure.h"
 
 namespace clogscope::apps {
 

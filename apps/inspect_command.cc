@@ -9,9 +9,9 @@
 #include "apps/cli_util.h"
 #include "apps/commands.h"
 #include "common/path_check.h"
-#include "vision/frame_source.h"
-#include "vision/overlay.h"
-#include "vision/video_io.h"
+#include "vision/io/frame_source.h"
+#include "vision/io/video_io.h"
+#include "vision/overlay/overlay.h"
 
 namespace clogscope::apps {
 namespace {

@@ -21,8 +21,8 @@
 #include "common/csv.h"
 #include "common/provenance.h"
 #include "pipeline/statistics.h"
-#include "vision/batch.h"
-#include "vision/video_io.h"
+#include "vision/io/video_io.h"
+#include "vision/scene/batch.h"
 
 namespace clogscope::apps {
 namespace {

@@ -13,7 +13,7 @@
 #include "common/csv.h"
 #include "common/path_check.h"
 #include "model/extrusion_lag.h"
-#include "vision/video_io.h"
+#include "vision/io/video_io.h"
 
 namespace clogscope::apps {
 

@@ -13,7 +13,7 @@
 
 #include "pipeline/experiment.h"
 #include "pipeline/live_watch.h"
-#include "vision/synthetic.h"
+#include "synthetic/synthetic.h"
 
 namespace {
 

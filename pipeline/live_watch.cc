@@ -9,8 +9,8 @@
 #include <stdexcept>
 #include <thread>
 
-#include "vision/scene_memory.h"
-#include "vision/track.h"
+#include "vision/scene/scene_memory.h"
+#include "vision/scene/track.h"
 
 namespace clogscope::pipeline {
 namespace {

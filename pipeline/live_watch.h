@@ -11,8 +11,8 @@
 #include "model/parameters.h"
 #include "pipeline/watch_report.h"
 #include "pipeline/watch_state.h"
-#include "vision/live_source.h"
-#include "vision/strand_measure.h"
+#include "vision/io/live_source.h"
+#include "vision/scene/strand_measure.h"
 
 namespace clogscope::pipeline {
 

@@ -6,9 +6,9 @@
 
 #include "apps/band.h"
 #include "apps/commands.h"
+#include "synthetic/synthetic.h"
 #include "tests/apps/cli_test_util.h"
-#include "vision/strand_measure.h"
-#include "vision/synthetic.h"
+#include "vision/scene/strand_measure.h"
 
 namespace clogscope::apps {
 namespace {

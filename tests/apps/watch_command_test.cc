@@ -20,8 +20,8 @@
 #include <thread>
 
 #include "apps/commands.h"
+#include "synthetic/synthetic.h"
 #include "tests/apps/cli_test_util.h"
-#include "vision/synthetic.h"
 
 extern char** environ;
 
