@@ -15,12 +15,12 @@
 #include "model/roller_drive.h"
 #include "model/thermal.h"
 #include "pipeline/experiment.h"
-#include "pipeline/live_watch.h"
 #include "synthetic/synthetic.h"
 #include "vision/motion/feed_speed.h"
 #include "vision/motion/gear_speed.h"
 #include "vision/scene/scene.h"
 #include "vision/scene/strand_measure.h"
+#include "watch/live_watch.h"
 
 namespace clogscope::apps {
 

@@ -4,7 +4,7 @@
 #include <string>
 
 #include "model/parameters.h"
-#include "pipeline/watch_state.h"
+#include "watch/watch_state.h"
 
 namespace clogscope::pipeline {
 

@@ -1,4 +1,4 @@
-#include "pipeline/watch_report.h"
+#include "watch/watch_report.h"
 
 #include <fmt/format.h>
 

@@ -1,4 +1,4 @@
-#include "pipeline/live_watch.h"
+#include "watch/live_watch.h"
 
 #include <fmt/format.h>
 

@@ -1,4 +1,4 @@
-#include "pipeline/watch_state.h"
+#include "watch/watch_state.h"
 
 #include <fmt/format.h>
 

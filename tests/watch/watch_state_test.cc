@@ -1,4 +1,4 @@
-#include "pipeline/watch_state.h"
+#include "watch/watch_state.h"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 #include <random>
 
 #include "pipeline/experiment.h"
-#include "pipeline/watch_report.h"
+#include "watch/watch_report.h"
 
 namespace clogscope::pipeline {
 namespace {

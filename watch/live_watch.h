@@ -9,10 +9,10 @@
 
 #include "calib/pixel_scale.h"
 #include "model/parameters.h"
-#include "pipeline/watch_report.h"
-#include "pipeline/watch_state.h"
 #include "vision/io/live_source.h"
 #include "vision/scene/strand_measure.h"
+#include "watch/watch_report.h"
+#include "watch/watch_state.h"
 
 namespace clogscope::pipeline {
 
