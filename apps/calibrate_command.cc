@@ -1,3 +1,5 @@
+#include "apps/calibrate_command.h"
+
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
@@ -9,7 +11,6 @@
 #include <stdexcept>
 
 #include "apps/cli_util.h"
-#include "apps/commands.h"
 #include "calib/calibration_file.h"
 #include "calib/line_lattice.h"
 #include "common/atomic_file.h"

@@ -1,3 +1,5 @@
+#include "apps/measure_command.h"
+
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
@@ -12,10 +14,10 @@
 #include <tuple>
 
 #include "apps/cli_util.h"
-#include "apps/commands.h"
 #include "apps/measure_options.h"
 #include "apps/measure_overlays.h"
 #include "apps/measure_rows.h"
+#include "apps/run_command.h"
 #include "calib/calibration_file.h"
 #include "common/atomic_file.h"
 #include "common/csv.h"

@@ -1,3 +1,5 @@
+#include "apps/inspect_command.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -5,7 +7,6 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "apps/band.h"
-#include "apps/commands.h"
 #include "synthetic/synthetic.h"
 #include "tests/apps/cli_test_util.h"
 #include "vision/scene/strand_measure.h"
