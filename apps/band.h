@@ -4,7 +4,7 @@
 #include <string>
 
 #include "calib/pixel_scale.h"
-#include "vision/strand_measure.h"
+#include "vision/scene/strand_measure.h"
 
 namespace clogscope::apps {
 

@@ -1,3 +1,5 @@
+#include "apps/calibrate_command.h"
+
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
@@ -9,7 +11,6 @@
 #include <stdexcept>
 
 #include "apps/cli_util.h"
-#include "apps/commands.h"
 #include "calib/calibration_file.h"
 #include "calib/line_lattice.h"
 #include "common/atomic_file.h"
@@ -17,8 +18,8 @@
 #include "common/path_check.h"
 #include "common/plot.h"
 #include "common/provenance.h"
-#include "vision/micrometer.h"
-#include "vision/video_io.h"
+#include "vision/io/video_io.h"
+#include "vision/scene/micrometer.h"
 
 namespace clogscope::apps {
 namespace {

@@ -1,3 +1,5 @@
+#include "apps/drive_command.h"
+
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
@@ -6,7 +8,7 @@
 #include <stdexcept>
 
 #include "apps/cli_util.h"
-#include "apps/commands.h"
+#include "apps/predict_command.h"
 #include "common/atomic_file.h"
 #include "common/path_check.h"
 #include "common/provenance.h"

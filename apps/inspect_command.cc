@@ -1,17 +1,20 @@
+#include "apps/band.h"
+#include "apps/inspect_command.h"
+
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <stdexcept>
 
 #include "apps/cli_util.h"
-#include "apps/commands.h"
 #include "common/path_check.h"
-#include "vision/frame_source.h"
-#include "vision/overlay.h"
-#include "vision/video_io.h"
+#include "vision/io/frame_source.h"
+#include "vision/io/video_io.h"
+#include "vision/overlay/overlay.h"
 
 namespace clogscope::apps {
 namespace {

@@ -1,3 +1,5 @@
+#include "apps/lag_command.h"
+
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
@@ -6,7 +8,6 @@
 #include <stdexcept>
 
 #include "apps/cli_util.h"
-#include "apps/commands.h"
 #include "common/atomic_file.h"
 #include "common/path_check.h"
 #include "common/plot.h"

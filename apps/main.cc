@@ -9,8 +9,17 @@
 #include <stdexcept>
 #include <string>
 
+#include "apps/calibrate_command.h"
 #include "apps/cli_util.h"
-#include "apps/commands.h"
+#include "apps/drive_command.h"
+#include "apps/inspect_command.h"
+#include "apps/lag_command.h"
+#include "apps/measure_command.h"
+#include "apps/predict_command.h"
+#include "apps/render_command.h"
+#include "apps/run_command.h"
+#include "apps/thermal_command.h"
+#include "apps/watch_command.h"
 #include "calib/solver_log.h"
 #include "common/library_text.h"
 #include "common/provenance.h"

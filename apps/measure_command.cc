@@ -1,3 +1,5 @@
+#include "apps/measure_command.h"
+
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
@@ -12,17 +14,17 @@
 #include <tuple>
 
 #include "apps/cli_util.h"
-#include "apps/commands.h"
 #include "apps/measure_options.h"
 #include "apps/measure_overlays.h"
 #include "apps/measure_rows.h"
+#include "apps/run_command.h"
 #include "calib/calibration_file.h"
 #include "common/atomic_file.h"
 #include "common/csv.h"
 #include "common/provenance.h"
 #include "pipeline/statistics.h"
-#include "vision/batch.h"
-#include "vision/video_io.h"
+#include "vision/io/video_io.h"
+#include "vision/scene/batch.h"
 
 namespace clogscope::apps {
 namespace {

@@ -3,7 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <string>
 
-#include "apps/commands.h"
+#include "apps/measure_command.h"
 
 namespace clogscope::apps {
 

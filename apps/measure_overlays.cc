@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <filesystem>
 
-#include "vision/overlay.h"
-#include "vision/video_io.h"
+#include "vision/io/video_io.h"
+#include "vision/overlay/overlay.h"
 
 namespace clogscope::apps {
 

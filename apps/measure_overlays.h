@@ -9,7 +9,7 @@
 
 #include "apps/measure_rows.h"
 #include "calib/pixel_scale.h"
-#include "vision/strand_measure.h"
+#include "vision/scene/strand_measure.h"
 
 namespace clogscope::apps {
 

@@ -11,9 +11,9 @@
 
 #include "calib/pixel_scale.h"
 #include "pipeline/speed_summary.h"
-#include "vision/feed_speed.h"
-#include "vision/gear_speed.h"
-#include "vision/strand_measure.h"
+#include "vision/motion/feed_speed.h"
+#include "vision/motion/gear_speed.h"
+#include "vision/scene/strand_measure.h"
 
 namespace clogscope::apps {
 

@@ -1,3 +1,5 @@
+#include "apps/predict_command.h"
+
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
@@ -8,7 +10,6 @@
 #include <stdexcept>
 
 #include "apps/cli_util.h"
-#include "apps/commands.h"
 #include "common/atomic_file.h"
 #include "common/path_check.h"
 #include "common/plot.h"

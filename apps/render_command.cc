@@ -1,3 +1,5 @@
+#include "apps/render_command.h"
+
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
@@ -8,12 +10,11 @@
 #include <stdexcept>
 
 #include "apps/cli_util.h"
-#include "apps/commands.h"
 #include "common/atomic_file.h"
 #include "common/csv.h"
 #include "common/path_check.h"
 #include "model/extrusion_lag.h"
-#include "vision/video_io.h"
+#include "vision/io/video_io.h"
 
 namespace clogscope::apps {
 

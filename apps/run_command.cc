@@ -1,3 +1,5 @@
+#include "apps/run_command.h"
+
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
@@ -10,8 +12,9 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
+#include "apps/calibrate_command.h"
 #include "apps/cli_util.h"
-#include "apps/commands.h"
+#include "apps/measure_command.h"
 #include "calib/calibration_file.h"
 #include "common/atomic_file.h"
 #include "common/library_text.h"

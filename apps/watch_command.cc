@@ -1,3 +1,5 @@
+#include "apps/watch_command.h"
+
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
@@ -6,8 +8,8 @@
 #include <stdexcept>
 
 #include "apps/cli_util.h"
-#include "apps/commands.h"
 #include "apps/measure_options.h"
+#include "apps/predict_command.h"
 #include "apps/watch_outputs.h"
 #include "pipeline/experiment.h"
 

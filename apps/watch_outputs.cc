@@ -16,7 +16,7 @@
 
 #include "common/csv.h"
 #include "common/spawn.h"
-#include "vision/overlay.h"
+#include "vision/overlay/overlay.h"
 
 extern char** environ;
 

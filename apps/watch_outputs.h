@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "pipeline/live_watch.h"
+#include "watch/live_watch.h"
 
 namespace clogscope::apps {
 

@@ -10,7 +10,7 @@
 #include <string>
 
 #include "synthetic/adversarial_matrix.h"
-#include "vision/frame_status.h"
+#include "vision/scene/frame_status.h"
 
 void BenchAdversarial(int argc, char** argv) {
   namespace syn = clogscope::synthetic;

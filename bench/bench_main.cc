@@ -20,14 +20,14 @@
 #include "model/lag_fit.h"
 #include "pipeline/experiment.h"
 #include "pipeline/speed_summary.h"
-#include "vision/batch.h"
-#include "vision/feed_speed.h"
-#include "vision/frame_source.h"
-#include "vision/gear_speed.h"
-#include "vision/strand_measure.h"
-#include "vision/synthetic.h"
-#include "vision/track.h"
-#include "vision/video_decoder.h"
+#include "synthetic/synthetic.h"
+#include "vision/io/frame_source.h"
+#include "vision/io/video_decoder.h"
+#include "vision/motion/feed_speed.h"
+#include "vision/motion/gear_speed.h"
+#include "vision/scene/batch.h"
+#include "vision/scene/strand_measure.h"
+#include "vision/scene/track.h"
 
 namespace {
 

@@ -12,8 +12,8 @@
 #include <thread>
 
 #include "pipeline/experiment.h"
-#include "pipeline/live_watch.h"
-#include "vision/synthetic.h"
+#include "synthetic/synthetic.h"
+#include "watch/live_watch.h"
 
 namespace {
 

@@ -4,8 +4,8 @@
 #include <stdexcept>
 
 #include "fuzz/fuzz_util.h"
-#include "vision/strand_measure.h"
-#include "vision/video_io.h"
+#include "vision/io/video_io.h"
+#include "vision/scene/strand_measure.h"
 
 // As the tool runs (apps/main.cc): OpenCV's own log lines off, the tool reports instead.
 extern "C" int LLVMFuzzerInitialize(int*, char***) {

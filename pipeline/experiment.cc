@@ -18,10 +18,10 @@
 #include "pipeline/feedstock_io.h"
 #include "pipeline/statistics.h"
 #include "pipeline/step_file.h"
-#include "vision/overlay.h"
-#include "vision/track.h"
-#include "vision/video_decoder.h"
-#include "vision/video_io.h"
+#include "vision/io/video_decoder.h"
+#include "vision/io/video_io.h"
+#include "vision/overlay/overlay.h"
+#include "vision/scene/track.h"
 
 namespace clogscope::pipeline {
 namespace {

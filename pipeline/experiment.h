@@ -11,7 +11,7 @@
 #include "pipeline/feedstock.h"
 #include "pipeline/manifest.h"
 #include "pipeline/statistics.h"
-#include "vision/strand_measure.h"
+#include "vision/scene/strand_measure.h"
 
 namespace clogscope::pipeline {
 

@@ -8,9 +8,9 @@
 
 #include "pipeline/experiment.h"
 #include "pipeline/statistics.h"
-#include "vision/feed_speed.h"
-#include "vision/track.h"
-#include "vision/video_decoder.h"
+#include "vision/io/video_decoder.h"
+#include "vision/motion/feed_speed.h"
+#include "vision/scene/track.h"
 
 namespace clogscope::pipeline {
 namespace {

@@ -7,8 +7,8 @@
 #include <string>
 
 #include "calib/pixel_scale.h"
-#include "vision/gear_speed.h"
-#include "vision/strand_measure.h"
+#include "vision/motion/gear_speed.h"
+#include "vision/scene/strand_measure.h"
 
 namespace clogscope::pipeline {
 

@@ -14,7 +14,7 @@
 #include "common/csv.h"
 #include "common/path_check.h"
 #include "pipeline/statistics.h"
-#include "vision/video_io.h"
+#include "vision/io/video_io.h"
 
 namespace clogscope::pipeline {
 namespace {

@@ -5,7 +5,7 @@
 // the rows of its table with it.
 #include <vector>
 
-#include "vision/feed_speed.h"
+#include "vision/motion/feed_speed.h"
 
 namespace clogscope::pipeline {
 

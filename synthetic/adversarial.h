@@ -7,7 +7,7 @@
 
 namespace clogscope::synthetic {
 
-// An adversarial renderer, written apart from vision/synthetic.cc (the world the measurement was
+// An adversarial renderer, written apart from synthetic/synthetic.cc (the world the measurement was
 // tuned in) to judge the measurement on scenes it was not designed around. Every object is drawn
 // as a shape at 3× resolution (anti-aliased by signed distance), blurred there, averaged down to
 // pixels, lit, made noisy and passed through a camera's codec. Nothing here is used by the

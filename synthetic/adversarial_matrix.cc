@@ -7,7 +7,7 @@
 #include <filesystem>
 #include <stdexcept>
 
-#include "vision/strand_measure.h"
+#include "vision/scene/strand_measure.h"
 
 namespace clogscope::synthetic {
 namespace {

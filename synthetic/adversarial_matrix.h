@@ -6,8 +6,8 @@
 #include <vector>
 
 #include "synthetic/adversarial.h"
-#include "vision/frame_status.h"
-#include "vision/strand_measure.h"
+#include "vision/scene/frame_status.h"
+#include "vision/scene/strand_measure.h"
 
 namespace clogscope::synthetic {
 

@@ -1,3 +1,5 @@
+#include "apps/inspect_command.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -5,10 +7,9 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "apps/band.h"
-#include "apps/commands.h"
+#include "synthetic/synthetic.h"
 #include "tests/apps/cli_test_util.h"
-#include "vision/strand_measure.h"
-#include "vision/synthetic.h"
+#include "vision/scene/strand_measure.h"
 
 namespace clogscope::apps {
 namespace {

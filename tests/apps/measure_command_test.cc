@@ -1,5 +1,8 @@
 // End-to-end tests of `clogscope render` and `clogscope measure`: the binary on a small rendered
 // video, its exit codes and one-line errors, and the typed MeasureInputs() behind it.
+#include "apps/measure_command.h"
+#include "apps/render_command.h"
+
 #include <gtest/gtest.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
@@ -14,7 +17,6 @@
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
-#include "apps/commands.h"
 #include "common/atomic_file.h"
 #include "common/csv.h"
 #include "tests/apps/cli_test_util.h"

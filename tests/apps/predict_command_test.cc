@@ -1,5 +1,7 @@
 // End-to-end tests of `clogscope predict`: the binary on the reference table, a fit, and bad inputs
 // that must leave no output files behind.
+#include "apps/predict_command.h"
+
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -7,7 +9,6 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "apps/commands.h"
 #include "common/atomic_file.h"
 #include "common/csv.h"
 #include "tests/apps/cli_test_util.h"

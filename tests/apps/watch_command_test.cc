@@ -1,6 +1,8 @@
 // `clogscope watch` end to end: a rendered clog sequence read from a file and served as a real
 // HTTP MJPEG stream by FFmpeg, the JSON lines, /status, /metrics, /frame.jpg, the alert command,
 // and bad input.
+#include "apps/watch_command.h"
+
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <httplib.h>
@@ -19,9 +21,8 @@
 #include <sstream>
 #include <thread>
 
-#include "apps/commands.h"
+#include "synthetic/synthetic.h"
 #include "tests/apps/cli_test_util.h"
-#include "vision/synthetic.h"
 
 extern char** environ;
 

@@ -5,9 +5,9 @@
 #include <cmath>
 
 #include "calib/pixel_scale.h"
-#include "vision/micrometer.h"
-#include "vision/strand_measure.h"
-#include "vision/synthetic.h"
+#include "synthetic/synthetic.h"
+#include "vision/scene/micrometer.h"
+#include "vision/scene/strand_measure.h"
 
 namespace clogscope::calib {
 namespace {

@@ -9,8 +9,8 @@
 
 #include "calib/line_lattice.h"
 #include "calib/pixel_scale.h"
-#include "vision/micrometer.h"
-#include "vision/synthetic.h"
+#include "synthetic/synthetic.h"
+#include "vision/scene/micrometer.h"
 
 namespace clogscope::calib {
 namespace {

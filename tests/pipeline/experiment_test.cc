@@ -11,7 +11,7 @@
 
 #include "common/atomic_file.h"
 #include "common/csv.h"
-#include "vision/synthetic.h"
+#include "synthetic/synthetic.h"
 
 namespace clogscope::pipeline {
 namespace {

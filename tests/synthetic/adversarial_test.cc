@@ -8,7 +8,7 @@
 #include <filesystem>
 
 #include "synthetic/adversarial_matrix.h"
-#include "vision/strand_measure.h"
+#include "vision/scene/strand_measure.h"
 
 namespace clogscope::synthetic {
 namespace {

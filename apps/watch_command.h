@@ -1,0 +1,49 @@
+#pragma once
+
+// `clogscope watch`: a live camera or stream, diameter drift, clog index and alerts.
+
+#include <atomic>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "apps/measure_command.h"
+#include "watch/live_watch.h"
+
+namespace clogscope::apps {
+
+// Parses argv (argv[0] is the subcommand name) into the options below and calls the typed
+// function; returns the process exit code (main.cc dispatches to it).
+int RunWatch(int argc, char** argv);
+
+struct WatchCommandOptions {
+  // The measurement as `measure` has it (scale or calibration, ROI, band, target, polarity…);
+  // its inputs are not used.
+  MeasureCommandOptions measure;
+  // Source, its timeouts, the rolling window and thresholds, report interval, duration. Its
+  // strand, conversion and extruder are filled from the fields here.
+  pipeline::LiveWatchOptions live;
+  std::string extruder;                 // preset or YAML: attaches the clog index; empty: none
+  std::vector<std::string> set;         // "name=value" overrides of the extruder
+  std::optional<double> temperature_c;  // the nozzle's; default the extruder's reference
+  std::string log_path;                 // JSON lines appended here; empty: standard output
+  std::string http;                     // HOST:PORT for /status, /metrics, /frame.jpg
+  std::string on_alert;                 // shell command run on every level change
+};
+
+struct WatchReport {
+  pipeline::LiveWatchSummary summary;
+  int http_port = 0;  // the bound port (useful with --http HOST:0)
+  std::vector<std::string> alert_failures;
+};
+
+// Watches a camera, stream, file or folder until *stop (or the file's end, or --duration-s),
+// writing JSON lines, serving HTTP and running the alert command. Throws std::invalid_argument
+// (one line naming the option, file or source) when nothing can be watched: bad options, a source
+// that cannot be opened or yields no frame, a log that cannot be opened, a port in use.
+// `on_started`, when given, is called once the HTTP server listens (before the source opens).
+WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* stop,
+                        const std::function<void(int http_port)>& on_started = {});
+
+}  // namespace clogscope::apps

@@ -1,0 +1,100 @@
+#include "vision/edges/edge_fit.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "vision/edges/edge_profile.h"
+
+namespace clogscope::vision {
+namespace {
+
+// Samples of a pixel-integrated blurred step at spacing 1/k (k rows sheared by a tilt), with noise.
+std::vector<EdgeSample> Samples(double edge, double sigma, double lo, double hi, double noise,
+                                std::mt19937* rng, double from = -10, double to = 10) {
+  std::normal_distribution<double> n(0, noise);
+  std::vector<EdgeSample> s;
+  for (int row = 0; row < 4; ++row) {
+    for (double u = from + 0.29 * row; u <= to; u += 1.0) {
+      const double v = lo + (hi - lo) * PixelMeanOfBlurredStep(u - edge, sigma, 0.94, 0.342);
+      s.push_back({static_cast<float>(u), static_cast<float>(v + (noise > 0 ? n(*rng) : 0.0))});
+    }
+  }
+  return s;
+}
+
+TEST(EdgeFitTest, RecoversEdgeWithoutNoise) {
+  std::mt19937 rng(1);
+  for (double edge : {-0.7, 0.0, 0.31, 1.5}) {
+    for (double sigma : {1.0, 1.5, 3.0}) {
+      const auto s = Samples(edge, sigma, 40, 200, 0, &rng);
+      const EdgeFit f = FitBlurredStep(s, 0.0, 1.5, 0.0);
+      ASSERT_TRUE(f.converged);
+      // The model (Gaussian) differs slightly from PSF ⊗ trapezoidal footprint, but both are odd
+      // about the edge, so the position stays unbiased.
+      EXPECT_NEAR(f.edge_px, edge, 0.005) << "sigma " << sigma;
+      EXPECT_NEAR(f.step, 160, 0.5);
+      EXPECT_NEAR(std::sqrt(f.sigma_px * f.sigma_px - 1.0 / 12), sigma, 0.05);
+    }
+  }
+  // A falling edge (bright to dark) gives a negative step at the same place.
+  const EdgeFit f = FitBlurredStep(Samples(0.4, 1.5, 200, 40, 0, &rng), 0.0, 1.5, 0.0);
+  EXPECT_NEAR(f.edge_px, 0.4, 0.005);
+  EXPECT_NEAR(f.step, -160, 0.5);
+}
+
+// A background that slopes up to a flat object's silhouette (a lamp's gradient, a textured bed),
+// blurred by numerical convolution: the plain step trades the slope's bend at the edge against the
+// edge's position; the two-slope step describes it.
+TEST(EdgeFitTest, TwoSlopeStepFindsAnEdgeWhoseBackgroundSlopesOnOneSide) {
+  const double edge = 0.3, blur = 2.0, gradient = 4.0;  // grey levels per px, left of the edge
+  const auto scene = [&](double t) { return t < edge ? 60 + gradient * (t - edge) : 200.0; };
+  std::vector<EdgeSample> s;
+  for (double u = -14; u <= 14; u += 0.25) {
+    double sum = 0, weight = 0;
+    for (double t = u - 6 * blur; t <= u + 6 * blur; t += 0.01) {
+      const double w = std::exp(-0.5 * (t - u) * (t - u) / (blur * blur));
+      sum += w * scene(t);
+      weight += w;
+    }
+    s.push_back({static_cast<float>(u), static_cast<float>(sum / weight)});
+  }
+  const EdgeFit plain = FitBlurredStep(s, 0.0, 1.5, 0.0);
+  const EdgeFit two = FitTwoSlopeStep(s, 0.0, 1.5, 0.0);
+  ASSERT_TRUE(plain.converged && two.converged);
+  EXPECT_GT(std::abs(plain.edge_px - edge), 0.1);
+  EXPECT_NEAR(two.edge_px, edge, 0.01);
+  EXPECT_NEAR(two.sigma_px, blur, 0.02);
+  EXPECT_NEAR(two.slope_change_per_px, -gradient, 0.05);
+  // The fitted model reproduces the profile.
+  for (const EdgeSample& smp : s) EXPECT_NEAR(EdgeModelValue(two, smp.u_px), smp.value, 0.2);
+}
+
+TEST(EdgeFitTest, ReportedSigmaMatchesScatter) {
+  // The edge's standard error from the residuals should match its spread over noisy repeats.
+  std::mt19937 rng(7);
+  const int n = 400;
+  double sum = 0, sum2 = 0, reported = 0;
+  for (int i = 0; i < n; ++i) {
+    const EdgeFit f = FitBlurredStep(Samples(0.25, 1.5, 40, 200, 3.0, &rng), 0.0, 1.5, 0.0);
+    ASSERT_TRUE(f.converged);
+    sum += f.edge_px;
+    sum2 += f.edge_px * f.edge_px;
+    reported += f.edge_sigma_px;
+  }
+  const double mean = sum / n, sd = std::sqrt(sum2 / n - mean * mean);
+  EXPECT_NEAR(mean, 0.25, 4 * sd / std::sqrt(n) + 0.003);
+  EXPECT_NEAR(reported / n / sd, 1.0, 0.15);
+}
+
+TEST(EdgeFitTest, TooFewSamplesOrNoStepDoNotConverge) {
+  std::mt19937 rng(3);
+  std::vector<EdgeSample> few = {{0, 1}, {1, 2}, {2, 3}};
+  EXPECT_FALSE(FitBlurredStep(few, 1, 1.5, 1).converged);
+  // Samples on one side of the guess only: no plateau to start from.
+  EXPECT_FALSE(FitBlurredStep(Samples(0, 1.5, 40, 200, 1, &rng, 3, 10), 0.0, 1.5, 0.0).converged);
+}
+
+}  // namespace
+}  // namespace clogscope::vision

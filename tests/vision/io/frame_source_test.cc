@@ -1,0 +1,171 @@
+#include "vision/io/frame_source.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+
+#include "common/atomic_file.h"
+#include "synthetic/synthetic.h"
+#include "vision/io/video_io.h"
+#include "vision/scene/batch.h"
+
+namespace clogscope::vision {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path FreshDir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("clogscope_fs_" + name);
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+SceneParams SmallScene() {
+  SceneParams p;
+  p.width_px = 400;
+  p.height_px = 300;
+  p.tip_x_px = 200;
+  p.tip_y_px = 80;
+  return p;
+}
+
+std::string MessageOf(const std::string& path) {
+  try {
+    FrameSource::Open(path);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// Timestamps that jump by 10⁷ s (250 million frame periods): one entry for the gap, not one per
+// missing frame number.
+TEST(FrameSourceTest, ATimestampJumpIsOneGap) {
+  auto source =
+      FrameSource::Open(std::string(CLOGSCOPE_TESTDATA_DIR) + "/video/timestamp_jump.mkv");
+  InputFrame f;
+  int decoded = 0, gaps = 0, entries = 0;
+  while (source->Next(&f) && entries < 100) {
+    ++entries;
+    if (!f.image.empty()) ++decoded;
+    if (f.error.find("frames missing") != std::string::npos) {
+      ++gaps;
+      EXPECT_NE(f.error.find("jump of 1e+07 s"), std::string::npos) << f.error;
+    }
+  }
+  EXPECT_EQ(decoded, 6);
+  EXPECT_EQ(gaps, 1);
+  EXPECT_EQ(entries, 7);
+}
+
+TEST(FrameSourceTest, BadPathsNameThePathAndTheProblem) {
+  const fs::path dir = FreshDir("bad");
+  EXPECT_NE(MessageOf((dir / "missing.mp4").string()).find("no such file"), std::string::npos);
+  EXPECT_NE(MessageOf(dir.string()).find("holds no images"), std::string::npos);
+  // A valid PNG header claiming 65535×65535 pixels: refused from its header, never decoded.
+  const char kHuge[] =
+      "\x89\x50\x4e\x47\x0d\x0a\x1a\x0a\x00\x00\x00\x0d\x49\x48\x44\x52\x00\x00\xff\xff\x00"
+      "\x00\xff\xff\x08\x00\x00\x00\x00\x93\x6e\x86\x8c\x00\x00\x00\x0c\x49\x44\x41\x54\x78"
+      "\x9c\x63\x60\xa0\x3d\x00\x00\x00\x64\x00\x01\x86\x64\x3c\x35\x00\x00\x00\x00\x49\x45"
+      "\x4e\x44\xae\x42\x60\x82";
+  WriteFileAtomically((dir / "huge.png").string(), std::string(kHuge, sizeof(kHuge) - 1));
+  const std::string huge = MessageOf((dir / "huge.png").string());
+  EXPECT_NE(huge.find("huge.png: frames are 65535x65535"), std::string::npos) << huge;
+  // A name longer than the system allows; a directory whose one entry is a link to itself.
+  const std::string long_name = (dir / (std::string(300, 'a') + ".png")).string();
+  EXPECT_NE(MessageOf(long_name).find("file name too long"), std::string::npos);
+  const fs::path loop = dir / "loop";
+  fs::create_directories(loop);
+  fs::create_symlink(loop / "self.png", loop / "self.png");
+  cv::imwrite((loop / "good.png").string(), RenderFrame(SmallScene(), 0, nullptr));
+  EXPECT_NO_THROW(FrameSource::Open(loop.string()));
+  EXPECT_NE(MessageOf((loop / "self.png").string()).find("symbolic links"), std::string::npos);
+  // Writing a video into a folder that does not exist names the folder, not the encoder.
+  try {
+    VideoFileWriter w((dir / "nowhere" / "v.mp4").string(), VideoKind::kH264Mp4, 25, {64, 48});
+    ADD_FAILURE() << "opened a video in a missing folder";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("does not exist"), std::string::npos) << e.what();
+  }
+  WriteFileAtomically((dir / "corrupt.png").string(), "definitely not a png");
+  const std::string msg = MessageOf((dir / "corrupt.png").string());
+  EXPECT_NE(msg.find("corrupt.png"), std::string::npos);
+  EXPECT_NE(msg.find("not an image format the tool reads"), std::string::npos) << msg;
+  WriteFileAtomically((dir / "empty.mp4").string(), "");
+  EXPECT_NE(MessageOf((dir / "empty.mp4").string()).find("empty.mp4"), std::string::npos);
+  WriteFileAtomically((dir / "notes.txt").string(), "hello");
+  EXPECT_NE(MessageOf((dir / "notes.txt").string()).find("neither"), std::string::npos);
+}
+
+TEST(FrameSourceTest, DirectoryIsSortedAndBadImagesAreReportedNotFatal) {
+  const fs::path dir = FreshDir("dir");
+  const SceneParams p = SmallScene();
+  for (int i : {2, 0, 1}) {
+    cv::imwrite((dir / ("f" + std::to_string(i) + ".png")).string(), RenderFrame(p, i, nullptr));
+  }
+  WriteFileAtomically((dir / "f1b.png").string(), "garbage");
+  auto src = FrameSource::Open(dir.string());
+  EXPECT_EQ(src->expected_frames(), 4);
+  std::vector<std::string> names;
+  std::vector<bool> ok;
+  InputFrame f;
+  while (src->Next(&f)) {
+    names.push_back(fs::path(f.source).filename().string());
+    ok.push_back(!f.image.empty());
+  }
+  EXPECT_EQ(names, (std::vector<std::string>{"f0.png", "f1.png", "f1b.png", "f2.png"}));
+  EXPECT_EQ(ok, (std::vector<bool>{true, true, false, true}));
+}
+
+TEST(FrameSourceTest, SixteenBitAndColourImagesAreRead) {
+  const fs::path dir = FreshDir("depth");
+  SceneParams p = SmallScene();
+  p.bit_depth = 16;
+  cv::imwrite((dir / "deep.png").string(), RenderFrame(p, 0, nullptr));
+  p.bit_depth = 8;
+  p.colour = true;
+  cv::imwrite((dir / "colour.png").string(), RenderFrame(p, 0, nullptr));
+  InputFrame f;
+  auto deep = FrameSource::Open((dir / "deep.png").string());
+  ASSERT_TRUE(deep->Next(&f));
+  EXPECT_EQ(f.image.type(), CV_16UC1);
+  auto colour = FrameSource::Open((dir / "colour.png").string());
+  ASSERT_TRUE(colour->Next(&f));
+  EXPECT_EQ(f.image.type(), CV_8UC3);
+}
+
+TEST(FrameSourceTest, DamagedVideoKeepsGoingInOrder) {
+  const fs::path dir = FreshDir("damaged");
+  const std::string path = (dir / "v.avi").string();
+  RenderSequence(SmallScene(), 20, 25.0, path, "");
+  // Overwrite a stretch in the middle of the file with zeros.
+  {
+    std::fstream io(path, std::ios::in | std::ios::out | std::ios::binary);
+    io.seekp(0, std::ios::end);
+    const auto size = static_cast<long>(io.tellp());
+    io.seekp(size / 2);
+    const std::string zeros(size / 10, '\0');
+    io.write(zeros.data(), zeros.size());
+  }
+  auto src = FrameSource::Open(path);
+  StrandMeasureOptions opt;
+  opt.band_start_px = 10;
+  opt.band_height_px = 40;
+  int expected_index = 0, valid = 0;
+  const int n = MeasureFrames(*src, opt, [&](InputFrame& f, StrandMeasurement& m) {
+    EXPECT_GE(f.index, expected_index);  // a gap of several frames is one entry
+    expected_index = f.index + 1;
+    valid += m.valid();
+    if (f.image.empty()) {
+      EXPECT_EQ(m.status, FrameStatus::kUnreadable);
+    }
+  });
+  EXPECT_GE(n, 10);
+  EXPECT_GE(valid, 10);
+}
+
+}  // namespace
+}  // namespace clogscope::vision

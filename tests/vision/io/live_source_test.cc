@@ -1,0 +1,175 @@
+#include "vision/io/live_source.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <condition_variable>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <opencv2/imgcodecs.hpp>
+#include <thread>
+
+#include "synthetic/synthetic.h"
+#include "vision/io/video_io.h"
+
+namespace clogscope::vision {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path Fresh(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / (name + "_" + std::to_string(getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+cv::Mat Grey(int level) { return cv::Mat(48, 64, CV_8UC1, cv::Scalar(level)); }
+
+// A fresh folder holding one image already (not to be delivered), watched every 20 ms.
+std::unique_ptr<LiveSource> OpenFolderWithAnOldImage(const fs::path& d, std::atomic<bool>* stop) {
+  cv::imwrite((d / "old.png").string(), Grey(10));
+  LiveSourceOptions o;
+  o.folder_poll_s = 0.02;
+  return LiveSource::Open(d.string(), o, stop);
+}
+
+TEST(LiveSourceTest, KindFromTheSourceName) {
+  const fs::path d = Fresh("clogscope_live_kind");
+  EXPECT_EQ(LiveSource::KindOf("/dev/video0"), LiveSourceKind::kDevice);
+  EXPECT_EQ(LiveSource::KindOf("http://printer.local/webcam/?action=stream"),
+            LiveSourceKind::kStream);
+  EXPECT_EQ(LiveSource::KindOf("rtsp://cam/1"), LiveSourceKind::kStream);
+  EXPECT_EQ(LiveSource::KindOf(d.string()), LiveSourceKind::kFolder);
+  EXPECT_EQ(LiveSource::KindOf("replay.mp4"), LiveSourceKind::kFile);
+  fs::remove_all(d);
+}
+
+TEST(LiveSourceTest, AFolderDeliversNewImagesInOrderAndIgnoresThoseAlreadyThere) {
+  const fs::path d = Fresh("clogscope_live_folder");
+  std::atomic<bool> stop{false};
+  auto source = OpenFolderWithAnOldImage(d, &stop);
+  EXPECT_TRUE(source->live());
+  // A camera writes three frames, one after the other (names out of order on purpose: the
+  // modification time decides), and a text file that is not an image.
+  std::thread camera([&] {
+    for (int i : {3, 1, 2}) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(60));
+      WriteImageAtomically((d / ("shot" + std::to_string(i) + ".png")).string(), Grey(40 * i));
+    }
+    std::ofstream((d / "notes.txt").string()) << "not an image";
+  });
+  std::vector<int> levels;
+  LiveFrame f;
+  std::string why;
+  for (int k = 0; k < 3; ++k) {
+    ASSERT_EQ(source->Next(&f, &why), LiveRead::kFrame);
+    ASSERT_FALSE(f.image.empty()) << f.error;
+    levels.push_back(f.image.at<uchar>(0, 0));
+    EXPECT_EQ(f.index, k);
+  }
+  camera.join();
+  EXPECT_EQ(levels, (std::vector<int>{120, 40, 80}));
+  // Nothing new: the read waits; a raised stop flag ends it.
+  std::thread stopper([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    stop = true;
+  });
+  EXPECT_EQ(source->Next(&f, &why), LiveRead::kStopped);
+  stopper.join();
+  fs::remove_all(d);
+}
+
+// Raises the stop flag if the test is not over within a generous limit, so that a read that would
+// wait forever fails the test instead of hanging it. Not pacing: a passing test never waits on it.
+class Watchdog {
+ public:
+  explicit Watchdog(std::atomic<bool>* stop)
+      : thread_([this, stop] {
+          std::unique_lock<std::mutex> lock(mutex_);
+          if (!done_cv_.wait_for(lock, std::chrono::seconds(30), [this] { return done_; }))
+            *stop = true;
+        }) {}
+  ~Watchdog() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      done_ = true;
+    }
+    done_cv_.notify_all();
+    thread_.join();
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable done_cv_;
+  bool done_ = false;
+  std::thread thread_;
+};
+
+// A camera whose clock runs ahead stamps one image a day into the future: the images after it are
+// still delivered, in the order they arrived (a folder is not read by a clock it cannot trust).
+TEST(LiveSourceTest, AnImageStampedInTheFutureDoesNotHideTheNextOnes) {
+  const fs::path d = Fresh("clogscope_live_future");
+  std::atomic<bool> stop{false};
+  auto source = OpenFolderWithAnOldImage(d, &stop);
+  Watchdog watchdog(&stop);
+  const auto now = fs::file_time_type::clock::now();
+  struct Shot {
+    std::string name;
+    int level;
+    fs::file_time_type mtime;
+  };
+  const Shot shots[] = {{"c.png", 40, now + std::chrono::hours(24)},
+                        {"b.png", 80, now - std::chrono::hours(1)},
+                        {"a.png", 120, now - std::chrono::hours(2)}};
+  LiveFrame f;
+  std::string why;
+  for (size_t k = 0; k < std::size(shots); ++k) {
+    const std::string path = (d / shots[k].name).string();
+    WriteImageAtomically(path, Grey(shots[k].level));
+    fs::last_write_time(path, shots[k].mtime);
+    ASSERT_EQ(source->Next(&f, &why), LiveRead::kFrame) << shots[k].name << ": " << why;
+    ASSERT_FALSE(f.image.empty()) << f.error;
+    EXPECT_EQ(f.name, shots[k].name);
+    EXPECT_EQ(f.image.at<uchar>(0, 0), shots[k].level);
+    EXPECT_EQ(f.index, static_cast<int64_t>(k));
+  }
+  fs::remove_all(d);
+}
+
+TEST(LiveSourceTest, AFileEndsAndARealtimeFileIsPacedAtItsFrameRate) {
+  const fs::path d = Fresh("clogscope_live_file");
+  SceneParams s;
+  s.width_px = 160;
+  s.height_px = 120;
+  s.tip_x_px = 80;
+  s.tip_y_px = 30;
+  s.strand_width_um = 120;
+  const std::string video = (d / "v.avi").string();
+  RenderSequence(s, 10, 20, video, (d / "t.json").string());
+  std::atomic<bool> stop{false};
+  LiveSourceOptions o;
+  o.realtime = true;
+  auto source = LiveSource::Open(video, o, &stop);
+  EXPECT_FALSE(source->live());
+  LiveFrame f;
+  std::string why;
+  int n = 0;
+  double last_t = -1;
+  const auto t0 = std::chrono::steady_clock::now();
+  while (source->Next(&f, &why) == LiveRead::kFrame) {
+    EXPECT_GT(f.time_s, last_t);
+    last_t = f.time_s;
+    ++n;
+  }
+  const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_EQ(n, 10);
+  EXPECT_NEAR(last_t, 9 / 20.0, 1e-6);
+  EXPECT_GE(took, 0.4);  // ten frames at 20 frames/s span 0.45 s; pacing can only add
+  EXPECT_THROW(LiveSource::Open((d / "missing.avi").string(), o, &stop), std::invalid_argument);
+  fs::remove_all(d);
+}
+
+}  // namespace
+}  // namespace clogscope::vision

@@ -1,0 +1,127 @@
+#include "vision/scene/scene.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "synthetic/synthetic.h"
+#include "vision/scene/strand_measure.h"
+
+namespace clogscope::vision {
+namespace {
+
+SceneResult Find(const cv::Mat& img, MeasureTarget target = MeasureTarget::kStrand) {
+  StrandMeasureOptions o;
+  o.target = target;
+  return FindScene(SearchChannels(img, cv::Rect(0, 0, img.cols, img.rows)),
+                   SceneOptionsFor(o, DataMax(img)));
+}
+
+// The first failure: a nozzle dimmer than any global split, darker than the background,
+// as bright as the strand, or white. The tip is where the edge pair ends, whatever the nozzle.
+TEST(SceneTest, TipFoundWhateverTheNozzleBrightness) {
+  for (double nozzle : {0.0, 40.0, 70.0, 120.0, 200.0, 255.0}) {
+    SceneParams p;
+    p.nozzle_level = nozzle;
+    p.tilt_deg = 6;
+    FrameTruth t;
+    const SceneResult r = Find(RenderFrame(p, 0, &t));
+    ASSERT_EQ(r.status, FrameStatus::kValid) << "nozzle " << nozzle << ": " << r.detail;
+    EXPECT_NEAR(r.geometry.width_px, t.width_px, 1.0) << "nozzle " << nozzle;
+    EXPECT_NEAR(r.geometry.axis.ox, t.tip_x_px, 1.5) << "nozzle " << nozzle;
+    EXPECT_NEAR(r.geometry.axis.oy, t.tip_y_px, 1.5) << "nozzle " << nozzle;
+    EXPECT_TRUE(r.geometry.has_tip);
+  }
+}
+
+TEST(SceneTest, OrangeStrandOnBlueWithADarkNozzleIsFoundInColour) {
+  SceneParams p;
+  p.colour = true;
+  p.background_level = 110;
+  p.strand_level = 150;  // about the background's luma: the edge is in the colour, not the grey
+  p.nozzle_level = 20;
+  const double strand[3] = {0.1, 0.55, 1.0}, background[3] = {1.0, 0.5, 0.15};
+  for (int c = 0; c < 3; ++c) {
+    p.strand_tint[c] = strand[c];
+    p.background_tint[c] = background[c];
+  }
+  FrameTruth t;
+  const cv::Mat img = RenderFrame(p, 0, &t);
+  const StrandMeasurement m = MeasureStrand(img, {});
+  ASSERT_TRUE(m.valid()) << m.detail;
+  EXPECT_NEAR(m.width_px, t.width_px, 0.1);
+}
+
+TEST(SceneTest, NothingStrandLikeGivesNoStrandOrNoTip) {
+  const cv::Mat flat(720, 1280, CV_8UC1, cv::Scalar(90));
+  EXPECT_EQ(Find(flat).status, FrameStatus::kNoStrand);
+  SceneParams p;
+  p.strand = false;  // a nozzle with nothing below it
+  const SceneResult nozzle_only = Find(RenderFrame(p, 0, nullptr));
+  EXPECT_EQ(nozzle_only.status, FrameStatus::kNoStrand) << nozzle_only.detail;
+  EXPECT_FALSE(nozzle_only.detail.empty());
+  p.nozzle = false;
+  p.texture_amplitude = 20;  // texture only
+  EXPECT_EQ(Find(RenderFrame(p, 0, nullptr)).status, FrameStatus::kNoStrand);
+}
+
+TEST(SceneTest, TwoStrandsOfSimilarScoreAreAmbiguous) {
+  SceneParams p;
+  p.tip_x_px = 380;
+  cv::Mat a = RenderFrame(p, 0, nullptr);
+  p.tip_x_px = 900;
+  p.seed = 2;
+  const cv::Mat b = RenderFrame(p, 0, nullptr);
+  cv::Mat both;
+  cv::max(a, b, both);  // two lit strands below two nozzles
+  const SceneResult r = Find(both);
+  EXPECT_EQ(r.status, FrameStatus::kAmbiguous) << r.detail;
+  EXPECT_NE(r.detail.find("similar score"), std::string::npos);
+}
+
+TEST(SceneTest, TargetsDecideWhatATipMeans) {
+  SceneParams p;
+  p.nozzle = false;  // a filament through the whole frame
+  FrameTruth t;
+  const cv::Mat img = RenderFrame(p, 0, &t);
+  EXPECT_EQ(Find(img).status, FrameStatus::kNoTip);
+  const SceneResult filament = Find(img, MeasureTarget::kFilament);
+  ASSERT_EQ(filament.status, FrameStatus::kValid) << filament.detail;
+  EXPECT_FALSE(filament.geometry.has_tip);
+  // With a tip in view the filament target still measures the straight stretch below it.
+  p.nozzle = true;
+  const SceneResult with_tip = Find(RenderFrame(p, 0, &t), MeasureTarget::kFilament);
+  ASSERT_EQ(with_tip.status, FrameStatus::kValid) << with_tip.detail;
+  EXPECT_NEAR(with_tip.geometry.axis.oy, t.tip_y_px, 1.5);
+}
+
+TEST(SceneTest, AnRoiCuttingTheStrandLengthwiseTouchesTheBorder) {
+  SceneParams p;
+  FrameTruth t;
+  const cv::Mat img = RenderFrame(p, 0, &t);
+  StrandMeasureOptions o;
+  o.roi = cv::Rect(static_cast<int>(t.tip_x_px), 0, 400, 720);  // from the axis to the right
+  EXPECT_EQ(MeasureStrand(img, o).status, FrameStatus::kTouchesBorder);
+}
+
+TEST(SceneTest, HighlightStripeAndClearStrandLinesAreNotTheStrand) {
+  SceneParams p;
+  p.highlight = true;
+  p.highlight_gain = 80;
+  p.shading_ambient = 0.5;  // the silhouette is softer than the stripe
+  FrameTruth t;
+  SceneResult r = Find(RenderFrame(p, 0, &t));
+  ASSERT_EQ(r.status, FrameStatus::kValid) << r.detail;
+  EXPECT_NEAR(r.geometry.width_px, t.width_px, 6.0);  // the gradient peak lies inside the shading
+  p = SceneParams();
+  p.SetSilhouette();
+  p.strand_level = 150;
+  p.clear_strand = true;
+  p.clear_line_gain = 80;
+  r = Find(RenderFrame(p, 0, &t));
+  ASSERT_EQ(r.status, FrameStatus::kValid) << r.detail;
+  EXPECT_NEAR(r.geometry.width_px, t.width_px, 1.0);
+}
+
+}  // namespace
+}  // namespace clogscope::vision

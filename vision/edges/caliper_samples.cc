@@ -1,0 +1,194 @@
+#include "vision/edges/caliper_samples.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+namespace clogscope::vision {
+
+namespace {
+
+// The slab's pixel bounds; false when it leaves the image.
+bool SlabBounds(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
+                double u1, int* x_lo, int* x_hi, int* y_lo, int* y_hi) {
+  double xmin = 1e30, xmax = -1e30, ymin = 1e30, ymax = -1e30;
+  for (double s : {s0, s1}) {
+    for (double u : {u0, u1}) {
+      xmin = std::min(xmin, f.ImageX(s, u));
+      xmax = std::max(xmax, f.ImageX(s, u));
+      ymin = std::min(ymin, f.ImageY(s, u));
+      ymax = std::max(ymax, f.ImageY(s, u));
+    }
+  }
+  *x_lo = static_cast<int>(std::ceil(xmin));
+  *x_hi = static_cast<int>(std::floor(xmax));
+  *y_lo = static_cast<int>(std::ceil(ymin));
+  *y_hi = static_cast<int>(std::floor(ymax));
+  return *x_lo >= 0 && *y_lo >= 0 && *x_hi < img.m.cols && *y_hi < img.m.rows;
+}
+
+}  // namespace
+
+ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
+                          double u1, double data_max) {
+  ClipLevels clip{0.0f, static_cast<float>(data_max)};
+  int x_lo, x_hi, y_lo, y_hi;
+  if (!SlabBounds(img, f, s0, s1, u0, u1, &x_lo, &x_hi, &y_lo, &y_hi)) return clip;
+  // 256 bins over the data's range; only the outer 4 % on each side is looked at.
+  constexpr int kBins = 256, kEdgeBins = 10, kBelow = 4;
+  std::array<int, kBins> h{};
+  const double scale = (kBins - 1) / data_max;
+  int n = 0;
+  for (int y = y_lo; y <= y_hi; ++y) {
+    const double ry = y - f.oy;
+    for (int x = x_lo; x <= x_hi; ++x) {
+      const double rx = x - f.ox;
+      const double s = rx * f.dx + ry * f.dy, u = rx * f.dy - ry * f.dx;
+      if (s < s0 || s >= s1 || u < u0 || u > u1) continue;
+      ++h[std::clamp(static_cast<int>(std::lround(img.At(x, y) * scale)), 0, kBins - 1)];
+      ++n;
+    }
+  }
+  // A spike: the fullest bin of the outer tenth, well above the bins just inside it.
+  const auto spike = [&](int from, int to, int inward) {
+    int best = -1;
+    for (int b = from; b != to; b += inward) {
+      if (best < 0 || h[b] > h[best]) best = b;
+    }
+    double inside = 0;
+    for (int k = 1; k <= kBelow; ++k) inside += h[std::clamp(best + inward * k, 0, kBins - 1)];
+    // Little beyond a clip level (a codec's ringing): an unclipped plateau has its noise on both
+    // sides.
+    double beyond = 0;
+    for (int b = best - inward; b >= 0 && b < kBins; b -= inward) beyond += h[b];
+    const bool is_spike = h[best] >= 0.02 * n && h[best] >= 5.0 * (inside / kBelow) &&
+                          beyond <= 0.5 * h[best] && h[best] > 8;
+    return is_spike ? best : -1;
+  };
+  const int top = spike(kBins - 1, kBins - 1 - kEdgeBins, -1);
+  const int bottom = spike(0, kEdgeBins, +1);
+  // Half a bin inward, so that every value of the spike's bin counts.
+  if (top >= 0) clip.high = static_cast<float>((top - 0.5) / scale);
+  if (bottom >= 0) clip.low = static_cast<float>((bottom + 0.5) / scale);
+  int low = 0, high = 0;
+  for (int b = 0; b < kBins; ++b) {
+    const double v = b / scale;
+    if (v <= clip.low) low += h[b];
+    if (v >= clip.high) high += h[b];
+  }
+  clip.clipped_low_fraction = n > 0 ? static_cast<double>(low) / n : 0.0;
+  clip.clipped_high_fraction = n > 0 ? static_cast<double>(high) / n : 0.0;
+  return clip;
+}
+
+bool GatherEdgeSamples(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
+                       double u1, const ClipLevels& clip, std::vector<EdgeSample>* out,
+                       int* saturated) {
+  out->clear();
+  int x_lo, x_hi, y_lo, y_hi;
+  if (!SlabBounds(img, f, s0, s1, u0, u1, &x_lo, &x_hi, &y_lo, &y_hi)) return false;
+  for (int y = y_lo; y <= y_hi; ++y) {
+    const double ry = y - f.oy;
+    for (int x = x_lo; x <= x_hi; ++x) {
+      const double rx = x - f.ox;
+      const double s = rx * f.dx + ry * f.dy;
+      if (s < s0 || s >= s1) continue;
+      const double u = rx * f.dy - ry * f.dx;
+      if (u < u0 || u > u1) continue;
+      const float v = img.At(x, y);
+      if (v <= clip.low || v >= clip.high) ++*saturated;
+      out->push_back({static_cast<float>(u), v});
+    }
+  }
+  return true;
+}
+
+double InnerEdgeDistance(const GreyImage& img, const AxisFrame& f, double s0, double s1,
+                         double edge_u, int inward, double max_depth_px, double min_step) {
+  constexpr double kStepPx = 0.5, kBehindPx = 4.0, kStepReachPx = 3.0;
+  constexpr int kRows = 12;
+  const int n = static_cast<int>((max_depth_px + kBehindPx) / kStepPx) + 1;
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  if (n < 8 || n > 4096) return kNone;
+  // The median over rows: a blob over part of the band is not an edge along the object.
+  std::vector<double> profile(n, 0.0), column;
+  for (int i = 0; i < n; ++i) {
+    const double u = edge_u + inward * (i * kStepPx - kBehindPx);
+    column.clear();
+    for (int r = 0; r < kRows; ++r) {
+      const double s = s0 + (s1 - s0) * (r + 0.5) / kRows;
+      const double x = f.ImageX(s, u), y = f.ImageY(s, u);
+      if (img.InsideForBilinear(x, y)) column.push_back(img.Bilinear(x, y));
+    }
+    if (column.size() < kRows / 2) return kNone;
+    std::nth_element(column.begin(), column.begin() + column.size() / 2, column.end());
+    profile[i] = column[column.size() / 2];
+  }
+  // The gradient along the inward direction, over 1 px, signed like the silhouette's: an inner
+  // edge turns back (a bright stripe or core in a dark strand, a lens's core after its rim). A lit
+  // strand's shading ramp, brightening inward like its silhouette, never does.
+  const int edge_i = static_cast<int>(kBehindPx / kStepPx);
+  const double sign =
+      profile[std::min(n - 1, edge_i + 6)] >= profile[std::max(0, edge_i - 6)] ? 1.0 : -1.0;
+  std::vector<double> along(n, 0.0);
+  for (int i = 1; i + 1 < n; ++i) along[i] = sign * (profile[i + 1] - profile[i - 1]);
+  // The edge's own peak near the edge; then an opposite peak, an edge in its own right: at least
+  // a quarter of the silhouette's gradient and a step of min_step across it.
+  const int reach = static_cast<int>(kStepReachPx / kStepPx);
+  // The profile's own noise (medians of noisy rows): an inner edge stands well above it.
+  // Differences 1 px apart, their median: the few across real edges do not move it.
+  std::vector<double> diffs;
+  for (int i = edge_i + reach; i + 2 < n; ++i)
+    diffs.push_back(std::abs(profile[i + 2] - profile[i]));
+  double noise = 0;
+  if (diffs.size() >= 5) {
+    std::nth_element(diffs.begin(), diffs.begin() + diffs.size() / 2, diffs.end());
+    noise = 1.4826 * diffs[diffs.size() / 2] / std::sqrt(2.0);
+  }
+  min_step = std::max(min_step, 8.0 * noise);
+  int peak = edge_i;
+  for (int i = std::max(1, edge_i - 6); i <= std::min(n - 2, edge_i + 6); ++i)
+    if (along[i] > along[peak]) peak = i;
+  // Past the silhouette's own step (the ±3 px the step is read over).
+  for (int i = peak + reach + 1; i + 1 < n; ++i) {
+    // The gradient turned back: a peak of −along.
+    const bool local_max = -along[i] > 0 && along[i] <= along[i - 1] && along[i] <= along[i + 1];
+    if (!local_max || -along[i] < 0.25 * along[peak]) continue;
+    const double step =
+        std::abs(profile[std::min(n - 1, i + reach)] - profile[std::max(0, i - reach)]);
+    if (step >= min_step) return (i - edge_i) * kStepPx;
+  }
+  return kNone;
+}
+
+double RefineEdgeGuess(const GreyImage& img, const AxisFrame& f, double s, double u_guess,
+                       double half, double min_step) {
+  constexpr double kStep = 0.5;
+  const int n = static_cast<int>(2 * half / kStep) + 1;
+  std::array<float, 128> v;
+  if (n > static_cast<int>(v.size())) return u_guess;
+  float lo = 1e30f, hi = -1e30f;
+  for (int i = 0; i < n; ++i) {
+    const double u = u_guess - half + i * kStep;
+    const double x = f.ImageX(s, u), y = f.ImageY(s, u);
+    if (!img.InsideForBilinear(x, y)) return u_guess;
+    v[i] = img.Bilinear(x, y);
+    lo = std::min(lo, v[i]);
+    hi = std::max(hi, v[i]);
+  }
+  if (hi - lo < min_step) return u_guess;
+  const float mid = 0.5f * (lo + hi);
+  double best = u_guess, best_dist = 1e30;
+  for (int i = 0; i + 1 < n; ++i) {
+    if ((v[i] < mid) == (v[i + 1] < mid)) continue;
+    const double u = u_guess - half + (i + (mid - v[i]) / (v[i + 1] - v[i])) * kStep;
+    if (std::abs(u - u_guess) < best_dist) {
+      best_dist = std::abs(u - u_guess);
+      best = u;
+    }
+  }
+  return best;
+}
+
+}  // namespace clogscope::vision

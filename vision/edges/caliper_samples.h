@@ -1,0 +1,47 @@
+#pragma once
+
+// The pixels a caliper works on: one slab of the strand, across one edge or both.
+#include <vector>
+
+#include "vision/edges/edge_fit.h"
+#include "vision/edges/grey_image.h"
+
+namespace clogscope::vision {
+
+// The values at which a frame's data is clipped: 0 and the data's full scale, or where a codec
+// put them. A clipped plateau passed through a codec keeps a spike in the histogram below full
+// scale (H.264 in TV range decodes clipped white at ~252 of 255); such a spike is the clip level.
+struct ClipLevels {
+  float low = 0, high = 255;
+  double clipped_low_fraction = 0, clipped_high_fraction = 0;  // of the slab's pixels at or beyond
+};
+
+// The clip levels of the slab s0 <= s < s1, u0 <= u <= u1: data_max and 0, or a spike in the
+// top (bottom) 4 % of the range holding ≥ 2 % of the slab's pixels, ≥ 5× the pixels of the values
+// just inside it and ≥ 2× those beyond it.
+ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
+                          double u1, double data_max);
+
+// Gathers the pixels of the slab s0 <= s < s1, u0 <= u <= u1 (axis frame f) in (u, value) form,
+// counting those at or beyond the clip levels in *saturated. Returns false when the slab leaves
+// the image.
+bool GatherEdgeSamples(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
+                       double u1, const ClipLevels& clip, std::vector<EdgeSample>* out,
+                       int* saturated);
+
+// How far inside the object, from an edge at edge_u (the object toward `inward`, ±1), the next
+// edge lies: a stripe, a lens's core, a clear strand's inner line. Read from the profile across
+// the axis averaged over the band s0..s1: past the edge's own gradient peak the gradient falls,
+// then turns back at ≥ 25 % of the edge's gradient with a step of at least min_step across it, in
+// the median over the band's rows (a blob over part of the band does not count). Looks as deep as
+// max_depth_px; returns infinity when nothing is there.
+double InnerEdgeDistance(const GreyImage& img, const AxisFrame& f, double s0, double s1,
+                         double edge_u, int inward, double max_depth_px, double min_step);
+
+// Sub-pixel start for an edge fit: along the normal at s, from u_guess - half to u_guess + half in
+// half-pixel steps, the crossing of the local mid-level (between the profile's extremes) nearest to
+// u_guess. Returns u_guess when the profile has no clear step (extremes closer than min_step).
+double RefineEdgeGuess(const GreyImage& img, const AxisFrame& f, double s, double u_guess,
+                       double half, double min_step);
+
+}  // namespace clogscope::vision

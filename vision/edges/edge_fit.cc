@@ -1,0 +1,267 @@
+#include "vision/edges/edge_fit.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "vision/edges/fit_shapes.h"
+
+namespace clogscope::vision {
+namespace {
+
+constexpr double kMinSigmaPx = 0.15;
+using fitcore::BlurredSqrt;
+using fitcore::Mat;
+using fitcore::StepShape;
+using fitcore::Vec;
+
+// Parameters: base a, slope b, amplitude c, position e, width s, and for the shaded model the
+// shading amplitude k. value(u) = a + b·(u − u_ref) + c·f((u − e)/s) [+ k·G(ι·(u − e)/s)].
+enum { kA, kB, kC, kE, kS, kK };
+
+// The blurred step: 5 parameters.
+struct StepModel {
+  static constexpr int kN = 5;
+  void operator()(double du, double u, const double* p, double* value, double* j) const {
+    const double inv_s = 1.0 / p[kS];
+    const double z = (u - p[kE]) * inv_s;
+    double f, df;
+    StepShape(z, &f, &df);
+    *value = p[kA] + p[kB] * du + p[kC] * f;
+    const double de = -p[kC] * df * inv_s;
+    j[kA] = 1.0;
+    j[kB] = du;
+    j[kC] = f;
+    j[kE] = de;
+    j[kS] = de * z;
+  }
+};
+
+// The blurred step with a blurred √d shading ramp on the object side (ι = +1: object at +u).
+struct ShadedStepModel {
+  static constexpr int kN = 6;
+  double iota = 1.0;
+  const BlurredSqrt* sqrt_table = &BlurredSqrt::Get();
+  void operator()(double du, double u, const double* p, double* value, double* j) const {
+    const double inv_s = 1.0 / p[kS];
+    const double z = (u - p[kE]) * inv_s;
+    double f, df, g, dg;
+    StepShape(z, &f, &df);
+    (*sqrt_table)(iota * z, &g, &dg);
+    *value = p[kA] + p[kB] * du + p[kC] * f + p[kK] * g;
+    const double de = -(p[kC] * df + p[kK] * iota * dg) * inv_s;
+    j[kA] = 1.0;
+    j[kB] = du;
+    j[kC] = f;
+    j[kE] = de;
+    j[kS] = de * z;
+    j[kK] = g;
+  }
+};
+
+// The blurred step whose two sides slope differently (a background gradient that stops at the
+// silhouette): the blurred ramp k·s·R(z), R(z) = zΦ(z) + φ(z), adds slope k on the +u side.
+struct TwoSlopeStepModel {
+  static constexpr int kN = 6;
+  void operator()(double du, double u, const double* p, double* value, double* j) const {
+    const double inv_s = 1.0 / p[kS];
+    const double z = (u - p[kE]) * inv_s;
+    double f, df;
+    StepShape(z, &f, &df);
+    const double ramp = z * f + df;
+    *value = p[kA] + p[kB] * du + p[kC] * f + p[kK] * p[kS] * ramp;
+    j[kA] = 1.0;
+    j[kB] = du;
+    j[kC] = f;
+    j[kE] = -p[kC] * df * inv_s - p[kK] * f;
+    j[kS] = -p[kC] * df * inv_s * z + p[kK] * df;
+    j[kK] = p[kS] * ramp;
+  }
+};
+
+// A thin line's blurred profile, close to a Gaussian; symmetric, so its centre is unbiased.
+struct LineModel {
+  static constexpr int kN = 5;
+  void operator()(double du, double u, const double* p, double* value, double* j) const {
+    const double inv_s = 1.0 / p[kS];
+    const double z = (u - p[kE]) * inv_s;
+    const double f = std::exp(-0.5 * z * z);
+    *value = p[kA] + p[kB] * du + p[kC] * f;
+    const double de = p[kC] * z * f * inv_s;
+    j[kA] = 1.0;
+    j[kB] = du;
+    j[kC] = f;
+    j[kE] = de;
+    j[kS] = de * z;
+  }
+};
+
+// Residuals' sum of squares with the Gauss-Newton system J^T J and J^T r at p.
+template <typename Model>
+double Evaluate(const std::vector<EdgeSample>& samples, const Vec<Model::kN>& p, double u_ref,
+                const Model& model, Mat<Model::kN>* jtj, Vec<Model::kN>* jtr) {
+  constexpr int N = Model::kN;
+  double h[N][N] = {}, g[N] = {};
+  double cost = 0;
+  for (const auto& smp : samples) {
+    double value, j[N];
+    model(smp.u_px - u_ref, smp.u_px, p.data(), &value, j);
+    const double r = value - smp.value;
+    cost += r * r;
+    fitcore::Accumulate<N>(j, r, 1.0, h, g);
+  }
+  fitcore::Symmetric<N>(h, g, jtj, jtr);
+  return cost;
+}
+
+// Levenberg–Marquardt from p; fills the fit's common fields. The position's standard error comes
+// from the inverse normal matrix scaled by the residual variance.
+template <typename Model>
+EdgeFit Solve(const std::vector<EdgeSample>& samples, const Vec<Model::kN>& p0, double u_ref,
+              const Model& model) {
+  constexpr int N = Model::kN;
+  EdgeFit fit;
+  fit.samples = static_cast<int>(samples.size());
+  const auto lm = fitcore::MinimiseLm<N>(
+      p0,
+      [&](const Vec<N>& p, Mat<N>* jtj, Vec<N>* jtr) {
+        return Evaluate(samples, p, u_ref, model, jtj, jtr);
+      },
+      [](Vec<N>* p) { (*p)[kS] = std::max((*p)[kS], kMinSigmaPx); },
+      // The edge moves by less than 2e-4 px.
+      [](const Vec<N>& d) { return std::abs(d[kE]) < 2e-4 && std::abs(d[kS]) < 2e-3; });
+  const Vec<N>& p = lm.p;
+  fit.converged = lm.converged;
+  fit.iterations = lm.iterations;
+  fit.edge_px = p[kE];
+  fit.sigma_px = p[kS];
+  fit.step = p[kC];
+  fit.base = p[kA];
+  fit.slope_per_px = p[kB];
+  if constexpr (N > kK) fit.shading = p[kK];
+  const int dof = fit.samples - N;
+  fit.rms = std::sqrt(lm.cost / fit.samples);
+  const double residual_var = dof > 0 ? lm.cost / dof : 0.0;
+  const Mat<N> cov = lm.jtj.ldlt().solve(Mat<N>::Identity());
+  fit.edge_sigma_px = std::sqrt(std::max(0.0, cov(kE, kE) * residual_var));
+  if (!std::isfinite(fit.edge_px) || !std::isfinite(fit.sigma_px)) fit.converged = false;
+  return fit;
+}
+
+// Plateau means on either side of the guess, for a step's starting values. False when a side has
+// no samples.
+bool PlateauStart(const std::vector<EdgeSample>& samples, double edge_guess_px, double sigma_px,
+                  double* lo, double* hi) {
+  double lo_sum = 0, hi_sum = 0;
+  int lo_n = 0, hi_n = 0;
+  const double guard = 2.0 * sigma_px + 0.5;
+  for (const auto& smp : samples) {
+    if (smp.u_px < edge_guess_px - guard) {
+      lo_sum += smp.value;
+      ++lo_n;
+    } else if (smp.u_px > edge_guess_px + guard) {
+      hi_sum += smp.value;
+      ++hi_n;
+    }
+  }
+  if (lo_n == 0 || hi_n == 0) return false;
+  *lo = lo_sum / lo_n;
+  *hi = hi_sum / hi_n;
+  return true;
+}
+
+}  // namespace
+
+namespace {
+// A step model fitted from the plateaus' levels on either side of the guess (extra terms from 0).
+template <typename Model>
+EdgeFit FitStepModel(const std::vector<EdgeSample>& samples, double edge_guess_px,
+                     double sigma_guess_px, double u_ref, size_t min_samples, const Model& model) {
+  EdgeFit fit;
+  fit.samples = static_cast<int>(samples.size());
+  double lo, hi;
+  if (samples.size() < min_samples ||
+      !PlateauStart(samples, edge_guess_px, sigma_guess_px, &lo, &hi))
+    return fit;
+  Vec<Model::kN> p = Vec<Model::kN>::Zero();
+  p[kA] = lo;
+  p[kC] = hi - lo;
+  p[kE] = edge_guess_px;
+  p[kS] = std::max(sigma_guess_px, 0.5);
+  fit = Solve(samples, p, u_ref, model);
+  fit.u_ref = u_ref;
+  return fit;
+}
+}  // namespace
+
+EdgeFit FitBlurredStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
+                       double sigma_guess_px, double u_ref) {
+  EdgeFit fit = FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 8, StepModel());
+  fit.contrast = fit.step;
+  return fit;
+}
+
+EdgeFit FitShadedStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
+                      double sigma_guess_px, double u_ref, int object_side) {
+  ShadedStepModel model;
+  model.iota = object_side > 0 ? 1.0 : -1.0;
+  EdgeFit fit = FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 10, model);
+  if (fit.samples < 10) return fit;
+  fit.object_side = object_side > 0 ? 1 : -1;
+  double g2, dg2;
+  BlurredSqrt::Get()(2.0, &g2, &dg2);
+  fit.contrast = fit.step + model.iota * fit.shading * g2;
+  return fit;
+}
+
+EdgeFit FitTwoSlopeStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
+                        double sigma_guess_px, double u_ref) {
+  EdgeFit fit =
+      FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 10, TwoSlopeStepModel());
+  fit.slope_change_per_px = fit.shading;
+  fit.shading = 0;
+  fit.contrast = fit.step;
+  return fit;
+}
+
+double EdgeModelValue(const EdgeFit& fit, double u_px) {
+  const double z = (u_px - fit.edge_px) / fit.sigma_px;
+  double f, df;
+  StepShape(z, &f, &df);
+  double value = fit.base + fit.slope_per_px * (u_px - fit.u_ref) + fit.step * f +
+                 fit.slope_change_per_px * fit.sigma_px * (z * f + df);
+  if (fit.object_side != 0) {
+    double g, dg;
+    BlurredSqrt::Get()(fit.object_side * z, &g, &dg);
+    value += fit.shading * g;
+  }
+  return value;
+}
+
+EdgeFit FitLineProfile(const std::vector<EdgeSample>& samples, double centre_guess_px,
+                       double width_guess_px) {
+  EdgeFit fit;
+  fit.samples = static_cast<int>(samples.size());
+  if (samples.size() < 8) return fit;
+  // Base from the samples far from the guess; amplitude from the sample nearest to it.
+  double far_sum = 0, near_v = 0, near_d = 1e30;
+  int far_n = 0;
+  for (const auto& smp : samples) {
+    const double d = std::abs(smp.u_px - centre_guess_px);
+    if (d > 3 * width_guess_px) {
+      far_sum += smp.value;
+      ++far_n;
+    }
+    if (d < near_d) {
+      near_d = d;
+      near_v = smp.value;
+    }
+  }
+  if (far_n == 0) return fit;
+  Vec<5> p;
+  p << far_sum / far_n, 0.0, near_v - far_sum / far_n, centre_guess_px,
+      std::max(width_guess_px, 0.5);
+  return Solve(samples, p, centre_guess_px, LineModel());
+}
+
+}  // namespace clogscope::vision

@@ -1,0 +1,59 @@
+#pragma once
+
+#include <vector>
+
+#include "vision/edges/caliper_samples.h"
+#include "vision/edges/edge_fit.h"
+#include "vision/edges/grey_image.h"
+
+namespace clogscope::vision {
+
+// The part of an edge model's residuals that the calipers along a band share. Each caliper's
+// residuals are noise plus whatever the model does not describe; noise differs from caliper to
+// caliper, but a textured background, a smeared nozzle or a stripe near the silhouette repeats
+// along the band at the same distance from the edge. Residuals are pooled in 1 px bins of that
+// distance: the bins' means keep the shared structure and lose the noise (minus what the noise
+// leaves in a mean of n samples, σ²/n).
+class ResidualStructure {
+ public:
+  // Distances from the edge within ±half_width_px are kept.
+  explicit ResidualStructure(double half_width_px);
+  void Add(double u_from_edge_px, double residual);
+  int samples() const { return samples_; }
+  // RMS of all residuals added.
+  double ResidualRms() const;
+  // RMS of the structure shared by the samples (bin means above the noise's share); 0 when
+  // nothing is shared or fewer than 3 samples fell in every occupied bin on average.
+  double SharedRms() const;
+
+ private:
+  double half_width_px_;
+  std::vector<double> sum_, count_;
+  double sum_sq_ = 0;
+  int samples_ = 0;
+};
+
+// How far a shared residual structure of RMS `shared_rms` may have moved an edge whose fit gave
+// edge_sigma_px from residuals of RMS `rms` over `samples` samples spread across `window_px` px:
+// the structure counts as noise that every row of the band repeats, so it averages over the
+// window's px, not over its samples.
+double SharedStructureEdgeDoubtPx(double shared_rms, double rms, double edge_sigma_px, int samples,
+                                  double window_px);
+
+// One caliper's fitted edge: the slab s0..s1 along the axis and its edge model.
+struct CaliperEdge {
+  double s0_px = 0, s1_px = 0;
+  EdgeFit fit;  // FitBlurredStep or FitShadedStep
+};
+
+// How far one edge of a band may lie from where its calipers put it, by what the band's pooled
+// profile (each caliper's samples placed about its own fitted edge, below_px before it and
+// above_px after it along u) shows that one caliper's cannot: the structure the calipers share in
+// their residuals, and, when every caliper took the plain step, how far the edge moves when its
+// two sides may slope differently (FitTwoSlopeStep: a background gradient stopping at a flat
+// object); the plain step's two-slope check only counts the part of that move the pooled
+// profile's noise cannot explain. 0 with fewer than two calipers.
+double BandEdgeDoubtPx(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
+                       const std::vector<CaliperEdge>& edges, double below_px, double above_px);
+
+}  // namespace clogscope::vision

@@ -1,0 +1,320 @@
+#include "vision/io/live_source.h"
+
+#include <fmt/format.h>
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <map>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+#include <optional>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include "common/path_check.h"
+#include "vision/io/video_decoder.h"
+#include "vision/io/video_io.h"
+
+namespace clogscope::vision {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double SecondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+bool Stopped(const std::atomic<bool>* stop) { return stop && stop->load(); }
+
+// Files and streams, decoded by FFmpeg to grey.
+class DecodedSource : public LiveSource {
+ public:
+  DecodedSource(const std::string& source, LiveSourceKind kind, const LiveSourceOptions& options,
+                const std::atomic<bool>* stop)
+      : LiveSource(source, kind), options_(options), stop_(stop), opened_(Clock::now()) {
+    VideoDecoderOptions d;
+    d.stop = stop;
+    if (kind == LiveSourceKind::kStream) {
+      d.open_timeout_s = options.open_timeout_s;
+      d.read_timeout_s = options.read_timeout_s;
+      d.low_latency = true;
+    }
+    decoder_ = std::make_unique<VideoDecoder>(source, d);
+    if (kind == LiveSourceKind::kStream) {
+      // A stream may open and then send nothing: wait for the first frame here, so that a camera
+      // that never delivers is refused like one that cannot be opened.
+      DecodedFrame f;
+      if (!decoder_->Read(&f)) {
+        if (Stopped(stop)) throw std::invalid_argument(source + ": stopped while opening");
+        throw std::invalid_argument(
+            fmt::format("{}: opened, but no frame within {:g} s (--open-timeout-s)", source,
+                        std::max(options.open_timeout_s, options.read_timeout_s)));
+      }
+      pending_ = std::move(f);
+    }
+  }
+
+  bool live() const override { return kind_ == LiveSourceKind::kStream; }
+
+  LiveRead Next(LiveFrame* out, std::string* why) override {
+    if (Stopped(stop_)) return LiveRead::kStopped;
+    DecodedFrame f;
+    if (pending_) {
+      f = std::move(*pending_);
+      pending_.reset();
+    } else if (!decoder_->Read(&f)) {
+      if (Stopped(stop_)) return LiveRead::kStopped;
+      if (kind_ == LiveSourceKind::kFile) return LiveRead::kEnd;
+      *why = decoder_->interrupted() ? fmt::format("no data for {:g} s", options_.read_timeout_s)
+                                     : std::string("the stream ended");
+      return LiveRead::kDropped;
+    }
+    if (kind_ == LiveSourceKind::kFile && options_.realtime) {
+      // Pace at the video's own timestamps from the first frame on.
+      if (!first_time_s_) first_time_s_ = f.time_s;
+      const auto due = opened_ + std::chrono::duration_cast<Clock::duration>(
+                                     std::chrono::duration<double>(f.time_s - *first_time_s_));
+      if (!SleepUnlessStopped(due, stop_)) return LiveRead::kStopped;
+    }
+    out->arrival = Clock::now();
+    out->image = std::move(f.grey);
+    out->error = out->image.empty() ? "undecodable frame" : "";
+    out->time_s = kind_ == LiveSourceKind::kFile ? f.time_s : SecondsSince(opened_);
+    out->index = index_++;
+    out->name.clear();
+    return LiveRead::kFrame;
+  }
+
+ private:
+  LiveSourceOptions options_;
+  const std::atomic<bool>* stop_;
+  Clock::time_point opened_;
+  std::unique_ptr<VideoDecoder> decoder_;
+  std::optional<DecodedFrame> pending_;
+  std::optional<double> first_time_s_;
+  int64_t index_ = 0;
+};
+
+// A V4L2 camera through OpenCV (FFmpeg's v4l2 input would need libavdevice).
+class DeviceSource : public LiveSource {
+ public:
+  DeviceSource(const std::string& source, const std::atomic<bool>* stop)
+      : LiveSource(source, LiveSourceKind::kDevice), stop_(stop), opened_(Clock::now()) {
+    std::error_code ec;
+    if (!fs::exists(source, ec)) throw std::invalid_argument(source + ": no such device");
+    if (!capture_.open(source, cv::CAP_V4L2) || !capture_.isOpened())
+      throw std::invalid_argument(source + ": cannot open as a V4L2 camera");
+    if (!capture_.read(first_) || first_.empty())
+      throw std::invalid_argument(source + ": opened, but the camera delivered no frame");
+  }
+
+  LiveRead Next(LiveFrame* out, std::string* why) override {
+    if (Stopped(stop_)) return LiveRead::kStopped;
+    cv::Mat frame;
+    if (!first_.empty()) {
+      frame = first_;
+      first_.release();
+    } else if (!capture_.read(frame) || frame.empty()) {
+      *why = "the camera stopped delivering frames";
+      return LiveRead::kDropped;
+    }
+    out->arrival = Clock::now();
+    if (frame.channels() == 3)
+      cv::cvtColor(frame, out->image, cv::COLOR_BGR2GRAY);
+    else
+      out->image = frame;
+    out->error.clear();
+    out->time_s = SecondsSince(opened_);
+    out->index = index_++;
+    return LiveRead::kFrame;
+  }
+
+ private:
+  const std::atomic<bool>* stop_;
+  Clock::time_point opened_;
+  cv::VideoCapture capture_;
+  cv::Mat first_;
+  int64_t index_ = 0;
+};
+
+// A folder a camera writes images into. The images there at Open are not taken; every image that
+// appears afterwards (a new name, or a name whose file was replaced or rewritten: another inode,
+// size or modification time) is taken once, in order of arrival — the poll that first saw it, then
+// its name — never by its modification time, which a camera whose clock is off puts anywhere. An
+// image is taken once its size and time have held for one poll, so a half-written one is not read.
+// What is remembered is one entry per image in the folder: names that vanish are forgotten.
+class FolderSource : public LiveSource {
+ public:
+  FolderSource(const std::string& source, const LiveSourceOptions& options,
+               const std::atomic<bool>* stop)
+      : LiveSource(source, LiveSourceKind::kFolder),
+        options_(options),
+        stop_(stop),
+        opened_(Clock::now()) {
+    std::error_code ec;
+    if (!fs::is_directory(source, ec)) throw std::invalid_argument(source + ": not a directory");
+    for (const auto& [name, stamp] : List()) seen_[name] = {stamp, 0, /*taken=*/true, true};
+  }
+
+  LiveRead Next(LiveFrame* out, std::string* why) override {
+    while (!Stopped(stop_)) {
+      std::error_code ec;
+      if (!fs::is_directory(source_, ec)) {
+        *why = "the folder is gone";
+        return LiveRead::kDropped;
+      }
+      Update(List());
+      // The earliest arrival not taken yet (names in order within one poll); it waits until it
+      // has held still for a poll, and the later ones wait behind it.
+      auto next = seen_.end();
+      for (auto it = seen_.begin(); it != seen_.end(); ++it) {
+        if (!it->second.taken && (next == seen_.end() || it->second.arrival < next->second.arrival))
+          next = it;
+      }
+      if (next != seen_.end() && next->second.held) {
+        next->second.taken = true;
+        const std::string path = (fs::path(source_) / next->first).string();
+        out->arrival = Clock::now();
+        out->image = ReadImage(path, &out->error);
+        out->time_s = SecondsSince(opened_);
+        out->index = index_++;
+        out->name = next->first;
+        return LiveRead::kFrame;
+      }
+      if (!SleepUnlessStopped(
+              Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                 std::chrono::duration<double>(options_.folder_poll_s)),
+              stop_))
+        break;
+    }
+    return LiveRead::kStopped;
+  }
+
+ private:
+  // What tells one file under a name from another: not a clock to order by.
+  struct Stamp {
+    uintmax_t inode = 0, size = 0;
+    int64_t mtime_ns = 0;
+    bool operator==(const Stamp& o) const {
+      return inode == o.inode && size == o.size && mtime_ns == o.mtime_ns;
+    }
+  };
+  struct Seen {
+    Stamp stamp;
+    int64_t arrival = 0;  // the poll that first saw this file
+    bool taken = false;
+    bool held = false;  // unchanged since the poll before
+  };
+
+  // The folder's regular image files by name (a looping or dangling link, a file that vanished
+  // between listing and looking: skipped).
+  std::map<std::string, Stamp> List() const {
+    std::map<std::string, Stamp> out;
+    std::error_code ec;
+    for (fs::directory_iterator it(source_, ec), end; !ec && it != end; it.increment(ec)) {
+      const std::string path = it->path().string();
+      if (!IsImagePath(path)) continue;
+      struct stat st;
+      if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) continue;
+      out[it->path().filename().string()] = {
+          static_cast<uintmax_t>(st.st_ino), static_cast<uintmax_t>(st.st_size),
+          static_cast<int64_t>(st.st_mtim.tv_sec) * 1'000'000'000 + st.st_mtim.tv_nsec};
+    }
+    return out;
+  }
+
+  void Update(const std::map<std::string, Stamp>& listing) {
+    ++polls_;
+    std::map<std::string, Seen> updated;
+    for (const auto& [name, stamp] : listing) {
+      const auto it = seen_.find(name);
+      if (it == seen_.end() || it->second.stamp.inode != stamp.inode ||
+          (it->second.taken && !(it->second.stamp == stamp))) {
+        updated[name] = {stamp, polls_, false, false};  // arrived (or arrived anew)
+      } else {
+        Seen s = it->second;
+        if (!s.taken) s.held = s.stamp == stamp;
+        s.stamp = stamp;
+        updated[name] = s;
+      }
+    }
+    seen_.swap(updated);
+  }
+
+  LiveSourceOptions options_;
+  const std::atomic<bool>* stop_;
+  Clock::time_point opened_;
+  std::map<std::string, Seen> seen_;  // by file name
+  int64_t polls_ = 0;
+  int64_t index_ = 0;
+};
+
+}  // namespace
+
+bool SleepUnlessStopped(Clock::time_point until, const std::atomic<bool>* stop) {
+  while (Clock::now() < until) {
+    if (Stopped(stop)) return false;
+    std::this_thread::sleep_for(
+        std::min<Clock::duration>(until - Clock::now(), std::chrono::milliseconds(20)));
+  }
+  return !Stopped(stop);
+}
+
+const char* LiveSourceKindName(LiveSourceKind kind) {
+  switch (kind) {
+    case LiveSourceKind::kDevice:
+      return "device";
+    case LiveSourceKind::kStream:
+      return "stream";
+    case LiveSourceKind::kFile:
+      return "file";
+    case LiveSourceKind::kFolder:
+      return "folder";
+  }
+  return "?";
+}
+
+bool LiveSourceOptions::Validate(std::string* why) const {
+  if (!(open_timeout_s > 0 && open_timeout_s <= 3600))
+    *why = fmt::format("--open-timeout-s {:g}: must be in (0, 3600] s", open_timeout_s);
+  else if (!(read_timeout_s > 0 && read_timeout_s <= 3600))
+    *why = fmt::format("read timeout {:g} s: must be in (0, 3600] s", read_timeout_s);
+  else if (!(folder_poll_s >= 0.01 && folder_poll_s <= 60))
+    *why = fmt::format("folder poll {:g} s: must be in [0.01, 60] s", folder_poll_s);
+  else
+    return true;
+  return false;
+}
+
+LiveSourceKind LiveSource::KindOf(const std::string& source) {
+  if (source.rfind("/dev/", 0) == 0) return LiveSourceKind::kDevice;
+  if (source.find("://") != std::string::npos) return LiveSourceKind::kStream;
+  std::error_code ec;
+  if (fs::is_directory(source, ec)) return LiveSourceKind::kFolder;
+  return LiveSourceKind::kFile;
+}
+
+std::unique_ptr<LiveSource> LiveSource::Open(const std::string& source,
+                                             const LiveSourceOptions& options,
+                                             const std::atomic<bool>* stop) {
+  std::string why;
+  if (!options.Validate(&why)) throw std::invalid_argument(why);
+  if (source.empty()) throw std::invalid_argument("no source given");
+  switch (KindOf(source)) {
+    case LiveSourceKind::kDevice:
+      return std::make_unique<DeviceSource>(source, stop);
+    case LiveSourceKind::kStream:
+      return std::make_unique<DecodedSource>(source, LiveSourceKind::kStream, options, stop);
+    case LiveSourceKind::kFolder:
+      return std::make_unique<FolderSource>(source, options, stop);
+    case LiveSourceKind::kFile:
+      RequireInputPath("", source, PathExpect::kFile);
+      return std::make_unique<DecodedSource>(source, LiveSourceKind::kFile, options, stop);
+  }
+  throw std::invalid_argument(source + ": unknown kind of source");
+}
+
+}  // namespace clogscope::vision

@@ -1,0 +1,670 @@
+#include "vision/scene/calipers.h"
+
+#include <fmt/format.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+#include "common/robust.h"
+#include "vision/edges/caliper_samples.h"
+#include "vision/edges/cylinder_fit.h"
+#include "vision/edges/edge_fit.h"
+#include "vision/edges/residual_structure.h"
+#include "vision/edges/straight_run.h"
+#include "vision/scene/self_check.h"
+
+namespace clogscope::vision {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / M_PI;
+// Whether a side's calipers show shading: each caliper's F statistic for the shading term is about
+// χ²(1) without shading (mean 1, σ √2), so their mean over n calipers stays near 1 ± √(2/n).
+// Shading is taken when the mean (each F capped, so that one odd caliper cannot decide) is 6σ
+// above that, plus a margin for structured noise such as compression artefacts.
+constexpr double kMinShadingShiftPx = 0.1;
+constexpr int kReferenceCalipers = 5;
+// How far the tip may lie from where it was placed along the axis: set by the nozzle's face on
+// both sides of the strand, or inferred from the outline (tip.h).
+constexpr double kTipSigmaBothFacesPx = 0.25, kTipSigmaWidths = 0.25;
+// Curvature of the width along the band: more than 1 px of sag, bending like a disc (|w''|/2 above
+// 0.25/w, i.e. a chord of a circle less than 4 widths in radius).
+constexpr double kMaxSagPx = 1.0, kMaxBend = 0.25;  // outside the band, for the occlusion check
+// The mean capped F statistic in its own σ units above 1.
+double ShadingEvidenceSigmas(const std::vector<double>& f) {
+  if (f.empty()) return 0;
+  double sum = 0;
+  for (double x : f) sum += std::min(x, 50.0);
+  const double n = static_cast<double>(f.size());
+  return (sum / n - 1.0 - 10.0 / n) / std::sqrt(2.0 / n);
+}
+bool ShadingEvident(const std::vector<double>& f) { return ShadingEvidenceSigmas(f) > 6.0; }
+// Below the decision but this far above chance, a side taken as plain may still be shaded: the
+// width's σ then carries the shaded fit's outward shift as the model's doubt (so it does when
+// both sides move out under the shading model).
+constexpr double kShadingDoubtSigmas = 2.0;
+
+struct CaliperFit {
+  EdgeFit left, right;
+  EdgeFit left_shaded, right_shaded;  // while the model is undecided
+  double width_sigma_px = -1;         // set by a joint fit of both edges (their errors correlate)
+  bool inside_roi = true;
+  int saturated = 0;
+  int samples = 0;
+};
+
+// A fit counts when it converged inside its window [u0, u1] (not within 1 px of its ends) with
+// the edge's expected sign of contrast.
+bool UsableFit(const EdgeFit& fit, double u0, double u1, int expected_sign) {
+  return fit.converged && fit.edge_px > u0 + 1.0 && fit.edge_px < u1 - 1.0 &&
+         fit.contrast * expected_sign > 0;
+}
+
+// The two edges as lines u = u0 + slope·s with a shared slope (parallel edges), least squares over
+// the calipers whose width agrees with the median (an occluded or damaged caliper must not tilt the
+// lines: the width's tilt correction depends on the slope).
+struct EdgeLines {
+  double left_u0 = 0, right_u0 = 0, slope = 0;
+  int calipers = 0;
+};
+
+EdgeLines FitEdgeLines(const std::vector<CaliperFit>& fits, double band_s0, double spacing) {
+  std::vector<double> widths;
+  for (const auto& cf : fits) {
+    if (cf.left.converged && cf.right.converged)
+      widths.push_back(cf.right.edge_px - cf.left.edge_px);
+  }
+  EdgeLines out;
+  if (widths.size() < 2) return out;
+  const double med = Median(widths);
+  const double tol = std::max(4.0 * 1.4826 * Mad(widths, med), 0.1);
+  double n = 0, ss = 0, sss = 0, sl = 0, sr = 0, sls = 0, srs = 0;
+  for (size_t k = 0; k < fits.size(); ++k) {
+    const CaliperFit& cf = fits[k];
+    if (!cf.left.converged || !cf.right.converged) continue;
+    if (std::abs(cf.right.edge_px - cf.left.edge_px - med) > tol) continue;
+    const double s = band_s0 + (k + 0.5) * spacing;
+    n += 1;
+    ss += s;
+    sss += s * s;
+    sl += cf.left.edge_px;
+    sr += cf.right.edge_px;
+    sls += cf.left.edge_px * s;
+    srs += cf.right.edge_px * s;
+  }
+  if (n < 2) return out;
+  const double var_s = sss - ss * ss / n;
+  out.slope = var_s > 1e-9 ? ((sls - sl * ss / n) + (srs - sr * ss / n)) / (2 * var_s) : 0.0;
+  out.left_u0 = (sl - out.slope * ss) / n;
+  out.right_u0 = (sr - out.slope * ss) / n;
+  out.calipers = static_cast<int>(n);
+  return out;
+}
+
+// Replaces each caliper's two per-edge fits by one lit cylinder across its whole profile (see
+// cylinder_fit.h): shared centre, radius, blur and shading, so the interior's curvature fixes the
+// shading that a per-edge fit trades against its edge. A caliper whose cylinder does not fit, or
+// whose silhouettes leave their windows, is dropped rather than mixed with per-edge widths.
+void RefitAsCylinders(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
+                      double band_s0, double spacing, const EdgeLines& lines, double sigma_px,
+                      std::vector<CaliperFit>* fits) {
+  const double outer = std::max(10.0, 3.0 * sigma_px + 2.5);
+  std::vector<EdgeSample> samples;
+  // Each caliper starts from its neighbour's blur: the fit then mostly has only the edges to move.
+  double sigma_start = sigma_px;
+  for (size_t k = 0; k < fits->size(); ++k) {
+    CaliperFit& cf = (*fits)[k];
+    const double s0 = band_s0 + k * spacing, sc = s0 + 0.5 * spacing;
+    const double l = lines.left_u0 + lines.slope * sc, r = lines.right_u0 + lines.slope * sc;
+    int clipped = 0;
+    CylinderFit cyl;
+    if (GatherEdgeSamples(img, f, s0, s0 + spacing, l - outer, r + outer, clip, &samples,
+                          &clipped)) {
+      // Deep inside, the profile only tells the shading's amplitudes, which vary slowly: every
+      // fourth sample there does, and the fit costs a third.
+      const double keep = std::max(10.0, 3.0 * sigma_px + 4.0);
+      size_t n = 0;
+      for (size_t i = 0; i < samples.size(); ++i) {
+        const double u = samples[i].u_px;
+        if (u < l + keep || u > r - keep || i % 4 == 0) samples[n++] = samples[i];
+      }
+      samples.resize(n);
+      cyl = FitLitCylinder(samples, l, r, sigma_start);
+    }
+    const bool ok = cyl.converged && std::abs(cyl.left_px - l) < outer - 1.0 &&
+                    std::abs(cyl.right_px - r) < outer - 1.0;
+    cf.left.converged = cf.right.converged = ok;
+    if (ok) sigma_start = cyl.sigma_px;
+    if (!ok) continue;
+    cf.left.edge_px = cyl.left_px;
+    cf.right.edge_px = cyl.right_px;
+    cf.left.edge_sigma_px = cyl.left_sigma_px;
+    cf.right.edge_sigma_px = cyl.right_sigma_px;
+    cf.left.sigma_px = cf.right.sigma_px = cyl.sigma_px;
+    cf.width_sigma_px = cyl.width_sigma_px;
+  }
+}
+
+}  // namespace
+
+void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry& g, double band_s0,
+                     double band_s1, const StrandMeasureOptions& opt, StrandMeasurement* m) {
+  auto fail = [&](FrameStatus st, std::string detail) {
+    m->status = st;
+    m->detail = std::move(detail);
+  };
+  const AxisFrame& f = g.axis;
+  const double min_contrast = opt.min_contrast_fraction * data_max;
+  const double width0 = g.width_px;
+  const int n_cal = static_cast<int>((band_s1 - band_s0) / opt.caliper_spacing_px + 1e-9);
+  m->band_start_px = band_s0;
+  m->band_end_px = band_s0 + n_cal * opt.caliper_spacing_px;
+  m->calipers_total = n_cal;
+
+  std::vector<CaliperFit> fits(n_cal);
+  // Per side (left, right): −1 undecided, 0 plain blurred step, 1 shaded step.
+  int shade[2] = {opt.shading ? g.shading_left : 0, opt.shading ? g.shading_right : 0};
+  std::vector<double> shade_evidence[2], shade_shift[2];
+  double shading_doubt_px[2] = {0, 0};  // per side: how far out a shaded edge would lie
+  double cylinder_doubt_px = 0;         // the lit cylinders' disagreement with the per-edge fits
+  double shading_shift_px[2] = {0, 0};  // the same for every side judged plain
+  std::vector<EdgeSample> samples;
+  samples.reserve(512);
+  double sigma_guess = 1.5;
+  double left_guess = g.left_u0, right_guess = g.right_u0, slope_guess = g.edge_slope;
+  if (!g.precise) {
+    // Sub-pixel starting edges at the top and bottom of the band: most frames then need one pass.
+    // (Tracked edges are the last frame's fitted lines: better than two profiles, which on a rough
+    // edge such as a knurled filament's would move the windows and cost a second pass.)
+    const double sa = band_s0 + 0.5 * opt.caliper_spacing_px;
+    const double sb = band_s0 + (n_cal - 0.5) * opt.caliper_spacing_px;
+    const double half = std::min(10.0, 0.25 * width0);
+    const double la =
+        RefineEdgeGuess(img, f, sa, left_guess + slope_guess * sa, half, min_contrast);
+    const double lb =
+        RefineEdgeGuess(img, f, sb, left_guess + slope_guess * sb, half, min_contrast);
+    const double ra =
+        RefineEdgeGuess(img, f, sa, right_guess + slope_guess * sa, half, min_contrast);
+    const double rb =
+        RefineEdgeGuess(img, f, sb, right_guess + slope_guess * sb, half, min_contrast);
+    if (sb > sa) slope_guess = 0.5 * ((lb - la) + (rb - ra)) / (sb - sa);
+    left_guess = 0.5 * (la + lb) - slope_guess * 0.5 * (sa + sb);
+    right_guess = 0.5 * (ra + rb) - slope_guess * 0.5 * (sa + sb);
+  }
+  const bool filament = opt.target == MeasureTarget::kFilament;
+  // Edges inside the object near its silhouette (a stripe, a lens's core) must stay out of the
+  // edge windows: how deep inside each side's window may reach.
+  // (A filament's band is its whole stretch, its median profile blurred by gear and knurl marks:
+  // not looked at.)
+  double inner_edge_px[2] = {std::numeric_limits<double>::infinity(),
+                             std::numeric_limits<double>::infinity()};
+  for (int side = 0; side < 2 && !filament; ++side) {
+    const double mid = 0.5 * (band_s0 + band_s1);
+    const double e = (side == 0 ? left_guess : right_guess) + slope_guess * mid;
+    inner_edge_px[side] = InnerEdgeDistance(img, f, band_s0, band_s1, e, side == 0 ? 1 : -1,
+                                            std::min(0.45 * width0, 40.0), min_contrast);
+  }
+  // One side's edge window about e0: `outer` px into the background, `inner` into the object
+  // but short of an edge inside it by the blur (sigma_guess as it stands).
+  struct Window {
+    double u0, u1;
+  };
+  const auto window = [&](int side, double e0, double outer, double inner) {
+    const double in = std::min(inner, std::max(3.0, inner_edge_px[side] - 2.5 * sigma_guess - 1.0));
+    return side == 0 ? Window{e0 - outer, e0 + in} : Window{e0 - in, e0 + outer};
+  };
+  // Saturation is judged on the decoded frame: where a codec put the clipped plateau.
+  const double mid_s = 0.5 * (band_s0 + band_s1), reach_px = 12.0;
+  const ClipLevels clip =
+      FindClipLevels(img, f, band_s0, band_s1, left_guess + slope_guess * mid_s - reach_px,
+                     right_guess + slope_guess * mid_s + reach_px, data_max);
+  int total_samples = 0, total_saturated = 0, per_edge_consistent = 0;
+  bool border = false;
+  // A filament's band is its whole visible stretch, parts of which a drive gear or a guide may
+  // hide: a quarter of it (at least 8 calipers) will do. A strand's short band must be clean.
+  double min_used = filament ? std::max(8.0, 0.5 * opt.min_caliper_fraction * n_cal)
+                             : opt.min_caliper_fraction * n_cal;
+  // Usually one pass. Another re-centres the windows on the fitted edge lines, or widens them to
+  // the fitted blur; a badly blurred frame needs a few widenings before its fit sees the whole
+  // edge.
+  constexpr int kMaxPasses = 4;
+  for (int pass = 0; pass < kMaxPasses; ++pass) {
+    double outer = std::max(6.5, 3.0 * sigma_guess + 2.5);
+    // A guess from the scene (a gradient peak) lies inside a shaded silhouette by a few px: the
+    // first pass looks wider so that both plateaus are in its windows.
+    // The shading model needs room to see the ramp's shape, too.
+    if ((pass == 0 && !g.precise) || shade[0] != 0 || shade[1] != 0) outer = std::max(outer, 10.0);
+    const double inner = std::min(outer, std::max(4.0, 0.3 * width0));
+    total_samples = total_saturated = 0;
+    border = false;
+    for (int k = 0; k < n_cal; ++k) {
+      const double s0 = band_s0 + k * opt.caliper_spacing_px;
+      const double s1 = s0 + opt.caliper_spacing_px;
+      const double sc = 0.5 * (s0 + s1);
+      CaliperFit& cf = fits[k];
+      cf = CaliperFit{};
+      for (int side = 0; side < 2; ++side) {
+        const double e0 = (side == 0 ? left_guess : right_guess) + slope_guess * sc;
+        const auto [u0, u1] = window(side, e0, outer, inner);
+        if (!GatherEdgeSamples(img, f, s0, s1, u0, u1, clip, &samples, &cf.saturated)) {
+          cf.inside_roi = false;
+          break;
+        }
+        cf.samples += static_cast<int>(samples.size());
+        // Reject fits that wandered out of their window or have the wrong sign of step.
+        const int expected = side == 0 ? g.left_sign : g.right_sign;
+        const auto usable = [&](const EdgeFit& fit) { return UsableFit(fit, u0, u1, expected); };
+        // The shading model only where the side is known (or may turn out) to be shaded: on a
+        // plain edge its extra parameter costs precision for nothing.
+        const int model = shade[side];
+        EdgeFit plain, shaded;
+        if (model != 1) plain = FitBlurredStep(samples, e0, sigma_guess, e0);
+        if (model != 0) shaded = FitShadedStep(samples, e0, sigma_guess, e0, side == 0 ? 1 : -1);
+        if (!usable(plain)) plain.converged = false;
+        if (!usable(shaded)) shaded.converged = false;
+        if (model < 0) {
+          // Evidence for shading: how much the extra term lowers the residuals, in units of the
+          // residual variance (an F statistic with 1 and n − 6 degrees of freedom). An edge only
+          // the shaded model describes counts as strong evidence.
+          // And where the silhouette moves: shading pulls a plain fit inward, so the shaded edge
+          // lies outward of it; structured noise moves it either way.
+          double evidence = 0, outward = 0;
+          if (shaded.converged && !plain.converged) {
+            evidence = 1e9;
+            outward = 1.0;
+          } else if (shaded.converged && plain.converged && shaded.samples > 6) {
+            const double rss_p = plain.rms * plain.rms * plain.samples;
+            const double rss_s = shaded.rms * shaded.rms * shaded.samples;
+            evidence = (rss_p - rss_s) / std::max(1e-12, rss_s / (shaded.samples - 6));
+            outward = (shaded.edge_px - plain.edge_px) * (side == 0 ? -1.0 : 1.0);
+          }
+          if (plain.converged || shaded.converged) {
+            shade_evidence[side].push_back(evidence);
+            shade_shift[side].push_back(outward);
+          }
+        }
+        (side == 0 ? cf.left_shaded : cf.right_shaded) = shaded;
+        const EdgeFit fit = model == 1 || (model < 0 && !plain.converged) ? shaded : plain;
+        (side == 0 ? cf.left : cf.right) = fit;
+      }
+      if (!cf.inside_roi) border = true;
+      total_samples += cf.samples;
+      total_saturated += cf.saturated;
+    }
+    // After the first pass each undecided side settles on one model for all its calipers.
+    for (int side = 0; side < 2; ++side) {
+      if (shade[side] >= 0) continue;
+      const double shift = Median(shade_shift[side]);
+      shade[side] = ShadingEvident(shade_evidence[side]) && shift > kMinShadingShiftPx;
+      if (shade[side] == 0) shading_shift_px[side] = shift;
+      if (shade[side] == 0 && ShadingEvidenceSigmas(shade_evidence[side]) > kShadingDoubtSigmas)
+        shading_doubt_px[side] = std::max(0.0, shift);
+      if (shade[side] == 0) continue;
+      for (auto& cf : fits)
+        (side == 0 ? cf.left : cf.right) = side == 0 ? cf.left_shaded : cf.right_shaded;
+    }
+    const EdgeLines lines = FitEdgeLines(fits, band_s0, opt.caliper_spacing_px);
+    per_edge_consistent = lines.calipers;
+    if (lines.calipers < 2) {
+      // No edge fitted: perhaps blur far wider than the window. Widen and look again.
+      sigma_guess = std::max(2.5 * sigma_guess, 0.6 * outer);
+      continue;
+    }
+    std::vector<double> sigmas;
+    for (const auto& cf : fits) {
+      if (!cf.left.converged || !cf.right.converged) continue;
+      sigmas.push_back(cf.left.sigma_px);
+      sigmas.push_back(cf.right.sigma_px);
+    }
+    const double new_sigma = Median(sigmas);
+    const double s_mid = 0.5 * (band_s0 + band_s1);
+    const bool recentre =
+        std::abs(lines.left_u0 + lines.slope * s_mid - (left_guess + slope_guess * s_mid)) > 1.0 ||
+        std::abs(lines.right_u0 + lines.slope * s_mid - (right_guess + slope_guess * s_mid)) > 1.0;
+    const bool widen = 3.0 * new_sigma + 2.5 > 1.25 * outer;
+    left_guess = lines.left_u0;
+    right_guess = lines.right_u0;
+    slope_guess = lines.slope;
+    // A fit in a window too narrow for the edge underestimates its width: widen geometrically.
+    sigma_guess = widen ? std::max(new_sigma, 0.6 * outer) : new_sigma;
+    if (!(recentre || widen)) break;
+  }
+  if (border)
+    return fail(FrameStatus::kTouchesBorder, "edge windows reach the frame or ROI border");
+  // The windows from here on, at the blur and models the passes settled on.
+  const double outer = std::max(6.5, 3.0 * sigma_guess + 2.5) + (shade[0] || shade[1] ? 3.5 : 0);
+  const double inner = std::min(outer, std::max(4.0, 0.3 * width0));
+  // A strand's edges may curve out of windows placed on straight lines near the tip (die swell):
+  // from the bottom up, a caliper that found no edge looks again where the two below point.
+  if (!filament) {
+    for (int k = n_cal - 3; k >= 0; --k) {
+      CaliperFit& cf = fits[k];
+      const CaliperFit& b1 = fits[k + 1];
+      const CaliperFit& b2 = fits[k + 2];
+      if ((cf.left.converged && cf.right.converged) || !cf.inside_roi) continue;
+      if (!(b1.left.converged && b1.right.converged && b2.left.converged && b2.right.converged))
+        continue;
+      const double s0 = band_s0 + k * opt.caliper_spacing_px, s1 = s0 + opt.caliper_spacing_px;
+      for (int side = 0; side < 2; ++side) {
+        EdgeFit& fit = side == 0 ? cf.left : cf.right;
+        if (fit.converged) continue;
+        const double e1 = (side == 0 ? b1.left : b1.right).edge_px;
+        const double e2 = (side == 0 ? b2.left : b2.right).edge_px;
+        const double e0 = 2 * e1 - e2;
+        const auto [u0, u1] = window(side, e0, outer, inner);
+        int clipped = 0;
+        if (!GatherEdgeSamples(img, f, s0, s1, u0, u1, clip, &samples, &clipped)) break;
+        const EdgeFit again = shade[side] == 1
+                                  ? FitShadedStep(samples, e0, sigma_guess, e0, side == 0 ? 1 : -1)
+                                  : FitBlurredStep(samples, e0, sigma_guess, e0);
+        if (UsableFit(again, u0, u1, side == 0 ? g.left_sign : g.right_sign)) fit = again;
+      }
+    }
+  }
+  if (total_samples > 0 && total_saturated > opt.max_saturated_fraction * total_samples) {
+    return fail(FrameStatus::kSaturated,
+                fmt::format("{} of {} edge pixels clipped", total_saturated, total_samples));
+  }
+  // The shading model reads the strand's lit interior: clipped there (at the object's end of the
+  // range; a dark background clipped at 0 is no matter), it cannot be fitted.
+  const double object_clipped = g.polarity == Polarity::kBrightOnDark ? clip.clipped_high_fraction
+                                : g.polarity == Polarity::kDarkOnBright
+                                    ? clip.clipped_low_fraction
+                                    : clip.clipped_low_fraction + clip.clipped_high_fraction;
+  if ((shade[0] == 1 || shade[1] == 1) && object_clipped > opt.max_saturated_fraction) {
+    return fail(FrameStatus::kSaturated,
+                fmt::format("{:.0f} % of the band clipped: its shading cannot be fitted",
+                            100 * object_clipped));
+  }
+  // A lit object on both sides (a front-lit strand or filament): one cylinder per caliper.
+  // Only on an object the per-edge fits already saw as one (enough consistent calipers): a wrong
+  // pair (an edge and a shading step, filament and idler) must not become one by a richer model.
+  // Then on every caliper: a knurl or gear tooth that spoils one edge's window spoils the
+  // cylinder's less, which uses both edges and the interior.
+  if (shade[0] == 1 && shade[1] == 1 && g.left_sign == -g.right_sign &&
+      per_edge_consistent >= min_used) {
+    EdgeLines lines;
+    lines.left_u0 = left_guess;
+    lines.right_u0 = right_guess;
+    lines.slope = slope_guess;
+    RefitAsCylinders(img, f, clip, band_s0, opt.caliper_spacing_px, lines, sigma_guess, &fits);
+    lines = FitEdgeLines(fits, band_s0, opt.caliper_spacing_px);
+    if (lines.calipers >= 2) {
+      // Two models of the same silhouette: each within its blur of it where it holds. Beyond
+      // that, one of them is wrong (a stripe the cylinder traded its blur against), and which
+      // one the frame cannot tell: half the excess counts as one σ, as the shading's does.
+      const double sc = 0.5 * (band_s0 + band_s1);
+      cylinder_doubt_px = 0.5 * (std::max(0.0, std::abs(lines.left_u0 + lines.slope * sc -
+                                                        (left_guess + slope_guess * sc)) -
+                                                   sigma_guess) +
+                                 std::max(0.0, std::abs(lines.right_u0 + lines.slope * sc -
+                                                        (right_guess + slope_guess * sc)) -
+                                                   sigma_guess));
+      left_guess = lines.left_u0;
+      right_guess = lines.right_u0;
+      slope_guess = lines.slope;
+    }
+  }
+
+  // Per-caliper widths, robust combination.
+  const double cos_d = 1.0 / std::sqrt(1.0 + slope_guess * slope_guess);
+  std::vector<double> cal_widths, steps, blurs;
+  m->calipers.assign(n_cal, Caliper{});
+  for (int k = 0; k < n_cal; ++k) {
+    Caliper& c = m->calipers[k];
+    c.s_px = band_s0 + (k + 0.5) * opt.caliper_spacing_px;
+    c.fitted = fits[k].left.converged && fits[k].right.converged;
+    if (!c.fitted) continue;
+    c.left_u_px = fits[k].left.edge_px;
+    c.right_u_px = fits[k].right.edge_px;
+    c.width_px = (c.right_u_px - c.left_u_px) * cos_d;
+    c.width_sigma_px = (fits[k].width_sigma_px >= 0
+                            ? fits[k].width_sigma_px
+                            : std::hypot(fits[k].left.edge_sigma_px, fits[k].right.edge_sigma_px)) *
+                       cos_d;
+    cal_widths.push_back(c.width_px);
+    steps.push_back(std::abs(fits[k].left.contrast));
+    steps.push_back(std::abs(fits[k].right.contrast));
+    for (const EdgeFit* e : {&fits[k].left, &fits[k].right}) {
+      // The fitted width holds the PSF and the pixel footprint, whose variance across any straight
+      // edge is 1/12 px² whatever its tilt.
+      blurs.push_back(std::sqrt(std::max(0.0, e->sigma_px * e->sigma_px - 1.0 / 12.0)));
+    }
+  }
+  m->has_geometry = true;
+  m->shading_left = shade[0] == 1;
+  m->shading_right = shade[1] == 1;
+  m->axis_dx = f.dx;
+  m->axis_dy = f.dy;
+  m->left_u0_px = left_guess;
+  m->right_u0_px = right_guess;
+  m->edge_slope = slope_guess;
+  // Report the refined axis: the edges' slope in the measurement frame tilts the first estimate.
+  m->angle_deg = (std::atan2(f.dx, f.dy) + std::atan(slope_guess)) * kRadToDeg;
+  if (cal_widths.empty()) return fail(FrameStatus::kOccluded, "no caliper found both edges");
+  m->contrast = Median(steps);
+  m->blur_px = Median(blurs);
+
+  // A filament's width is taken on the longest straight part of its stretch (straight_run.h).
+  int run_begin = 0, run_end = n_cal;
+  if (filament) {
+    StraightRunOptions so;
+    if (g.straight_s1_px > g.straight_s0_px) {
+      so.prefer_begin =
+          static_cast<int>(std::lround((g.straight_s0_px - band_s0) / opt.caliper_spacing_px));
+      so.prefer_end =
+          static_cast<int>(std::lround((g.straight_s1_px - band_s0) / opt.caliper_spacing_px));
+    }
+    const StraightRun run = FindStraightRun(m->calipers, so);
+    m->rough_calipers = run.rough;
+    if (run.sections > 0 || run.end - run.begin < n_cal) {
+      run_begin = run.begin;
+      run_end = run.end;
+      cal_widths.clear();
+      for (int k = run_begin; k < run_end; ++k)
+        if (m->calipers[k].fitted) cal_widths.push_back(m->calipers[k].width_px);
+      if (cal_widths.size() < 2) {
+        const long unfitted = std::count_if(m->calipers.begin(), m->calipers.end(),
+                                            [](const Caliper& c) { return !c.fitted; });
+        return fail(FrameStatus::kOccluded,
+                    fmt::format("no straight part of the stretch: of {} calipers {} have rough "
+                                "edges (gear or knurl marks), {} lack an edge",
+                                n_cal, run.rough, unfitted));
+      }
+      min_used = std::max(8.0, 0.5 * opt.min_caliper_fraction * (run_end - run_begin));
+    }
+  }
+  m->straight_start_px = band_s0 + run_begin * opt.caliper_spacing_px;
+  m->straight_end_px = band_s0 + run_end * opt.caliper_spacing_px;
+
+  const double med = Median(cal_widths);
+  const double mad = Mad(cal_widths, med);
+  const double tol = std::max(4.0 * 1.4826 * mad, 0.1);
+  double sum = 0, sum2 = 0;
+  int used = 0;
+  // A strand relaxing from die swell is wider at the band's top and narrows steadily down it:
+  // those calipers are the strand too, kept while each is no wider than the one above it.
+  bool relaxing = !filament;
+  double above = 1e30;
+  for (int k = run_begin; k < run_end; ++k) {
+    Caliper& c = m->calipers[k];
+    if (!c.fitted) continue;
+    c.inlier = std::abs(c.width_px - med) <= tol;
+    if (!c.inlier && relaxing && c.width_px > med && c.width_px <= above + tol)
+      c.inlier = true;
+    else
+      relaxing = false;
+    above = c.width_px;
+    if (!c.inlier) continue;
+    sum += c.width_px;
+    sum2 += c.width_px * c.width_px;
+    ++used;
+  }
+  m->calipers_used = used;
+  // A strand's width along the band is constant (or changes linearly: die swell); the chord of a
+  // disc sags toward the ends. Periodic roughness (a filament marked by drive-gear teeth) averages
+  // out of a quadratic over several periods.
+  // All fitted calipers: on a disc the chord's change leaves few of them within the MAD cut.
+  // A strand's width about its smooth trend along the band: a swell relaxing down the band widens
+  // the calipers' spread without making their mean any less certain.
+  double trend_var = -1, width_slope = 0;
+  if (cal_widths.size() >= 4) {
+    Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+    const double s_mid = 0.5 * (m->straight_start_px + m->straight_end_px);
+    for (int k = run_begin; k < run_end; ++k) {
+      const Caliper& c = m->calipers[k];
+      if (!c.fitted) continue;
+      const Eigen::Vector3d row(1.0, c.s_px - s_mid, (c.s_px - s_mid) * (c.s_px - s_mid));
+      ata += row * row.transpose();
+      atb += row * c.width_px;
+    }
+    const Eigen::Vector3d coef = ata.ldlt().solve(atb);
+    if (!filament && used >= 5) {
+      double ss = 0;
+      for (const Caliper& c : m->calipers) {
+        if (!c.inlier) continue;
+        const double ds = c.s_px - s_mid;
+        const double r = c.width_px - (coef[0] + coef[1] * ds + coef[2] * ds * ds);
+        ss += r * r;
+      }
+      trend_var = ss / (used - 3);
+      // Only a width that clearly changes: the slope of a straight strand's noisy widths is noise.
+      const double slope_sigma = std::sqrt(trend_var * ata.inverse()(1, 1));
+      if (std::abs(coef[1]) > 3.0 * slope_sigma) width_slope = coef[1];
+    }
+    const double half = 0.5 * (m->straight_end_px - m->straight_start_px);
+    // A disc's chord w(s) ≈ 2R − s²/R bends with |w''|/2 = 1/R ≈ 2/w; a strand's slow changes
+    // (or a filament's along a long stretch) bend hundreds of widths more gently.
+    const double sag = std::abs(coef[2]) * half * half;
+    // Only a width bulging in the middle: a swell relaxing down the band bends the other way.
+    if (coef[2] < 0 && sag > kMaxSagPx && std::abs(coef[2]) > kMaxBend / med) {
+      return fail(FrameStatus::kNoStrand,
+                  fmt::format("the edges curve: the width changes by {:.1f} px over the band (a "
+                              "disc or bend, not a straight strand)",
+                              sag));
+    }
+  }
+  m->width_px = sum / used;
+  // The calipers' spread, or what their own fits expect of it when a few calipers happen to agree.
+  double expected_var = 0;
+  for (const Caliper& c : m->calipers)
+    if (c.inlier) expected_var += c.width_sigma_px * c.width_sigma_px;
+  m->width_sigma_px = std::sqrt(expected_var) / used;
+  if (used >= 2) {
+    const double var =
+        trend_var >= 0 ? trend_var : std::max(0.0, (sum2 - sum * sum / used) / (used - 1));
+    m->width_sigma_px = std::max(m->width_sigma_px, std::sqrt(var / used));
+  }
+  // The model's doubt: a side judged plain on weak evidence of shading would be this much wider
+  // if shaded; half of it (both sides together) counts as one σ.
+  // Both sides moving out under the shading model is itself a sign of weak shading that a few
+  // noisy calipers cannot decide.
+  if (shading_shift_px[0] > kMinShadingShiftPx && shading_shift_px[1] > kMinShadingShiftPx) {
+    shading_doubt_px[0] = shading_shift_px[0];
+    shading_doubt_px[1] = shading_shift_px[1];
+  }
+  m->model_sigma_px = 0.5 * (shading_doubt_px[0] + shading_doubt_px[1]);
+  {
+    // The inlier calipers' own edge models. (Calipers refitted as cylinders carry the cylinders'
+    // disagreement with the per-edge fits instead: the cylinders' own residual structure on
+    // Greeff's real filament, knurled and lit, doubled its σ to 0.16 px against a frame-to-frame
+    // scatter of 0.08 px.)
+    double structure_doubt_px[2];
+    for (int side = 0; side < 2; ++side) {
+      std::vector<CaliperEdge> edges;
+      for (int k = 0; k < n_cal; ++k) {
+        if (!m->calipers[k].inlier || fits[k].width_sigma_px >= 0) continue;
+        const double s0 = band_s0 + k * opt.caliper_spacing_px;
+        edges.push_back(
+            {s0, s0 + opt.caliper_spacing_px, side == 0 ? fits[k].left : fits[k].right});
+      }
+      // About each caliper's fitted edge: the window's reach either side of it.
+      const Window w = window(side, 0.0, outer, inner);
+      structure_doubt_px[side] = BandEdgeDoubtPx(img, f, clip, edges, -w.u0, w.u1);
+    }
+    // And where the band starts, when the width changes along it (die swell relaxing): a tip set
+    // by the nozzle's face on both sides is good to a fraction of a px; one inferred from where
+    // the outline leaves the nozzle's may be off by a good part of the strand's width.
+    const double tip_sigma_px =
+        g.tip_face_sides == 2 ? kTipSigmaBothFacesPx : kTipSigmaWidths * width0;
+    m->model_sigma_px = std::hypot(
+        std::hypot(m->model_sigma_px + cylinder_doubt_px, std::abs(width_slope) * tip_sigma_px),
+        std::hypot(structure_doubt_px[0], structure_doubt_px[1]));
+  }
+  m->width_sigma_px = std::hypot(m->width_sigma_px, m->model_sigma_px);
+
+  // The same calipers further down the strand, outside the band: a blob covering one edge over
+  // the band makes the band's edges agree with each other but not with the strand. (A filament's
+  // band is its whole stretch: there is no elsewhere, and occlusion shows as calipers that
+  // disagree.)
+  if (opt.target == MeasureTarget::kStrand) {
+    const double lo = m->band_end_px + 2 * opt.caliper_spacing_px;
+    const double hi = g.s_end - 10.0 - 12.0 * std::abs(f.dx);
+    std::vector<double> elsewhere;
+    for (int i = 0; i < kReferenceCalipers && hi - lo > opt.caliper_spacing_px; ++i) {
+      const double s0 = lo + (hi - lo - opt.caliper_spacing_px) * (i + 0.5) / kReferenceCalipers;
+      const double s1 = s0 + opt.caliper_spacing_px, sc = 0.5 * (s0 + s1);
+      double edge[2];
+      bool ok = true;
+      for (int side = 0; side < 2 && ok; ++side) {
+        const double e0 = (side == 0 ? left_guess : right_guess) + slope_guess * sc;
+        const auto [u0, u1] = window(side, e0, outer, inner);
+        int clipped = 0;
+        ok = GatherEdgeSamples(img, f, s0, s1, u0, u1, clip, &samples, &clipped);
+        if (!ok) break;
+        const EdgeFit fit = shade[side] == 1
+                                ? FitShadedStep(samples, e0, sigma_guess, e0, side == 0 ? 1 : -1)
+                                : FitBlurredStep(samples, e0, sigma_guess, e0);
+        ok = UsableFit(fit, u0, u1, side == 0 ? g.left_sign : g.right_sign);
+        edge[side] = fit.edge_px;
+      }
+      if (ok) elsewhere.push_back((edge[1] - edge[0]) * cos_d);
+    }
+    if (elsewhere.size() >= 3) {
+      const double ref = Median(elsewhere);
+      // Wider in the band than below it, narrowing steadily down the band toward it: die swell
+      // relaxing, not an object over one edge.
+      const Caliper* first = nullptr;
+      const Caliper* last = nullptr;
+      for (const Caliper& c : m->calipers) {
+        if (!c.inlier) continue;
+        if (!first) first = &c;
+        last = &c;
+      }
+      const bool relaxes = first && last && m->width_px > ref && first->width_px > last->width_px &&
+                           first->width_px - last->width_px > 0.5 * (m->width_px - ref);
+      if (!relaxes && std::abs(m->width_px - ref) > std::max(3.0, 0.04 * ref)) {
+        return fail(FrameStatus::kOccluded,
+                    fmt::format("width in the band {:.1f} px disagrees with the strand's {:.1f} px "
+                                "further down",
+                                m->width_px, ref));
+      }
+    }
+  }
+  // Self-check (self_check.h): both silhouettes fit about as well.
+  if (!filament) {
+    std::vector<double> rms[2];
+    for (int k = run_begin; k < run_end; ++k) {
+      if (!m->calipers[k].inlier) continue;
+      rms[0].push_back(fits[k].left.rms);
+      rms[1].push_back(fits[k].right.rms);
+    }
+    const SelfCheck check = CheckEdgeResiduals(rms[0], rms[1]);
+    if (!check.passed) return fail(FrameStatus::kNotSilhouette, check.why);
+  }
+  if (m->contrast < min_contrast)
+    return fail(FrameStatus::kLowContrast,
+                fmt::format("edge contrast {:.1f} below {:.1f}", m->contrast, min_contrast));
+  if (m->blur_px > opt.max_blur_px)
+    return fail(FrameStatus::kOutOfFocus,
+                fmt::format("edge blur {:.2f} px above {:.2f} px", m->blur_px, opt.max_blur_px));
+  if (used < min_used)
+    return fail(FrameStatus::kOccluded, fmt::format("{} of {} calipers consistent", used, n_cal));
+  m->status = FrameStatus::kValid;
+  m->detail.clear();
+}
+
+}  // namespace clogscope::vision

@@ -1,0 +1,261 @@
+#include "vision/scene/edge_segments.h"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "common/robust.h"
+
+namespace clogscope::vision {
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+constexpr double kStraightTolPx = 1.0;  // a piece deviates less than this from its line
+
+// Links edge points of consecutive sampled rows into chains (same sign, continuing the chain's
+// direction), allowing one missed row.
+std::vector<std::vector<EdgePoint>> LinkChains(const Detection& d, double max_tilt_deg) {
+  struct Chain {
+    std::vector<EdgePoint> pts;
+    int last_row = 0;
+  };
+  std::vector<Chain> active;
+  std::vector<std::vector<EdgePoint>> done;
+  const double tan_max = std::tan(max_tilt_deg * kDegToRad);
+  struct Link {
+    float dist;
+    int chain, point;
+  };
+  std::vector<Link> links;
+  for (int r = 0; r < static_cast<int>(d.rows.size()); ++r) {
+    const auto& pts = d.rows[r];
+    // Close chains that missed two rows.
+    for (size_t c = 0; c < active.size();) {
+      if (active[c].last_row < r - 2) {
+        done.push_back(std::move(active[c].pts));
+        active[c] = std::move(active.back());
+        active.pop_back();
+      } else {
+        ++c;
+      }
+    }
+    links.clear();
+    for (int c = 0; c < static_cast<int>(active.size()); ++c) {
+      const auto& cp = active[c].pts;
+      const EdgePoint& last = cp.back();
+      const double y = pts.empty() ? 0 : pts.front().y;
+      double pred = last.x, tol;
+      if (cp.size() >= 2) {
+        const EdgePoint& first = cp[cp.size() >= 6 ? cp.size() - 6 : 0];
+        const double slope = (last.x - first.x) / std::max(1e-6f, last.y - first.y);
+        pred = last.x + slope * (y - last.y);
+        tol = 1.5;
+      } else {
+        tol = (y - last.y) * tan_max + 1.5;
+      }
+      // Points are sorted by x: look only in [pred − tol, pred + tol].
+      auto it = std::lower_bound(pts.begin(), pts.end(), pred - tol,
+                                 [](const EdgePoint& p, double v) { return p.x < v; });
+      for (; it != pts.end() && it->x <= pred + tol; ++it) {
+        if (it->sign != last.sign) continue;
+        links.push_back(
+            {static_cast<float>(std::abs(it->x - pred)), c, static_cast<int>(it - pts.begin())});
+      }
+    }
+    std::sort(links.begin(), links.end(),
+              [](const Link& a, const Link& b) { return a.dist < b.dist; });
+    std::vector<char> point_used(pts.size(), 0), chain_used(active.size(), 0);
+    for (const Link& l : links) {
+      if (point_used[l.point] || chain_used[l.chain]) continue;
+      point_used[l.point] = chain_used[l.chain] = 1;
+      active[l.chain].pts.push_back(pts[l.point]);
+      active[l.chain].last_row = r;
+    }
+    for (size_t i = 0; i < pts.size(); ++i) {
+      if (!point_used[i]) active.push_back({{pts[i]}, r});
+    }
+  }
+  for (auto& c : active) done.push_back(std::move(c.pts));
+  return done;
+}
+
+// Splits a chain into straight pieces (recursively at the point farthest from the fitted line).
+void SplitStraight(const std::vector<EdgePoint>& pts, size_t lo, size_t hi,
+                   std::vector<Piece>* out) {
+  if (hi - lo + 1 < kMinPiecePoints) return;
+  Piece p;
+  p.pts.assign(pts.begin() + lo, pts.begin() + hi + 1);
+  p.sign = pts[lo].sign;
+  p.Fit();
+  if (p.max_residual <= kStraightTolPx) {
+    out->push_back(std::move(p));
+    return;
+  }
+  size_t worst = lo;
+  double worst_r = -1;
+  const double c = 1.0 / std::sqrt(1 + p.b * p.b);
+  for (size_t i = lo; i <= hi; ++i) {
+    const double r = std::abs(pts[i].x - p.X(pts[i].y)) * c;
+    if (r > worst_r) {
+      worst_r = r;
+      worst = i;
+    }
+  }
+  // Keep the split point on the side where it is not the end, so that the recursion shrinks.
+  if (worst == lo) {
+    SplitStraight(pts, lo + 1, hi, out);
+  } else if (worst == hi) {
+    SplitStraight(pts, lo, hi - 1, out);
+  } else {
+    SplitStraight(pts, lo, worst - 1, out);
+    SplitStraight(pts, worst + 1, hi, out);
+  }
+}
+
+// Joins collinear pieces of the same sign along one line (an edge broken by a blob, a reflection
+// or a weak stretch).
+void MergeCollinear(std::vector<Piece>* pieces, int row_step) {
+  std::sort(pieces->begin(), pieces->end(),
+            [](const Piece& a, const Piece& b) { return a.y0() < b.y0(); });
+  bool merged = true;
+  while (merged) {
+    merged = false;
+    for (size_t i = 0; i < pieces->size() && !merged; ++i) {
+      for (size_t j = i + 1; j < pieces->size(); ++j) {
+        Piece& p = (*pieces)[i];
+        Piece& q = (*pieces)[j];
+        if (p.sign != q.sign) continue;
+        if (q.y0() < p.y1() - row_step + 0.5) continue;  // overlapping rows: parallel, not one
+        const double gap = q.y0() - p.y1();
+        if (gap > std::max(30.0, 0.5 * ((p.y1() - p.y0()) + (q.y1() - q.y0())))) continue;
+        if (std::abs(std::atan(p.b) - std::atan(q.b)) > 3.0 * kDegToRad) continue;
+        if (std::abs(p.X(q.y0()) - q.pts.front().x) > 1.5 ||
+            std::abs(q.X(p.y1()) - p.pts.back().x) > 1.5)
+          continue;
+        Piece m;
+        m.pts = p.pts;
+        m.pts.insert(m.pts.end(), q.pts.begin(), q.pts.end());
+        m.sign = p.sign;
+        m.Fit();
+        if (m.max_residual > 1.5 * kStraightTolPx) continue;
+        p = std::move(m);
+        pieces->erase(pieces->begin() + j);
+        merged = true;
+        break;
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void Piece::Fit() {
+  double n = 0, sy = 0, sx = 0, syy = 0, sxy = 0;
+  for (const auto& p : pts) {
+    n += 1;
+    sy += p.y;
+    sx += p.x;
+    syy += double(p.y) * p.y;
+    sxy += double(p.y) * p.x;
+  }
+  const double var = n * syy - sy * sy;
+  b = var > 1e-9 ? (n * sxy - sx * sy) / var : 0.0;
+  a = (sx - b * sy) / n;
+  const double c = 1.0 / std::sqrt(1 + b * b);
+  max_residual = 0;
+  for (const auto& p : pts) max_residual = std::max(max_residual, std::abs(p.x - X(p.y)) * c);
+}
+
+Detection DetectEdgePoints(const cv::Mat& channel, const SceneOptions& o) {
+  Detection d;
+  d.factor = std::min(channel.cols, channel.rows) >= 240 ? 2 : 1;
+  d.row_step = std::max(1, 4 / d.factor);
+  cv::Mat small;
+  if (d.factor == 2) {
+    cv::resize(channel, small, cv::Size(channel.cols / 2, channel.rows / 2), 0, 0, cv::INTER_AREA);
+  } else {
+    small = channel;
+  }
+  cv::Mat f32, gx, gy;
+  small.convertTo(f32, CV_32F);
+  d.image = f32;
+  cv::Sobel(f32, gx, CV_32F, 1, 0, 3, 1.0 / 8, 0, cv::BORDER_REPLICATE);
+  cv::Sobel(f32, gy, CV_32F, 0, 1, 3, 1.0 / 8, 0, cv::BORDER_REPLICATE);
+
+  // Pixel noise by Immerkær's mask [1 −2 1; −2 4 −2; 1 −2 1] (σ of its response is 6σ for white
+  // noise), robustly through the median: a second difference hardly sees smooth texture or
+  // straight edges, whereas a median gradient would count a textured scene as noise. The Sobel
+  // gradient scaled by 1/8 carries 0.433σ of it.
+  std::vector<double> lap;
+  for (int y = std::max(1, d.row_step / 2); y + 1 < f32.rows; y += d.row_step) {
+    const float* a = f32.ptr<float>(y - 1);
+    const float* b = f32.ptr<float>(y);
+    const float* c = f32.ptr<float>(y + 1);
+    for (int x = 1; x + 1 < f32.cols; x += 2) {
+      lap.push_back(std::abs(a[x - 1] - 2 * a[x] + a[x + 1] - 2 * (b[x - 1] - 2 * b[x] + b[x + 1]) +
+                             c[x - 1] - 2 * c[x] + c[x + 1]));
+    }
+  }
+  const double pixel_noise = Median(lap) / (0.6745 * 6.0);
+  d.noise = std::max(0.433 * pixel_noise, o.min_contrast / 60.0);
+  // An edge of the weakest accepted step at the largest blur still rises above this.
+  const float threshold = static_cast<float>(std::max(5.0 * d.noise, o.min_contrast / 8.0));
+  const float tan_max =
+      static_cast<float>(std::tan(std::min(85.0, o.max_tilt_deg + 10) * kDegToRad));
+
+  for (int y = d.row_step / 2; y < gx.rows; y += d.row_step) {
+    const float* g = gx.ptr<float>(y);
+    const float* h = gy.ptr<float>(y);
+    std::vector<EdgePoint> pts;
+    for (int x = 1; x < gx.cols - 1; ++x) {
+      const float a = std::abs(g[x]);
+      if (a < threshold) continue;
+      const float l = std::abs(g[x - 1]), r = std::abs(g[x + 1]);
+      if (a < l || a <= r) continue;
+      if (std::abs(h[x]) > a * tan_max) continue;  // too far from an upright edge
+      // Sub-pixel position: centroid of the peak above half its height. A parabola through three
+      // samples is as good on sharp edges and far less noisy on blurred, broad ones.
+      const float half = 0.5f * a;
+      double sw = 0, sx = 0;
+      for (int k = x; k >= std::max(0, x - 12); --k) {
+        const float w = std::abs(g[k]) - half;
+        if (w <= 0 || (k < x && (g[k] > 0) != (g[x] > 0))) break;
+        sw += w;
+        sx += w * k;
+      }
+      for (int k = x + 1; k <= std::min(gx.cols - 1, x + 12); ++k) {
+        const float w = std::abs(g[k]) - half;
+        if (w <= 0 || (g[k] > 0) != (g[x] > 0)) break;
+        sw += w;
+        sx += w * k;
+      }
+      pts.push_back({static_cast<float>(sx / sw), static_cast<float>(y), a, g[x] > 0 ? 1 : -1});
+    }
+    d.rows.push_back(std::move(pts));
+    d.row_y.push_back(static_cast<float>(y));
+  }
+  return d;
+}
+
+std::vector<Piece> StraightPieces(const Detection& d, double max_tilt_deg) {
+  std::vector<Piece> pieces;
+  for (const auto& chain : LinkChains(d, max_tilt_deg))
+    SplitStraight(chain, 0, chain.size() - 1, &pieces);
+  MergeCollinear(&pieces, d.row_step);
+  return pieces;
+}
+
+EdgeSegment ToSegment(const Piece& p, const Detection& d) {
+  const double f = d.factor, off = 0.5 * (d.factor - 1);
+  EdgeSegment s;
+  s.top = {p.X(p.y0()) * f + off, p.y0() * f + off};
+  s.bottom = {p.X(p.y1()) * f + off, p.y1() * f + off};
+  s.sign = p.sign;
+  std::vector<double> g;
+  for (const auto& e : p.pts) g.push_back(e.g);
+  s.strength = Median(g) / f;
+  s.coverage = std::min(1.0, p.pts.size() / ((p.y1() - p.y0()) / d.row_step + 1.0));
+  return s;
+}
+
+}  // namespace clogscope::vision

@@ -1,0 +1,711 @@
+#include "vision/scene/scene.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <numeric>
+#include <opencv2/imgproc.hpp>
+
+#include "common/robust.h"
+#include "vision/scene/edge_segments.h"
+#include "vision/scene/tip.h"
+
+namespace clogscope::vision {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / M_PI;
+constexpr double kDegToRad = M_PI / 180.0;
+constexpr int kMaxCandidates = 40;       // pairs kept after scoring
+constexpr int kMaxFollowed = 6;          // pairs followed along the full-resolution image
+constexpr double kFollowOffsetPx = 3.0;  // edge contrast is read this far either side
+constexpr double kMixedPenalty = 0.5;    // a pair brighter on one side only is less likely
+constexpr double kParallelSine = 0.035;  // two axes within 2° of each other are parallel
+constexpr double kEndFraction = 0.3;     // an edge ends where its contrast falls below this share
+
+// The segment's line in an axis frame: u at s.
+struct LineInAxis {
+  double s0, s1, u0, u1;
+  double U(double s) const { return s1 > s0 ? u0 + (u1 - u0) * (s - s0) / (s1 - s0) : u0; }
+};
+LineInAxis InAxis(const EdgeSegment& e, const AxisFrame& a) {
+  return {a.S(e.top.x, e.top.y), a.S(e.bottom.x, e.bottom.y), a.U(e.top.x, e.top.y),
+          a.U(e.bottom.x, e.bottom.y)};
+}
+
+Polarity PairPolarity(int left_sign, int right_sign) {
+  if (left_sign > 0 && right_sign < 0) return Polarity::kBrightOnDark;
+  if (left_sign < 0 && right_sign > 0) return Polarity::kDarkOnBright;
+  return Polarity::kMixed;
+}
+
+// Two edges as a strand silhouette: geometry and score, or false when they are not parallel, too
+// short together, too narrow or too wide. `left`/`right` in the result are 0 and 1 (a and b).
+bool MakeCandidate(const EdgeSegment& a, const EdgeSegment& b, double noise_full, int roi_width,
+                   double min_overlap, const SceneOptions& o, PairCandidate* out) {
+  const cv::Point2d da = (a.bottom - a.top) / a.length_px();
+  const cv::Point2d db = (b.bottom - b.top) / b.length_px();
+  const double min_len = std::min(a.length_px(), b.length_px());
+  const double dangle = std::abs(std::atan2(da.x, da.y) - std::atan2(db.x, db.y));
+  if (dangle > std::max(3.0 * kDegToRad, std::atan(3.0 / min_len))) return false;
+  cv::Point2d dir = a.length_px() * da + b.length_px() * db;
+  dir /= cv::norm(dir);
+  if (std::abs(std::atan2(dir.x, dir.y)) > o.max_tilt_deg * kDegToRad) return false;
+  AxisFrame ax{0.25 * (a.top.x + a.bottom.x + b.top.x + b.bottom.x),
+               0.25 * (a.top.y + a.bottom.y + b.top.y + b.bottom.y), dir.x, dir.y};
+  LineInAxis la = InAxis(a, ax), lb = InAxis(b, ax);
+  int li = 0, ri = 1;
+  if (la.U(0.5 * (la.s0 + la.s1)) > lb.U(0.5 * (lb.s0 + lb.s1))) {
+    std::swap(la, lb);
+    std::swap(li, ri);
+  }
+  const double s0 = std::max(la.s0, lb.s0), s1 = std::min(la.s1, lb.s1);
+  const double len = s1 - s0;
+  if (len < min_overlap) return false;
+  const double w0 = lb.U(s0) - la.U(s0), w1 = lb.U(s1) - la.U(s1);
+  const double width = 0.5 * (w0 + w1);
+  if (width < o.min_width_px || width > 0.9 * roi_width) return false;
+  // Not parallel enough; a long pair may open by 0.6° (a curved end, such as a swell below the
+  // nozzle, tilts a segment's fitted line).
+  if (std::abs(w1 - w0) > std::max({2.0, 0.03 * width, 0.01 * len})) return false;
+  const EdgeSegment& L = li == 0 ? a : b;
+  const EdgeSegment& R = li == 0 ? b : a;
+  const Polarity pol = PairPolarity(L.sign, R.sign);
+  if (o.polarity != Polarity::kAuto && pol != o.polarity) return false;
+  PairCandidate c;
+  c.left = li;
+  c.right = ri;
+  c.polarity = pol;
+  c.length_px = len;
+  c.width_px = width;
+  c.snr = std::min(L.strength, R.strength) / noise_full;
+  // Length and continuity first; contrast with diminishing returns (a highlight stripe inside a
+  // strand is as long as the strand but weaker).
+  c.score = len * 0.5 * (L.coverage + R.coverage) * c.snr / (c.snr + 10.0) *
+            (pol == Polarity::kMixed ? kMixedPenalty : 1.0);
+  // Origin on the axis at the top of the common stretch.
+  const double uc = 0.5 * (la.U(s0) + lb.U(s0));
+  c.axis = {ax.ImageX(s0, uc), ax.ImageY(s0, uc), dir.x, dir.y};
+  c.left_u0 = la.U(s0) - uc;
+  c.right_u0 = lb.U(s0) - uc;
+  c.edge_slope = 0.5 * ((la.U(s1) - la.U(s0)) + (lb.U(s1) - lb.U(s0))) / len;
+  *out = c;
+  return true;
+}
+
+// Re-counts a seed pair's support from every edge point near its two lines (same sign), not only
+// the segments it came from: a jagged or broken edge (gear teeth, a reflection) arrives as many
+// short pieces along one line. Keeps the longest run of rows where both edges are present (short
+// gaps allowed) and refits both lines there. Returns the two edges, or false without a run.
+bool ExtendPair(const Detection& d, const EdgeSegment& a, const EdgeSegment& b, EdgeSegment* ea,
+                EdgeSegment* eb) {
+  const double f = d.factor, off = 0.5 * (d.factor - 1);
+  struct Line {
+    double a, b;
+    int sign;
+  };
+  auto to_small = [&](const EdgeSegment& e) {
+    const double y0 = (e.top.y - off) / f, y1 = (e.bottom.y - off) / f;
+    const double x0 = (e.top.x - off) / f, x1 = (e.bottom.x - off) / f;
+    const double slope = y1 > y0 ? (x1 - x0) / (y1 - y0) : 0.0;
+    return Line{x0 - slope * y0, slope, e.sign};
+  };
+  Line lines[2] = {to_small(a), to_small(b)};
+  constexpr double kTolPx = 2.0;  // small px either side of the line
+  constexpr int kMaxGapRows = 6;
+  const int n = static_cast<int>(d.rows.size());
+  std::vector<const EdgePoint*> hit[2];
+  for (int pass = 0; pass < 2; ++pass) {
+    for (int side = 0; side < 2; ++side) {
+      hit[side].assign(n, nullptr);
+      const Line& l = lines[side];
+      for (int r = 0; r < n; ++r) {
+        const double x = l.a + l.b * d.row_y[r];
+        const auto& pts = d.rows[r];
+        auto it = std::lower_bound(pts.begin(), pts.end(), x - kTolPx,
+                                   [](const EdgePoint& p, double v) { return p.x < v; });
+        double best = kTolPx;
+        for (; it != pts.end() && it->x <= x + kTolPx; ++it) {
+          if (it->sign == l.sign && std::abs(it->x - x) <= best) {
+            best = std::abs(it->x - x);
+            hit[side][r] = &*it;
+          }
+        }
+      }
+    }
+    // Each side's runs of rows with support (gaps of up to kMaxGapRows); the pair of runs whose
+    // stretches overlap most along the axis (a short, wide, tilted strand has its two edges on
+    // different rows).
+    struct RunRange {
+      int lo, hi, count;
+    };
+    std::vector<RunRange> runs[2];
+    for (int side = 0; side < 2; ++side) {
+      int lo = -1, last = -1, count = 0;
+      for (int r = 0; r <= n; ++r) {
+        const bool here = r < n && hit[side][r];
+        if (r == n || (here && last >= 0 && r - last - 1 > kMaxGapRows)) {
+          if (count >= kMinPiecePoints) runs[side].push_back({lo, last, count});
+          lo = -1;
+          count = 0;
+        }
+        if (here) {
+          if (lo < 0) lo = r;
+          last = r;
+          ++count;
+        }
+      }
+    }
+    // Along-axis position of a row on a side's line: the seed axis is close to both lines.
+    const double ax = 0.5 * (lines[0].b + lines[1].b), norm = std::sqrt(1 + ax * ax);
+    const auto s_of = [&](int side, int r) {
+      const double y = d.row_y[r];
+      return (lines[side].a + lines[side].b * y) * ax / norm + y / norm;
+    };
+    int best[2] = {-1, -1};
+    double best_overlap = 0;
+    for (size_t i = 0; i < runs[0].size(); ++i) {
+      for (size_t j = 0; j < runs[1].size(); ++j) {
+        const double lo = std::max(s_of(0, runs[0][i].lo), s_of(1, runs[1][j].lo));
+        const double hi = std::min(s_of(0, runs[0][i].hi), s_of(1, runs[1][j].hi));
+        if (hi - lo > best_overlap) {
+          best_overlap = hi - lo;
+          best[0] = static_cast<int>(i);
+          best[1] = static_cast<int>(j);
+        }
+      }
+    }
+    if (best[0] < 0) return false;
+    // Refit both lines on their runs' points.
+    for (int side = 0; side < 2; ++side) {
+      const RunRange& run = runs[side][best[side]];
+      Piece p;
+      p.sign = lines[side].sign;
+      for (int r = run.lo; r <= run.hi; ++r)
+        if (hit[side][r]) p.pts.push_back(*hit[side][r]);
+      p.Fit();
+      lines[side] = {p.a, p.b, p.sign};
+      if (pass == 1) {
+        EdgeSegment& e = side == 0 ? *ea : *eb;
+        e = ToSegment(p, d);
+        e.coverage = run.count / (run.hi - run.lo + 1.0);
+      }
+    }
+  }
+  return true;
+}
+
+// Scores pairs of long segments as strand silhouettes: every parallel, overlapping pair seeds two
+// lines, whose support is then counted over all edge points (ExtendPair).
+std::vector<PairCandidate> PairSegments(const Detection& d, const std::vector<EdgeSegment>& edges,
+                                        double noise_full, int roi_width, const SceneOptions& o) {
+  std::vector<PairCandidate> seeds;
+  for (size_t i = 0; i < edges.size(); ++i) {
+    for (size_t j = i + 1; j < edges.size(); ++j) {
+      PairCandidate c;
+      if (!MakeCandidate(edges[i], edges[j], noise_full, roi_width, 0.5 * o.min_length_px, o, &c))
+        continue;
+      c.left = c.left == 0 ? static_cast<int>(i) : static_cast<int>(j);
+      c.right = c.right == 0 ? static_cast<int>(i) : static_cast<int>(j);
+      seeds.push_back(c);
+    }
+  }
+  std::sort(seeds.begin(), seeds.end(),
+            [](const PairCandidate& a, const PairCandidate& b) { return a.score > b.score; });
+  std::vector<PairCandidate> out;
+  for (size_t k = 0; k < seeds.size() && k < 3 * kMaxCandidates; ++k) {
+    EdgeSegment el, er;
+    if (!ExtendPair(d, edges[seeds[k].left], edges[seeds[k].right], &el, &er)) continue;
+    PairCandidate c;
+    // Extended lines that are no longer parallel took in a curve (a strand swelling below the
+    // nozzle): the seed's own segments stand.
+    if (!MakeCandidate(el, er, noise_full, roi_width, o.min_length_px, o, &c) &&
+        !MakeCandidate(edges[seeds[k].left], edges[seeds[k].right], noise_full, roi_width,
+                       o.min_length_px, o, &c))
+      continue;
+    c.left = seeds[k].left;
+    c.right = seeds[k].right;
+    // Seeds along the same two lines end up as one candidate: keep it once.
+    bool duplicate = false;
+    for (const auto& e : out) {
+      if (std::abs(e.width_px - c.width_px) < 1.0 &&
+          std::abs(e.axis.U(c.axis.ox, c.axis.oy)) < 1.0 &&
+          std::abs(e.axis.dx * c.axis.dy - e.axis.dy * c.axis.dx) < 0.01) {
+        duplicate = true;
+        break;
+      }
+    }
+    if (!duplicate) out.push_back(c);
+  }
+  std::sort(out.begin(), out.end(),
+            [](const PairCandidate& a, const PairCandidate& b) { return a.score > b.score; });
+  if (out.size() > kMaxCandidates) out.resize(kMaxCandidates);
+  return out;
+}
+
+// u-interval of a candidate in another candidate's frame, at the middle of its stretch.
+std::pair<double, double> Interval(const PairCandidate& c, const AxisFrame& frame) {
+  const double sm = 0.5 * c.length_px;
+  const double xl = c.axis.ImageX(sm, c.left_u0 + c.edge_slope * sm);
+  const double yl = c.axis.ImageY(sm, c.left_u0 + c.edge_slope * sm);
+  const double xr = c.axis.ImageX(sm, c.right_u0 + c.edge_slope * sm);
+  const double yr = c.axis.ImageY(sm, c.right_u0 + c.edge_slope * sm);
+  return {frame.U(xl, yl), frame.U(xr, yr)};
+}
+
+// Marks pairs lying inside a comparable outer pair (a highlight stripe, a clear strand's internal
+// lines): the outer silhouette is the object.
+void SuppressNested(MeasureTarget target, std::vector<PairCandidate>* cands) {
+  auto& c = *cands;
+  for (size_t i = 0; i < c.size(); ++i) {
+    for (size_t j = 0; j < c.size(); ++j) {
+      if (i == j || !c[j].verdict.empty() || !c[i].verdict.empty()) continue;
+      if (c[i].width_px <= c[j].width_px + 3.0) continue;
+      // Inside, or sharing one edge and inside with the other (half a highlight stripe with the
+      // strand's far edge; a shading ridge with the other silhouette).
+      const auto [l, r] = Interval(c[j], c[i].axis);
+      const auto [ol, orr] = Interval(c[i], c[i].axis);
+      if (l < ol - 1.5 || r > orr + 1.5) continue;
+      const double sj = c[i].axis.S(c[j].axis.ox, c[j].axis.oy);
+      const double overlap = std::min(sj + c[j].length_px, c[i].length_px) - std::max(sj, 0.0);
+      if (overlap < 0.5 * c[j].length_px) continue;
+      // Inside an outer silhouette, edges of its own kind (a shading ridge, a clear strand's
+      // internal lines) or, below a nozzle, of the opposite kind (a bright stripe or a lens's
+      // core in a dark strand) never make the strand, whatever their contrast; a mixed pair
+      // inside, or a mixed outer pair (brighter on one side, darker on the other), is a weaker
+      // case. (Between a filament's gears and idler, a dark gap inside a bright outer pair is
+      // often the better pair: there the opposite kind stays a weaker case.)
+      const bool opposite =
+          target == MeasureTarget::kStrand &&
+          ((c[i].polarity == Polarity::kBrightOnDark && c[j].polarity == Polarity::kDarkOnBright) ||
+           (c[i].polarity == Polarity::kDarkOnBright && c[j].polarity == Polarity::kBrightOnDark));
+      const bool same_kind = c[i].polarity == c[j].polarity;
+      if (c[i].score >= (same_kind || opposite ? 0.3 : 0.8) * c[j].score) {
+        c[j].verdict = fmt::format("inside a wider pair ({:.1f} px)", c[i].width_px);
+        c[j].suppressed_by = static_cast<int>(i);
+      }
+    }
+  }
+}
+
+// Whether a pair's inside is one object: a pair made of the outer edges of two strands side by
+// side holds the background between them. Samples the inside at the detection scale and counts
+// how much of it sits at the background's level (within a quarter of the step). A transparent
+// strand on a backlight is a lens: its core shows the backlight too, but as one band centred
+// between two dark rims of equal width, and it is one object.
+bool InsideIsOneObject(const Detection& d, const PairCandidate& c) {
+  const cv::Mat& img = d.image;  // CV_32F
+  const double f = d.factor, off = 0.5 * (d.factor - 1), gap = 2.0 * d.factor + 2.0;
+  std::vector<double> outside, rim;
+  std::vector<std::vector<double>> rows(5);
+  for (int i = 1; i <= 5; ++i) {
+    const double s = c.length_px * i / 6.0;
+    const double ul = c.left_u0 + c.edge_slope * s, ur = c.right_u0 + c.edge_slope * s;
+    auto at = [&](double u, std::vector<double>* out) {
+      const double x = (c.axis.ImageX(s, u) - off) / f, y = (c.axis.ImageY(s, u) - off) / f;
+      if (x < 0 || y < 0 || x > img.cols - 1.001 || y > img.rows - 1.001) return;
+      const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
+      const double fx = x - x0, fy = y - y0;
+      const float* r0 = img.ptr<float>(y0);
+      const float* r1 = img.ptr<float>(y0 + 1);
+      out->push_back((r0[x0] * (1 - fx) + r0[x0 + 1] * fx) * (1 - fy) +
+                     (r1[x0] * (1 - fx) + r1[x0 + 1] * fx) * fy);
+    };
+    at(ul - gap, &outside);
+    at(ur + gap, &outside);
+    at(ul + gap, &rim);
+    at(ur - gap, &rim);
+    for (double u = ul + gap; u <= ur - gap; u += f) at(u, &rows[i - 1]);
+  }
+  size_t inside = 0;
+  for (const auto& r : rows) inside += r.size();
+  if (inside < 10 || outside.size() < 2 || rim.size() < 2) return true;
+  // The object's level just inside its edges; the background's just outside them.
+  const double background = Median(outside), body = Median(rim);
+  const double step = std::abs(body - background);
+  if (step <= 0) return true;
+  int at_background = 0, lens_rows = 0;
+  for (const auto& r : rows) {
+    int first = -1, last = -1, here = 0;
+    for (int k = 0; k < static_cast<int>(r.size()); ++k) {
+      if (std::abs(r[k] - background) >= 0.25 * step) continue;
+      ++here;
+      if (first < 0) first = k;
+      last = k;
+    }
+    at_background += here;
+    // A lens's core: one band (nearly all of it at the backlight's level), centred (rims of
+    // equal width within a tenth of the width), 10–70 % of the width.
+    const double n = static_cast<double>(r.size());
+    if (first >= 0 && here >= 0.8 * (last - first + 1) &&
+        std::abs(first - (n - 1 - last)) <= 0.1 * n && (last - first + 1) >= 0.1 * n &&
+        (last - first + 1) <= 0.7 * n)
+      ++lens_rows;
+  }
+  // Only a dark silhouette on a backlight can be a lens (its core transmits the backlight); a
+  // lit pair with the background between its edges is two objects.
+  if (c.polarity == Polarity::kDarkOnBright && lens_rows >= 4) return true;
+  return at_background < 0.2 * inside;
+}
+
+// Edge contrast across the line u(s) at s: positive when the edge is there with its sign.
+bool ContrastAt(const GreyImage& img, const AxisFrame& a, double s, double u, int sign, double* c) {
+  const double xa = a.ImageX(s, u - kFollowOffsetPx), ya = a.ImageY(s, u - kFollowOffsetPx);
+  const double xb = a.ImageX(s, u + kFollowOffsetPx), yb = a.ImageY(s, u + kFollowOffsetPx);
+  if (!img.InsideForBilinear(xa, ya) || !img.InsideForBilinear(xb, yb)) return false;
+  *c = sign * (img.Bilinear(xb, yb) - img.Bilinear(xa, ya));
+  return true;
+}
+
+struct EdgeEnd {
+  double s = 0;
+  bool at_object = false;  // the edge stopped inside the image (tip, bed); else it left the image
+};
+
+// Walks along one edge line from s_from in direction dir (±1) until the edge's contrast stays
+// below half its reference for three steps, or the line leaves the image. An edge that comes back
+// (five strong steps within max_gap_px) was only hidden by a blob or a reflection, and the walk
+// goes on.
+EdgeEnd WalkEdge(const GreyImage& img, const AxisFrame& a, double u0, double slope, int sign,
+                 double reference, double s_from, double dir, double max_gap_px) {
+  double prev_c = reference, c = 0;
+  int weak = 0, strong_again = 0;
+  double first_weak = 0, before_weak_c = reference;
+  bool in_gap = false;
+  EdgeEnd candidate;
+  for (int i = 0;; ++i) {
+    const double s = s_from + dir * i;
+    if (!ContrastAt(img, a, s, u0 + slope * s, sign, &c)) {
+      return in_gap ? candidate : EdgeEnd{s - dir, false};
+    }
+    if (in_gap) {
+      strong_again = std::abs(c) >= kEndFraction * reference ? strong_again + 1 : 0;
+      if (strong_again >= 5) {
+        in_gap = false;
+        weak = 0;
+      } else if (std::abs(s - candidate.s) > max_gap_px) {
+        return candidate;
+      }
+      prev_c = c;
+      continue;
+    }
+    // |c|: an object behind the strand may turn the edge's sign without ending it.
+    if (std::abs(c) < kEndFraction * reference) {
+      if (weak++ == 0) {
+        first_weak = s;
+        before_weak_c = prev_c;
+      }
+      if (weak >= 3) {
+        // Interpolate the half-contrast crossing between the last strong and the first weak step.
+        double c_weak = 0;
+        ContrastAt(img, a, first_weak, u0 + slope * first_weak, sign, &c_weak);
+        before_weak_c = std::abs(before_weak_c);
+        c_weak = std::abs(c_weak);
+        const double t = std::clamp(
+            (before_weak_c - 0.5 * reference) / std::max(1e-9, before_weak_c - c_weak), 0.0, 1.0);
+        candidate = {first_weak - dir + dir * t, true};
+        in_gap = true;
+        strong_again = 0;
+      }
+    } else {
+      weak = 0;
+    }
+    prev_c = c;
+  }
+}
+
+// Median contrast of an edge over the candidate's stretch.
+double ReferenceContrast(const GreyImage& img, const AxisFrame& a, double u0, double slope,
+                         int sign, double length) {
+  std::vector<double> cs;
+  for (double s = 0; s <= length; s += 2.0) {
+    double c;
+    if (ContrastAt(img, a, s, u0 + slope * s, sign, &c)) cs.push_back(c);
+  }
+  return Median(cs);
+}
+
+// For a pair of segments leaving the image at one border only, is it an object cut lengthwise by
+// the ROI? (One long edge whose object side runs uniformly to the nearer side border.)
+bool CutByBorder(const GreyImage& img, const std::vector<EdgeSegment>& edges, double min_length) {
+  std::vector<double> levels;
+  for (int y = 4; y < img.m.rows; y += 8)
+    for (int x = 4; x < img.m.cols; x += 8) levels.push_back(img.At(x, y));
+  const double background = Median(levels);
+  for (const auto& e : edges) {
+    // Cut lengthwise, the object runs along the side border; a steep edge (a nozzle flank) is not.
+    if (e.length_px() < std::max(3.0 * min_length, 0.3 * img.m.rows)) continue;
+    if (std::abs(e.bottom.x - e.top.x) > std::tan(15.0 * kDegToRad) * (e.bottom.y - e.top.y))
+      continue;
+    const cv::Point2d mid = 0.5 * (e.top + e.bottom);
+    const int y = static_cast<int>(std::lround(mid.y));
+    const bool to_left = mid.x < 0.5 * img.m.cols;
+    const int x_from = static_cast<int>(std::lround(mid.x)) + (to_left ? -4 : 4);
+    const int x_to = to_left ? 0 : img.m.cols - 1;
+    if (x_from < 0 || x_from >= img.m.cols) continue;
+    std::vector<double> v;
+    for (int x = x_from; to_left ? x >= x_to : x <= x_to; x += to_left ? -1 : 1)
+      v.push_back(img.At(x, y));
+    if (v.size() < 2) continue;
+    const double level = Median(v);
+    const double far_side = img.At(std::clamp(x_from + (to_left ? 8 : -8), 0, img.m.cols - 1), y);
+    const double step = std::abs(level - far_side);
+    if (step < 1e-9 || std::abs(level - background) < 0.5 * step) continue;
+    double max_dev = 0;
+    for (double x : v) max_dev = std::max(max_dev, std::abs(x - level));
+    if (max_dev < 0.3 * step) return true;
+  }
+  return false;
+}
+
+std::string Describe(const PairCandidate& c) {
+  return fmt::format("width {:.1f} px, {:.0f} px long, {:.1f}° tilt, edge SNR {:.0f}, score {:.0f}",
+                     c.width_px, c.length_px, std::atan2(c.axis.dx, c.axis.dy) * kRadToDeg, c.snr,
+                     c.score);
+}
+
+}  // namespace
+
+bool FollowPair(const GreyImage& img, const SceneOptions& o, const PairCandidate& c, int left_sign,
+                int right_sign, StrandGeometry* g, std::string* why) {
+  const AxisFrame& a = c.axis;
+  const double ref_l = ReferenceContrast(img, a, c.left_u0, c.edge_slope, left_sign, c.length_px);
+  const double ref_r = ReferenceContrast(img, a, c.right_u0, c.edge_slope, right_sign, c.length_px);
+  if (!(ref_l > 0.5 * o.min_contrast && ref_r > 0.5 * o.min_contrast)) {
+    *why = fmt::format("edge contrast {:.0f}/{:.0f} too weak along the pair", ref_l, ref_r);
+    return false;
+  }
+  // Walks start inside the stretch: a segment's detected end already lies in the fading zone.
+  const double inset = std::min(0.25 * c.length_px, 12.0);
+  const double top = inset, bottom = c.length_px - inset;
+  const double gap = std::max(20.0, 0.5 * c.width_px);
+  const auto walk = [&](double u0, int sign, double ref, double from, double dir) {
+    return WalkEdge(img, a, u0, c.edge_slope, sign, ref, from, dir, gap);
+  };
+  const EdgeEnd up_l = walk(c.left_u0, left_sign, ref_l, top, -1);
+  const EdgeEnd up_r = walk(c.right_u0, right_sign, ref_r, top, -1);
+  const EdgeEnd dn_l = walk(c.left_u0, left_sign, ref_l, bottom, +1);
+  const EdgeEnd dn_r = walk(c.right_u0, right_sign, ref_r, bottom, +1);
+  double s_origin;
+  g->has_tip = up_l.at_object && up_r.at_object;
+  if (o.target == MeasureTarget::kStrand) {
+    if (!g->has_tip) {
+      *why = up_l.at_object || up_r.at_object
+                 ? "only one edge ends upward: no nozzle tip across the strand"
+                 : "the edges run to the frame or ROI top: no nozzle tip in view";
+      return false;
+    }
+    // The walk followed straight lines; the outline followed as curves ends at the nozzle also
+    // when the strand swells below it (tip.h). It starts a little below where the walks ended.
+    const double s_from = std::max(up_l.s, up_r.s) + std::max(4.0, 0.1 * c.width_px);
+    const TipTrace trace =
+        TraceToNozzle(img, a, c.left_u0, c.right_u0, c.edge_slope, left_sign, right_sign, ref_l,
+                      ref_r, std::min(s_from, bottom), o.min_contrast);
+    // A nozzle face ends both edges together (a strand hanging up to ~8° off the nozzle axis).
+    const double mismatch = std::abs(up_l.s - up_r.s);
+    if (!trace.found && mismatch > std::max(4.0, 0.14 * c.width_px)) {
+      *why = fmt::format("the edges end {:.0f} px apart: no common nozzle tip", mismatch);
+      return false;
+    }
+    s_origin = 0.5 * (up_l.s + up_r.s);
+    if (trace.found && trace.s_tip_px < s_origin) s_origin = trace.s_tip_px;
+    g->tip_width_px = trace.found ? trace.widest_px : c.width_px;
+    g->tip_face_sides = trace.found ? trace.face_sides : 0;
+  } else {
+    // Where both edges are still there; but when one edge's walk stops at an object while the
+    // other runs on to the border, where the other ends: an object beside the filament (a gear's
+    // rim) cuts a walk short although the edge goes on. Calipers where it does not are not
+    // fitted, or rough, and the width comes from the straight part (straight_run.h).
+    const EdgeEnd& lower = up_l.s >= up_r.s ? up_l : up_r;
+    const EdgeEnd& higher = up_l.s >= up_r.s ? up_r : up_l;
+    s_origin = lower.at_object && !higher.at_object ? higher.s : lower.s;
+  }
+  const double s_end = std::min(dn_l.s, dn_r.s);
+  const bool end_object = dn_l.s <= dn_r.s ? dn_l.at_object : dn_r.at_object;
+  g->axis = {a.ImageX(s_origin, 0), a.ImageY(s_origin, 0), a.dx, a.dy};
+  g->left_u0 = c.left_u0 + c.edge_slope * s_origin;
+  g->right_u0 = c.right_u0 + c.edge_slope * s_origin;
+  g->edge_slope = c.edge_slope;
+  g->width_px = c.width_px;
+  g->left_sign = left_sign;
+  g->right_sign = right_sign;
+  g->polarity = c.polarity;
+  g->s_end = s_end - s_origin;
+  g->end_is_object = end_object;
+  g->score = c.score;
+  return true;
+}
+
+namespace {}  // namespace
+
+PairContest ContestPairs(const PairCandidate& b, const StrandGeometry& bg, const PairCandidate& c,
+                         const StrandGeometry& cg, const SceneOptions& o) {
+  const bool shares =
+      c.left == b.left || c.left == b.right || c.right == b.left || c.right == b.right;
+  const auto [bl, br] = Interval(b, b.axis);
+  const auto [cl, cr] = Interval(c, b.axis);
+  const bool disjoint = !shares && (cr < bl || cl > br);
+  // Two strands in one view look alike; a gap between objects (a mixed pair) is another thing.
+  if (!disjoint || c.polarity != b.polarity) return PairContest::kNotRivals;
+  // Two strand-like objects: the one hanging from the nozzle's face (the nozzle on both its
+  // sides) is the strand; a hair that ends at a flank, or in the open, is not.
+  if (o.target == MeasureTarget::kStrand && (bg.tip_face_sides == 2) != (cg.tip_face_sides == 2))
+    return bg.tip_face_sides == 2 ? PairContest::kFirstAtFace : PairContest::kSecondAtFace;
+  // Two parallel objects side by side, closer than either is wide, that the tip did not tell
+  // apart: one strand whose stripe matches the background, or a strand and its neighbour.
+  // Which is the strand, or whether their union is, the frame cannot say, whatever the scores.
+  const double gap_px = std::max(cl - br, bl - cr);
+  if (std::abs(c.axis.dx * b.axis.dy - c.axis.dy * b.axis.dx) < kParallelSine &&
+      gap_px < std::max(br - bl, cr - cl))
+    return PairContest::kSideBySide;
+  return c.score >= o.ambiguity_ratio * b.score ? PairContest::kSimilarScore
+                                                : PairContest::kOutscored;
+}
+
+std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const PairCandidate& c) {
+  assert(Ambiguous(contest));
+  return fmt::format(contest == PairContest::kSideBySide
+                         ? "two strand-like objects side by side: {} and {}"
+                         : "two strand-like pairs of similar score: {} and {}",
+                     Describe(b), Describe(c));
+}
+
+namespace {
+
+// Follows the best candidates of one channel on its full-resolution image; the first that holds
+// up is chosen (or the frame is ambiguous, or nothing holds up: r.status says which, and why).
+void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* result) {
+  SceneResult& r = *result;
+  const GreyImage img{channel, channel.depth() == CV_16U};
+
+  // Follow the best candidates on the full-resolution image; the first that holds up is chosen.
+  std::string first_reason;
+  int examined = 0;
+  for (int i = 0; i < static_cast<int>(r.candidates.size()) && examined < kMaxFollowed; ++i) {
+    PairCandidate& c = r.candidates[i];
+    if (!c.verdict.empty()) continue;
+    if (c.score < o.min_score) {
+      c.verdict = fmt::format("score below {:.0f}", o.min_score);
+      continue;
+    }
+    ++examined;
+    StrandGeometry g;
+    std::string why;
+    if (!FollowPair(img, o, c, r.edges[c.left].sign, r.edges[c.right].sign, &g, &why)) {
+      c.verdict = why;
+      if (first_reason.empty()) first_reason = why;
+      // The pairs this one outranked as their wider silhouette compete again, best first.
+      bool reinstated = false;
+      for (auto& inner : r.candidates) {
+        if (inner.suppressed_by != i) continue;
+        inner.suppressed_by = -1;
+        inner.verdict.clear();
+        reinstated = true;
+      }
+      if (reinstated) i = -1;
+      continue;
+    }
+    if (r.chosen < 0) {
+      r.chosen = i;
+      r.geometry = g;
+      c.verdict = "chosen";
+      continue;
+    }
+    // A second pair that holds up: ambiguous when it is a separate object of similar score.
+    const PairCandidate& b = r.candidates[r.chosen];
+    const PairContest contest = ContestPairs(b, r.geometry, c, g, o);
+    if (contest == PairContest::kSecondAtFace) {
+      r.candidates[r.chosen].verdict = kNotAtFaceVerdict;
+      r.runners_up.clear();
+      r.chosen = i;
+      r.geometry = g;
+      c.verdict = "chosen";
+      continue;
+    }
+    if (contest == PairContest::kFirstAtFace) {
+      c.verdict = kNotAtFaceVerdict;
+      continue;
+    }
+    if (Ambiguous(contest)) {
+      c.verdict = "as likely as the chosen pair";
+      r.status = FrameStatus::kAmbiguous;
+      r.detail = AmbiguityDetail(contest, b, c);
+      return;
+    }
+    c.verdict = fmt::format("scores {:.0f} % of the chosen pair", 100 * c.score / b.score);
+    r.runners_up.emplace_back(i, g);
+  }
+  if (r.chosen >= 0) {
+    r.status = FrameStatus::kValid;
+    r.detail.clear();
+    return;
+  }
+  const PairCandidate* top = nullptr;
+  for (const auto& c : r.candidates)
+    if (!top || c.score > top->score) top = &c;
+  if (top && top->score >= o.min_score && o.target == MeasureTarget::kStrand &&
+      first_reason.find("tip") != std::string::npos) {
+    r.status = FrameStatus::kNoTip;
+    r.detail = fmt::format("best pair ({}): {}", Describe(*top), first_reason);
+    return;
+  }
+  if (CutByBorder(img, r.edges, o.min_length_px)) {
+    r.status = FrameStatus::kTouchesBorder;
+    r.detail = "a long object runs into the frame or ROI side: its other edge is outside";
+    return;
+  }
+  r.status = FrameStatus::kNoStrand;
+  if (top) {
+    r.detail = fmt::format("best pair ({}) lost: {}", Describe(*top),
+                           top->verdict.empty() ? "no better candidate" : top->verdict);
+  } else {
+    r.detail = fmt::format("no pair of parallel edges at least {:.0f} px long ({} straight edges)",
+                           o.min_length_px, r.edges.size());
+  }
+}
+
+}  // namespace
+
+SceneResult FindScene(const std::vector<cv::Mat>& channels, const SceneOptions& o) {
+  // Each channel is searched on its own. They are tried best pair first: the first channel in
+  // which a pair holds up is used (a clear strand's internal lines may outscore its silhouette in
+  // luma and leave two look-alike pairs, while the silhouette stands alone in blue).
+  std::vector<SceneResult> found;
+  std::vector<double> top_score;
+  for (int ch = 0; ch < static_cast<int>(channels.size()); ++ch) {
+    const Detection d = DetectEdgePoints(channels[ch], o);
+    const std::vector<Piece> pieces = StraightPieces(d, o.max_tilt_deg);
+    SceneResult r;
+    r.channel = ch;
+    r.gradient_noise = d.noise / d.factor;
+    for (const Piece& p : pieces) {
+      EdgeSegment s = ToSegment(p, d);
+      if (s.length_px() >= o.min_length_px) r.edges.push_back(s);
+    }
+    r.candidates = PairSegments(d, r.edges, r.gradient_noise, channels[ch].cols, o);
+    for (auto& c : r.candidates) {
+      if (!InsideIsOneObject(d, c))
+        c.verdict = "spans separate objects: the background shows between its edges";
+    }
+    SuppressNested(o.target, &r.candidates);
+    double top = 0;
+    for (const auto& c : r.candidates)
+      if (c.verdict.empty()) top = std::max(top, c.score);
+    found.push_back(std::move(r));
+    top_score.push_back(top);
+  }
+  std::vector<int> order(found.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return top_score[a] > top_score[b]; });
+  for (int ch : order) {
+    if (top_score[ch] < o.min_score && ch != order.front()) break;
+    ChoosePair(channels[ch], o, &found[ch]);
+    if (found[ch].status == FrameStatus::kValid) return std::move(found[ch]);
+  }
+  // Nothing held up anywhere: the best channel's account of why.
+  return std::move(found[order.front()]);
+}
+
+}  // namespace clogscope::vision

@@ -1,0 +1,122 @@
+#pragma once
+
+#include <opencv2/core.hpp>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "vision/edges/grey_image.h"
+#include "vision/edges/polarity.h"
+#include "vision/scene/frame_status.h"
+
+namespace clogscope::vision {
+
+// How the strand (or filament) is looked for: a pair of long, straight, nearly parallel edges whose
+// separation holds along the axis, found from the image gradient (no global threshold).
+struct SceneOptions {
+  MeasureTarget target = MeasureTarget::kStrand;
+  Polarity polarity = Polarity::kAuto;  // forced: only pairs of that polarity count
+  double max_tilt_deg = 45.0;           // axes leaning more than this from vertical are ignored
+  double min_length_px = 30.0;          // shortest common stretch of the two edges
+  double min_width_px = 8.0;            // narrower pairs are lines (scratches, glints), not strands
+  double min_contrast = 15.0;    // edge step below this (grey levels of the data's range): too weak
+  double ambiguity_ratio = 0.8;  // a disjoint runner-up scoring this much of the best: ambiguous
+  double min_score = 15.0;       // below this no candidate is a strand (score units: px of edge)
+};
+
+// A straight piece of an intensity edge, ROI pixel coordinates at full resolution.
+struct EdgeSegment {
+  cv::Point2d top, bottom;  // ends, top.y <= bottom.y
+  int sign = 0;             // +1: brighter on the +x side, −1: darker on the +x side
+  double strength = 0;      // median |gradient| along it, grey levels per px
+  double coverage = 0;      // fraction of the sampled rows along it that hold an edge point
+  double length_px() const { return cv::norm(bottom - top); }
+};
+
+// One candidate: two edges as the strand's silhouette. The axis is the bisector of the pair.
+struct PairCandidate {
+  int left = -1, right = -1;            // indices into SceneResult::edges
+  Polarity polarity = Polarity::kAuto;  // bright, dark, or kMixed (brighter on one side only)
+  AxisFrame axis;                       // origin on the axis at the top of the common stretch
+  double left_u0 = 0, right_u0 = 0;     // edge lines u = u0 + slope·s in `axis`
+  double edge_slope = 0;
+  double length_px = 0;  // common stretch (from the segments)
+  double width_px = 0;   // perpendicular separation
+  double snr = 0;        // weaker edge's gradient over the gradient noise
+  double score = 0;
+  std::string verdict;     // "chosen", or why it lost
+  int suppressed_by = -1;  // the wider pair it lies inside (index into the candidates), if any
+};
+
+// The chosen pair, followed along the full-resolution image, with where it ends.
+struct StrandGeometry {
+  AxisFrame axis;  // origin on the axis: at the tip (strand) or the top of the stretch (filament)
+  double left_u0 = 0, right_u0 = 0, edge_slope = 0;
+  double width_px = 0;  // coarse width of the pair
+  int left_sign = 0, right_sign = 0;
+  Polarity polarity = Polarity::kAuto;
+  bool has_tip = false;
+  // Strand: the widest width between the tip and the straight part (die swell), px.
+  double tip_width_px = 0;
+  int tip_face_sides = 0;  // strand: on how many sides the nozzle's face shows at the tip (tip.h)
+  bool precise = false;    // edge lines from fitted calipers (tracking), not from the gradient
+  // Edge model per side: −1 decide from the calipers, 0 plain blurred step, 1 shaded (tracking
+  // keeps the first frame's decision).
+  int shading_left = -1, shading_right = -1;
+  // Tracking a filament: the straight part of the stretch measured last (px from origin; empty
+  // when none), kept while it stays straight so that the width comes from the same place.
+  double straight_s0_px = 0, straight_s1_px = 0;
+  double s_end = 0;  // where the pair ends downward (bed, obstacle or border), from origin
+  bool end_is_object = false;  // the pair ends at an object (bed) rather than the border
+  double score = 0;
+};
+
+struct SceneResult {
+  FrameStatus status = FrameStatus::kNoStrand;  // kValid when a pair was chosen
+  std::string detail;                           // why not, naming the best candidate
+  int channel = 0;                              // which of the prepared channels was used
+  double gradient_noise = 0;                    // grey levels per px
+  std::vector<EdgeSegment> edges;
+  std::vector<PairCandidate> candidates;  // best first
+  int chosen = -1;
+  StrandGeometry geometry;
+  // The other pairs that held up when followed, best first (candidate index and geometry): the
+  // measurement falls back to them when the chosen pair's calipers reject it.
+  std::vector<std::pair<int, StrandGeometry>> runners_up;
+};
+
+// How a second pair that held up (c, followed as cg) stands against the first (b, bg):
+// kNotRivals: not two separate objects of one polarity (a stripe inside, a gap beside);
+// kFirstAtFace / kSecondAtFace: the tip decides — only that one hangs from the nozzle's face;
+// kSideBySide: parallel and closer than either is wide (one strand with a stripe at the
+// background's level, or two strands): ambiguous whatever the scores;
+// kSimilarScore: c scores at least ambiguity_ratio of b: ambiguous; kOutscored: b wins.
+enum class PairContest {
+  kNotRivals,
+  kFirstAtFace,
+  kSecondAtFace,
+  kSideBySide,
+  kSimilarScore,
+  kOutscored
+};
+PairContest ContestPairs(const PairCandidate& b, const StrandGeometry& bg, const PairCandidate& c,
+                         const StrandGeometry& cg, const SceneOptions& options);
+inline bool Ambiguous(PairContest c) {
+  return c == PairContest::kSideBySide || c == PairContest::kSimilarScore;
+}
+// The verdict of a pair that loses to one hanging from the nozzle's face.
+inline constexpr const char* kNotAtFaceVerdict = "its top is not at the nozzle's face";
+// The `ambiguous` detail for a kSideBySide or kSimilarScore contest.
+std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const PairCandidate& c);
+
+// Finds the strand in one or more single-channel 8/16-bit views of the same ROI (grey, or a
+// colour frame's luma and channels): the channel whose best pair scores highest is used. Contrast
+// limits come from options.min_contrast, in the data's own range.
+SceneResult FindScene(const std::vector<cv::Mat>& channels, const SceneOptions& options);
+
+// Follows a known pair (from an earlier frame) in `grey`: finds its ends again. Used by tracking;
+// returns false when the pair's edges are not there.
+bool FollowPair(const GreyImage& img, const SceneOptions& options, const PairCandidate& pair,
+                int left_sign, int right_sign, StrandGeometry* out, std::string* why);
+
+}  // namespace clogscope::vision

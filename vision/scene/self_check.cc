@@ -1,0 +1,106 @@
+#include "vision/scene/self_check.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "common/robust.h"
+
+namespace clogscope::vision {
+namespace {
+
+constexpr int kRows = 8;
+constexpr double kMinReachPx = 20.0;       // how far out the outside is looked at, at least
+constexpr double kNearPx = 3.0;            // the background's level: this far beyond the blur
+constexpr double kMaxObjectLike = 0.4;     // of one side's outside samples
+constexpr double kMaxLevelMismatch = 1.0;  // of the object's contrast
+// One edge's residuals this many times the other's, and by this many grey levels.
+constexpr double kMaxResidualRatio = 2.0, kMinResidualExcess = 1.5;
+
+// Along u from the edge at u0 + slope·s, `dir` ±1, from `from` over `length` px: per px of distance
+// the median over kRows rows of the band (noise and a blob over a few rows do not count).
+std::vector<double> Strip(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
+                          double slope, double from, double dir, double length) {
+  std::vector<double> out, column;
+  for (double d = 0; d <= length; d += 1.0) {
+    column.clear();
+    for (int r = 0; r < kRows; ++r) {
+      const double s = s0 + (s1 - s0) * (r + 0.5) / kRows;
+      const double u = u0 + slope * s + dir * (from + d);
+      const double x = f.ImageX(s, u), y = f.ImageY(s, u);
+      if (img.InsideForBilinear(x, y)) column.push_back(img.Bilinear(x, y));
+    }
+    if (column.size() >= kRows / 2) out.push_back(Median(column));
+  }
+  return out;
+}
+
+}  // namespace
+
+SelfCheck CheckOutsideIsBackground(const GreyImage& img, const AxisFrame& f, double s0, double s1,
+                                   double left_u0, double right_u0, double slope, double blur_px) {
+  SelfCheck out;
+  const double width = right_u0 - left_u0;
+  const double gap = 3.0 * blur_px + 2.0;
+  if (width < 2 * gap + 2) return out;  // too thin to read an inside level
+  // The object's level just inside both edges.
+  std::vector<double> inside = Strip(img, f, s0, s1, left_u0, slope, gap, +1, 2.0);
+  const std::vector<double> inside_r = Strip(img, f, s0, s1, right_u0, slope, gap, -1, 2.0);
+  inside.insert(inside.end(), inside_r.begin(), inside_r.end());
+  if (inside.size() < 2) return out;
+  const double object = Median(inside);
+  // As far out as the edge fits' windows and what pulls them reach.
+  const double reach = kMinReachPx + 3.0 * blur_px;
+  double background[2];
+  for (int side = 0; side < 2; ++side) {
+    const double u0 = side == 0 ? left_u0 : right_u0, dir = side == 0 ? -1.0 : 1.0;
+    const std::vector<double> near = Strip(img, f, s0, s1, u0, slope, gap, dir, kNearPx);
+    const std::vector<double> far = Strip(img, f, s0, s1, u0, slope, gap, dir, reach);
+    if (near.size() < 2 || far.size() < 10) return out;  // the frame's border: not judged here
+    background[side] = Median(near);
+    const double step = std::abs(object - background[side]);
+    if (step <= 0) continue;
+    long object_like = 0;
+    // Not background: nearer the object's level than the background's (another object, a lamp's
+    // reflection behind the edge).
+    for (double v : far) object_like += std::abs(v - background[side]) > 0.5 * step;
+    const double fraction = static_cast<double>(object_like) / far.size();
+    if (fraction > kMaxObjectLike) {
+      out.passed = false;
+      out.why = fmt::format(
+          "the silhouette's outside is not background: {:.0f} % of the {:.0f} px beyond its {} "
+          "edge is nearer the object's level (another object, a reflection)",
+          100 * fraction, reach, side == 0 ? "left" : "right");
+      return out;
+    }
+  }
+  const double contrast = std::abs(object - 0.5 * (background[0] + background[1]));
+  if (std::abs(background[0] - background[1]) > kMaxLevelMismatch * contrast) {
+    out.passed = false;
+    out.why = fmt::format(
+        "the background outside its edges differs ({:.0f} and {:.0f} grey levels, the object "
+        "{:.0f}): not one object's silhouette",
+        background[0], background[1], object);
+  }
+  return out;
+}
+
+SelfCheck CheckEdgeResiduals(const std::vector<double>& left_rms,
+                             const std::vector<double>& right_rms) {
+  SelfCheck out;
+  if (left_rms.size() < 3 || right_rms.size() < 3) return out;
+  const double l = Median(left_rms), r = Median(right_rms);
+  const double worse = std::max(l, r), better = std::max(std::min(l, r), 1e-9);
+  if (worse > kMaxResidualRatio * better && worse - better > kMinResidualExcess) {
+    out.passed = false;
+    out.why = fmt::format(
+        "the {} edge fits a silhouette on a plain background {:.1f}× worse than the {} "
+        "(residuals {:.1f} and {:.1f} grey levels)",
+        l > r ? "left" : "right", worse / better, l > r ? "right" : "left", worse, better);
+  }
+  return out;
+}
+
+}  // namespace clogscope::vision

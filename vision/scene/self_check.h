@@ -1,0 +1,34 @@
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "vision/edges/grey_image.h"
+
+namespace clogscope::vision {
+
+// The self-checks after a strand is measured, each failing as `not_silhouette` with its reason: a
+// silhouette has the background outside it, at matching levels on both sides, and both its edges
+// fit a blurred step about as well. A thin object measured beside the real strand (a hair beside
+// it, a pair made of a hair's edge and the strand's), a lamp's reflection behind an edge or an
+// inner edge in a window fails one of them.
+struct SelfCheck {
+  bool passed = true;
+  std::string why;  // when not passed
+};
+
+// Samples the band s0..s1 outward from each fitted edge (u = left_u0 + slope·s, right likewise,
+// in axis frame f) beyond the edge's blur, over 20 px + 3 blurs, each px of distance the median
+// over the band's rows: fails when more than 40 % of one side's distances sit nearer the object's
+// level than that side's background, or when the two sides' backgrounds differ by more than the
+// object's contrast.
+SelfCheck CheckOutsideIsBackground(const GreyImage& img, const AxisFrame& f, double s0, double s1,
+                                   double left_u0, double right_u0, double slope, double blur_px);
+
+// The calipers' residual RMS of each edge's fit (grey levels): fails when one edge's median is
+// more than twice the other's and more than 1.5 grey levels above it (the noise is the frame's on
+// both sides).
+SelfCheck CheckEdgeResiduals(const std::vector<double>& left_rms,
+                             const std::vector<double>& right_rms);
+
+}  // namespace clogscope::vision

@@ -1,0 +1,303 @@
+#include "vision/scene/strand_measure.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+
+#include "common/robust.h"
+#include "vision/scene/calipers.h"
+#include "vision/scene/scene.h"
+#include "vision/scene/self_check.h"
+
+namespace clogscope::vision {
+namespace {
+constexpr size_t kMaxFallbacks = 2;             // runner-up pairs measured after the chosen one
+constexpr double kMinFallbackScoreRatio = 0.5;  // of the chosen pair's score
+// A second guess must be clearly strand-like: weak short pairs are what clutter makes.
+constexpr double kMinFallbackScoreFactor = 3.0;    // times the scene's minimum score
+constexpr double kStraightPartMarginCalipers = 6;  // tracking a filament: calipers beside its part
+
+// Statuses that say the pair was not the strand, rather than that the frame is poor.
+bool RejectsPair(FrameStatus s) {
+  return s == FrameStatus::kNoStrand || s == FrameStatus::kOccluded ||
+         s == FrameStatus::kTouchesBorder || s == FrameStatus::kBandOutsideFrame;
+}
+}  // namespace
+
+std::vector<cv::Mat> SearchChannels(const cv::Mat& frame, const cv::Rect& roi) {
+  if (frame.depth() != CV_8U && frame.depth() != CV_16U) {
+    throw std::invalid_argument("frame: unsupported pixel depth (need 8- or 16-bit integer)");
+  }
+  const cv::Mat view = frame(roi);
+  if (frame.channels() == 1) return {view};
+  if (frame.channels() != 3 && frame.channels() != 4) {
+    throw std::invalid_argument(
+        fmt::format("frame: unsupported channel count {} (need 1, 3 or 4)", frame.channels()));
+  }
+  std::vector<cv::Mat> out(1);
+  cv::cvtColor(view, out[0], frame.channels() == 3 ? cv::COLOR_BGR2GRAY : cv::COLOR_BGRA2GRAY);
+  std::vector<cv::Mat> planes;
+  cv::split(view, planes);
+  for (int c = 0; c < 3; ++c) out.push_back(planes[c]);
+  return out;
+}
+
+cv::Mat SearchChannel(const cv::Mat& frame, const cv::Rect& roi, int index) {
+  if (frame.channels() == 1) return frame(roi);
+  cv::Mat out;
+  if (index == 0) {  // luma alone: no need to split the other three
+    cv::cvtColor(frame(roi), out, frame.channels() == 3 ? cv::COLOR_BGR2GRAY : cv::COLOR_BGRA2GRAY);
+    return out;
+  }
+  cv::extractChannel(frame(roi), out, index - 1);
+  return out;
+}
+
+cv::Rect ResolveRoi(const cv::Mat& frame, const StrandMeasureOptions& opt) {
+  std::string why;
+  if (!opt.Validate(&why)) throw std::invalid_argument("measure options: " + why);
+  if (frame.empty()) throw std::invalid_argument("frame: empty image");
+  const cv::Rect roi = opt.roi.empty() ? cv::Rect(0, 0, frame.cols, frame.rows) : opt.roi;
+  if ((roi & cv::Rect(0, 0, frame.cols, frame.rows)) != roi) {
+    throw std::invalid_argument(fmt::format("--roi {},{},{},{} lies outside the {}x{} frame", roi.x,
+                                            roi.y, roi.width, roi.height, frame.cols, frame.rows));
+  }
+  return roi;
+}
+
+SceneOptions SceneOptionsFor(const StrandMeasureOptions& opt, double data_max) {
+  SceneOptions so;
+  so.target = opt.target;
+  so.polarity = opt.polarity;
+  so.max_tilt_deg = opt.max_tilt_deg;
+  so.min_length_px = opt.min_length_px;
+  so.min_contrast = opt.min_contrast_fraction * data_max;
+  return so;
+}
+
+double DataMax(const cv::Mat& image) {
+  if (image.depth() != CV_16U) return 255.0;
+  double lo = 0, hi = 0;
+  cv::minMaxLoc(image.reshape(1), &lo, &hi);
+  // The smallest bit depth of 8 to 16 that holds the largest value: 10- and 12-bit cameras write
+  // 16-bit files whose top bits are always zero.
+  int bits = 8;
+  while (bits < 16 && hi > (1 << bits) - 1) ++bits;
+  return (1 << bits) - 1.0;
+}
+
+BandPx DefaultBand(MeasureTarget target, double scale_um_per_px) {
+  if (!(scale_um_per_px > 0 && std::isfinite(scale_um_per_px)))
+    throw std::invalid_argument(fmt::format("pixel scale {}: must be positive", scale_um_per_px));
+  if (target == MeasureTarget::kFilament) return {0.0, kWholeStretchPx};
+  return {50.0 / scale_um_per_px, 150.0 / scale_um_per_px};
+}
+
+bool StrandMeasureOptions::Validate(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (roi.x < 0 || roi.y < 0 || roi.width < 0 || roi.height < 0)
+    return fail("roi must have non-negative x, y, width and height");
+  if (!roi.empty() && (roi.width < 16 || roi.height < 16))
+    return fail("roi must be at least 16x16 px");
+  if (!(band_start_px >= 0)) return fail("band start must not be negative");
+  if (!(band_height_px >= 4)) return fail("band height must be at least 4 px");
+  if (!(caliper_spacing_px >= 1 && caliper_spacing_px <= band_height_px))
+    return fail("caliper spacing must be between 1 px and the band height");
+  if (!(min_contrast_fraction > 0 && min_contrast_fraction < 1))
+    return fail("min contrast fraction must be in (0, 1)");
+  if (!(max_blur_px > 0)) return fail("max blur must be positive");
+  if (!(max_tilt_deg > 0 && max_tilt_deg < 80)) return fail("max tilt must be in (0, 80) degrees");
+  if (!(min_caliper_fraction > 0 && min_caliper_fraction <= 1))
+    return fail("min caliper fraction must be in (0, 1]");
+  if (!(min_length_px >= 8)) return fail("min length must be at least 8 px");
+  if (!(max_saturated_fraction >= 0 && max_saturated_fraction <= 1))
+    return fail("max saturated fraction must be in [0, 1]");
+  if (!(max_sigma_px > 0)) return fail("max sigma must be positive");
+  if (!(max_sigma_fraction >= 0)) return fail("max sigma fraction must not be negative");
+  return true;
+}
+
+StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions& opt) {
+  return FindAndMeasure(frame, opt, nullptr);
+}
+
+StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOptions& opt,
+                                 SceneResult* scene_out) {
+  const cv::Rect roi = ResolveRoi(frame, opt);
+  const std::vector<cv::Mat> channels = SearchChannels(frame, roi);
+  const double data_max = DataMax(frame(roi));
+  const SceneOptions scene_options = SceneOptionsFor(opt, data_max);
+  SceneResult scene = FindScene(channels, scene_options);
+  const cv::Mat& channel = channels[scene.channel];
+  StrandMeasurement m =
+      MeasureInScene(channel, data_max, scene.status, scene.detail, scene.geometry, roi, opt);
+  // The calipers see more than the pair search: when they reject the chosen pair (its width
+  // bends like a disc's, most of it is hidden, it runs off the frame), the next pair that held up
+  // gets its turn, as long as it scored near the chosen one.
+  if (scene.chosen >= 0 && RejectsPair(m.status)) {
+    PairCandidate& first = scene.candidates[scene.chosen];
+    first.verdict = fmt::format("measured {}: {}", FrameStatusName(m.status), m.detail);
+    for (size_t k = 0; k < scene.runners_up.size() && k < kMaxFallbacks; ++k) {
+      const auto& [index, g] = scene.runners_up[k];
+      PairCandidate& next = scene.candidates[index];
+      if (next.score < std::max(kMinFallbackScoreRatio * first.score,
+                                kMinFallbackScoreFactor * scene_options.min_score))
+        break;
+      // The pairs the first one outranked were weighed against it, not against each other.
+      PairContest contest = PairContest::kNotRivals;
+      size_t rival = 0;
+      for (size_t j = 0; j < scene.runners_up.size(); ++j) {
+        if (j == k) continue;
+        const auto& [other, other_g] = scene.runners_up[j];
+        contest = ContestPairs(next, g, scene.candidates[other], other_g, scene_options);
+        rival = j;
+        if (contest == PairContest::kFirstAtFace || contest == PairContest::kNotRivals ||
+            contest == PairContest::kOutscored)
+          continue;
+        break;
+      }
+      if (contest == PairContest::kSecondAtFace) {
+        next.verdict = kNotAtFaceVerdict;
+        continue;
+      }
+      if (Ambiguous(contest)) {
+        next.verdict = "as likely as another pair";
+        m.status = FrameStatus::kAmbiguous;
+        m.detail = AmbiguityDetail(contest, next, scene.candidates[scene.runners_up[rival].first]);
+        break;
+      }
+      StrandMeasurement alt =
+          MeasureInScene(channel, data_max, FrameStatus::kValid, "", g, roi, opt);
+      if (!alt.valid()) {
+        next.verdict = fmt::format("measured {}: {}", FrameStatusName(alt.status), alt.detail);
+        continue;
+      }
+      next.verdict = "chosen";
+      scene.chosen = index;
+      scene.geometry = g;
+      m = std::move(alt);
+      break;
+    }
+  }
+  // A colour channel clipped at the strand's edges flattens their profile and biases the fit:
+  // the same edges are measured in another channel that holds up unclipped. Single colour
+  // channels first: luma mixes the clipped one in.
+  if (m.status == FrameStatus::kSaturated && channels.size() > 1 && scene.chosen >= 0) {
+    for (size_t k = 1; k <= channels.size(); ++k) {
+      const size_t c = k % channels.size();  // 1, 2, 3, then 0 (luma)
+      if (static_cast<int>(c) == scene.channel) continue;
+      StrandMeasurement alt =
+          MeasureInScene(channels[c], data_max, FrameStatus::kValid, "", scene.geometry, roi, opt);
+      if (!alt.valid()) continue;
+      scene.channel = static_cast<int>(c);
+      m = std::move(alt);
+      break;
+    }
+  }
+  if (scene_out) *scene_out = std::move(scene);
+  return m;
+}
+
+StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameStatus status,
+                                 const std::string& detail, const StrandGeometry& g,
+                                 const cv::Rect& roi, const StrandMeasureOptions& opt) {
+  StrandMeasurement m;
+  m.status = status;
+  m.detail = detail;
+  if (status != FrameStatus::kValid) return m;
+  m.polarity = g.polarity;
+  m.tip_x_px = g.axis.ox + roi.x;
+  m.tip_y_px = g.axis.oy + roi.y;
+  m.angle_deg = std::atan2(g.axis.dx, g.axis.dy) * 180.0 / M_PI;
+
+  // The band: from the tip (strand) or the top of the stretch (filament), stopping short of where
+  // the pair ends (a bed, an obstacle, the frame) by more than the edge windows reach.
+  const double reach = 10.0 + 12.0 * std::abs(g.axis.dx);
+  const double band_s0 = opt.band_start_px + (opt.target == MeasureTarget::kFilament ? reach : 0);
+  double band_s1 = band_s0 + opt.band_height_px;
+  band_s1 = std::min(band_s1, g.s_end - reach);
+  const double min_band = opt.target == MeasureTarget::kStrand
+                              ? std::max(3.0 * opt.caliper_spacing_px, 0.3 * opt.band_height_px)
+                              : 3.0 * opt.caliper_spacing_px;
+  if (band_s1 - band_s0 < min_band) {
+    m.status = FrameStatus::kBandOutsideFrame;
+    m.detail = fmt::format("band {:.0f}-{:.0f} px below the {} runs into {} {:.0f} px below it",
+                           band_s0, band_s0 + std::min(opt.band_height_px, 1e5),
+                           opt.target == MeasureTarget::kStrand ? "tip" : "top of the stretch",
+                           g.end_is_object ? "an object" : "the frame or ROI edge", g.s_end);
+    return m;
+  }
+  // Tracking a filament: only the straight part measured last, with a margin wide enough for its
+  // end calipers' straightness windows and for the rough calipers beyond it, on the same caliper
+  // grid as the whole stretch. (The whole stretch costs a caliper fit every few px of it.)
+  double s0 = band_s0, s1 = band_s1;
+  if (opt.target == MeasureTarget::kFilament && g.precise && g.straight_s1_px > g.straight_s0_px) {
+    const double step = opt.caliper_spacing_px;
+    const double margin = kStraightPartMarginCalipers * step;
+    s0 = band_s0 + std::max(0.0, std::floor((g.straight_s0_px - margin - band_s0) / step)) * step;
+    s1 =
+        std::min(band_s1, band_s0 + std::ceil((g.straight_s1_px + margin - band_s0) / step) * step);
+    if (s1 - s0 < min_band) s0 = band_s0, s1 = band_s1;
+  }
+  const GreyImage img{channel, channel.depth() == CV_16U};
+  // A strand's calipers cover its whole band (its width may change along it: die swell), the
+  // spacing stretched to a whole number of calipers.
+  StrandMeasureOptions calipers = opt;
+  if (opt.target == MeasureTarget::kStrand)
+    calipers.caliper_spacing_px =
+        (s1 - s0) / std::max(1.0, std::round((s1 - s0) / opt.caliper_spacing_px));
+  MeasureCalipers(img, data_max, g, s0, s1, calipers, &m);
+  if (m.valid() && opt.target == MeasureTarget::kStrand) {
+    if (g.tip_width_px > 0) m.swell_ratio = std::max(1.0, g.tip_width_px / m.width_px);
+    const SelfCheck check =
+        CheckOutsideIsBackground(img, g.axis, m.band_start_px, m.band_end_px, m.left_u0_px,
+                                 m.right_u0_px, m.edge_slope, m.blur_px);
+    if (!check.passed) {
+      m.status = FrameStatus::kNotSilhouette;
+      m.detail = check.why;
+    }
+  }
+  const double max_sigma_px = std::max(opt.max_sigma_px, opt.max_sigma_fraction * m.width_px);
+  if (m.valid() && m.width_sigma_px > max_sigma_px) {
+    m.status = FrameStatus::kImprecise;
+    m.detail =
+        fmt::format("width {:.2f} ± {:.2f} px: σ above the {:.2f} px a valid width may carry",
+                    m.width_px, m.width_sigma_px, max_sigma_px);
+  }
+  return m;
+}
+
+int FlagWidthOutliers(std::vector<StrandMeasurement>& frames, int half_window, double k,
+                      double min_deviation_px) {
+  const int n = static_cast<int>(frames.size());
+  std::vector<bool> flag(n, false);
+  std::vector<double> window;
+  for (int i = 0; i < n; ++i) {
+    if (!frames[i].valid()) continue;
+    window.clear();
+    for (int j = std::max(0, i - half_window); j <= std::min(n - 1, i + half_window); ++j) {
+      if (frames[j].valid()) window.push_back(frames[j].width_px);
+    }
+    if (window.size() < 5) continue;
+    const double med = Median(window);
+    const double mad = Mad(window, med);
+    const double dev = std::abs(frames[i].width_px - med);
+    if (dev > k * 1.4826 * mad && dev > min_deviation_px) flag[i] = true;
+  }
+  int count = 0;
+  for (int i = 0; i < n; ++i) {
+    if (!flag[i]) continue;
+    frames[i].status = FrameStatus::kWidthOutlier;
+    frames[i].detail = fmt::format("width {:.2f} px far from its neighbours", frames[i].width_px);
+    ++count;
+  }
+  return count;
+}
+
+}  // namespace clogscope::vision

@@ -1,0 +1,136 @@
+#pragma once
+
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "vision/edges/caliper.h"
+#include "vision/edges/polarity.h"
+#include "vision/scene/frame_status.h"
+
+namespace clogscope::vision {
+
+// How the strand is found and measured in one frame. Lengths are in px of the frame.
+struct StrandMeasureOptions {
+  cv::Rect roi;  // region to search; empty = whole frame
+  Polarity polarity = Polarity::kAuto;
+  // The measurement band, along the strand axis below the nozzle tip. Defaults are the reference
+  // 50 µm and 150 µm at the nominal 3 µm/px.
+  double band_start_px = 50.0 / 3.0;
+  double band_height_px = 50.0;
+  double caliper_spacing_px = 4.0;      // thickness of one caliper along the axis
+  double min_contrast_fraction = 0.06;  // edge step below this fraction of full scale: low contrast
+  double max_blur_px = 6.0;             // fitted PSF sigma above this: out of focus
+  double max_tilt_deg = 45.0;           // strand axes leaning more than this are not strands
+  // kStrand: the band starts band_start_px below the nozzle tip. kFilament (also pins, needles):
+  // no tip; the band starts band_start_px below the top of the visible straight stretch and runs
+  // band_height_px along it (at most to its end).
+  MeasureTarget target = MeasureTarget::kStrand;
+  double min_length_px = 30.0;  // shortest straight stretch of both edges that counts as a strand
+  // Fit a lit cylinder's shading on the object side of each edge (edge_fit.h: FitShadedStep), so
+  // a front-lit strand's silhouette is found rather than the 50 % level of its sloping plateau.
+  bool shading = true;
+  double min_caliper_fraction = 0.5;     // fewer consistent calipers than this: occluded
+  double max_saturated_fraction = 0.05;  // more clipped pixels at the edges than this: saturated
+  // A valid width is good to max(0.3 px, 0.5 %) at 3σ: a width whose σ (the calipers' spread and
+  // the edge model's doubt) is above max(max_sigma_px, max_sigma_fraction·width) is `imprecise`.
+  double max_sigma_px = 0.1;
+  double max_sigma_fraction = 0.005 / 3;
+
+  bool Validate(std::string* why) const;
+};
+
+// A target's default band at a pixel scale: a strand's 50 µm from the tip, 150 µm long (the
+// reference experiment's); a filament's whole visible stretch.
+struct BandPx {
+  double start_px = 0;
+  double height_px = 0;
+};
+inline constexpr double kWholeStretchPx = 1e6;  // band height meaning "as far as the stretch goes"
+inline constexpr double kNominalScaleUmPerPx = 3.0;  // the reference camera's, when none is given
+BandPx DefaultBand(MeasureTarget target, double scale_um_per_px);
+
+// The result for one frame. Geometry is in full-frame pixel coordinates (ROI offset added).
+struct StrandMeasurement {
+  FrameStatus status = FrameStatus::kNoStrand;
+  std::string detail;  // human-readable reason when not valid
+  bool valid() const { return status == FrameStatus::kValid; }
+
+  double width_px = 0;
+  // Standard error of width_px: the calipers' spread, and the model's doubt (model_sigma_px).
+  double width_sigma_px = 0;
+  double model_sigma_px = 0;  // the part from an edge model chosen on weak evidence (shading)
+  double angle_deg = 0;       // strand axis from image vertical, + leaning to +x going down
+  double contrast = 0;        // median edge step, grey levels of the frame's bit depth
+  double blur_px = 0;         // median PSF sigma, pixel footprint removed
+  double tip_x_px = 0;  // nozzle tip on the axis (strand); top of the measured stretch (filament)
+  double tip_y_px = 0;
+  Polarity polarity = Polarity::kAuto;
+  int calipers_used = 0;
+  int calipers_total = 0;
+
+  // Measurement frame for overlays: origin at the tip, axis direction (down the strand), and the
+  // fitted edge lines u = left_u0_px + edge_slope·s (right likewise) in that frame.
+  bool has_geometry = false;
+  bool shading_left = false, shading_right = false;  // each side fitted with the shading model
+  double axis_dx = 0, axis_dy = 1;
+  double band_start_px = 0, band_end_px = 0;
+  double left_u0_px = 0, right_u0_px = 0, edge_slope = 0;
+  // The part of the band the width comes from: all of it, but for a filament whose edges are
+  // rough (knurl marks) over part of its stretch, its longest straight part (straight_run.h).
+  double straight_start_px = 0, straight_end_px = 0;
+  int rough_calipers = 0;  // filament: calipers whose edges are not straight
+  // Strand: the widest width between the tip and the band over width_px (die swell; 1 when the
+  // strand is no wider there).
+  double swell_ratio = 1;
+  std::vector<Caliper> calipers;
+};
+
+// Measures the strand width in one frame (8- or 16-bit; grey, BGR or BGRA; 16-bit frames holding
+// 10- or 12-bit data are judged against their data range). The strand is found by its edges (see
+// scene.h); for colour frames the channel with the best edge pair is measured. Expected failures
+// come back as a status with a reason; throws std::invalid_argument for frames of another pixel
+// type or options that do not validate.
+StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions& options);
+
+struct StrandGeometry;
+struct SceneOptions;
+struct SceneResult;
+// MeasureStrand that also hands back the scene it found (candidates, verdicts, chosen geometry)
+// when scene_out is given: for tracking and for inspect.
+StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOptions& options,
+                                 SceneResult* scene_out);
+
+// The second half of MeasureStrand: the band and calipers on a strand already found in `channel`
+// (the ROI view the scene chose). A status other than kValid is passed through with its detail.
+// Tracking calls it with the geometry of the last frame.
+StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameStatus status,
+                                 const std::string& detail, const StrandGeometry& geometry,
+                                 const cv::Rect& roi, const StrandMeasureOptions& options);
+
+// The ROI views the strand is looked for in: the grey frame, or a colour frame's luma and its B, G
+// and R channels (an orange strand on a blue background may show no luma edge at all); and one of
+// them by index.
+std::vector<cv::Mat> SearchChannels(const cv::Mat& frame, const cv::Rect& roi);
+cv::Mat SearchChannel(const cv::Mat& frame, const cv::Rect& roi, int index);
+
+// The options' ROI, or the whole frame; throws std::invalid_argument when the options do not
+// validate, the frame is empty or the ROI leaves it.
+cv::Rect ResolveRoi(const cv::Mat& frame, const StrandMeasureOptions& options);
+
+// Scene-finding options from the measurement options and the data's range.
+SceneOptions SceneOptionsFor(const StrandMeasureOptions& options, double data_max);
+
+// The largest value the frame's data can hold: 255 for 8 bit; for 16 bit, 2^b − 1 for the smallest
+// b (8…16) that holds its largest pixel (12-bit cameras write 16-bit files).
+double DataMax(const cv::Mat& image);
+
+// Marks valid frames whose width is far from the median of the valid frames within ±half_window
+// frames (robust: more than k·1.4826·MAD and more than min_deviation_px away) as kWidthOutlier.
+// Returns how many it marked.
+inline constexpr int kWidthOutlierHalfWindow = 25;  // frames either side a width is judged by
+int FlagWidthOutliers(std::vector<StrandMeasurement>& frames,
+                      int half_window = kWidthOutlierHalfWindow, double k = 6.0,
+                      double min_deviation_px = 1.0);
+
+}  // namespace clogscope::vision

@@ -1,0 +1,118 @@
+#include "vision/scene/track.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "vision/edges/straight_run.h"
+
+namespace clogscope::vision {
+namespace {
+constexpr double kTipHysteresisPx = 1.5;  // tip moves smaller than this keep the band in place
+
+// True when a filament's width came from (part of) the straight part measured before, as
+// FindStraightRun keeps it while it has enough straight calipers.
+bool KeptStraightPart(const StrandMeasurement& m, const StrandGeometry& before, double spacing_px) {
+  constexpr double kSlackPx = 0.5;
+  return m.valid() && m.straight_start_px >= before.straight_s0_px - kSlackPx &&
+         m.straight_end_px <= before.straight_s1_px + kSlackPx &&
+         m.straight_end_px - m.straight_start_px >=
+             StraightRunOptions{}.min_kept_calipers * spacing_px - kSlackPx;
+}
+}  // namespace
+
+StrandTracker::StrandTracker(const StrandMeasureOptions& options) : options_(options) {
+  std::string why;
+  if (!options_.Validate(&why)) throw std::invalid_argument("measure options: " + why);
+}
+
+StrandMeasurement StrandTracker::Measure(const cv::Mat& frame) {
+  StrandMeasurement m;
+  if (tracking_ && Follow(frame, &m)) {
+    ++tracked_frames_;
+    return m;
+  }
+  return Detect(frame);
+}
+
+StrandMeasurement StrandTracker::Detect(const cv::Mat& frame) {
+  ++full_detections_;
+  SceneResult scene;
+  StrandMeasurement m = FindAndMeasure(frame, options_, &scene);
+  if (m.valid()) Remember(scene, m, frame.size());
+  return m;
+}
+
+bool StrandTracker::Follow(const cv::Mat& frame, StrandMeasurement* out) {
+  const cv::Rect roi = ResolveRoi(frame, options_);
+  if (frame.size() != frame_size_) return false;
+  const cv::Mat channel = SearchChannel(frame, roi, scene_.channel);
+  const double data_max = DataMax(frame(roi));
+  StrandGeometry g = scene_.geometry;
+  if (options_.target == MeasureTarget::kStrand) {
+    // The tip is found again along the fitted edges (cheap walks); small moves are noise and keep
+    // the band where it was.
+    PairCandidate c;
+    c.axis = g.axis;
+    c.left_u0 = g.left_u0;
+    c.right_u0 = g.right_u0;
+    c.edge_slope = g.edge_slope;
+    c.width_px = g.width_px;
+    c.polarity = g.polarity;
+    c.score = g.score;
+    c.length_px = std::max(options_.min_length_px,
+                           std::min(g.s_end, options_.band_start_px + options_.band_height_px));
+    const GreyImage img{channel, channel.depth() == CV_16U};
+    StrandGeometry now;
+    std::string why;
+    if (!FollowPair(img, SceneOptionsFor(options_, data_max), c, g.left_sign, g.right_sign, &now,
+                    &why)) {
+      return false;
+    }
+    const double tip_shift = g.axis.S(now.axis.ox, now.axis.oy);
+    if (std::abs(tip_shift) > kTipHysteresisPx) {
+      g.axis = now.axis;
+      g.left_u0 = now.left_u0;
+      g.right_u0 = now.right_u0;
+      g.s_end = now.s_end;
+    } else if (std::abs(now.s_end + tip_shift - g.s_end) > kTipHysteresisPx) {
+      g.s_end = now.s_end + tip_shift;
+    }
+  }
+  StrandMeasurement m =
+      MeasureInScene(channel, data_max, FrameStatus::kValid, "", g, roi, options_);
+  if (options_.target == MeasureTarget::kFilament && g.straight_s1_px > g.straight_s0_px &&
+      !KeptStraightPart(m, g, options_.caliper_spacing_px)) {
+    // A filament is measured on its last straight part only (MeasureInScene); when that part no
+    // longer holds, the whole stretch is looked at for the longest straight part again.
+    g.straight_s0_px = g.straight_s1_px = 0;
+    m = MeasureInScene(channel, data_max, FrameStatus::kValid, "", g, roi, options_);
+  }
+  // A frame that does not measure like the last one is looked at afresh.
+  if (!m.valid() || std::abs(m.width_px - width_px_) > std::max(2.0, 0.03 * width_px_))
+    return false;
+  scene_.geometry = g;
+  Remember(scene_, m, frame.size());
+  *out = std::move(m);
+  return true;
+}
+
+void StrandTracker::Remember(const SceneResult& scene, const StrandMeasurement& m,
+                             cv::Size frame_size) {
+  if (&scene != &scene_) scene_ = scene;
+  // The next frame starts from this one's fitted edges, in the same axis frame.
+  StrandGeometry& g = scene_.geometry;
+  g.left_u0 = m.left_u0_px;
+  g.right_u0 = m.right_u0_px;
+  g.edge_slope = m.edge_slope;
+  g.width_px = m.width_px;
+  g.precise = true;
+  g.shading_left = m.shading_left ? 1 : 0;
+  g.shading_right = m.shading_right ? 1 : 0;
+  g.straight_s0_px = m.straight_start_px;
+  g.straight_s1_px = m.straight_end_px;
+  width_px_ = m.width_px;
+  frame_size_ = frame_size;
+  tracking_ = true;
+}
+
+}  // namespace clogscope::vision

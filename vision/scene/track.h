@@ -1,0 +1,42 @@
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include "vision/scene/scene.h"
+#include "vision/scene/strand_measure.h"
+
+namespace clogscope::vision {
+
+// Per-video state for measuring a strand frame after frame: after the first frame it looks for the
+// strand where it was (its fitted edges, tip and band) and falls back to full scene finding when
+// that fails, so a steady scene costs only the caliper fits. The band also stays where it was, so
+// frame-to-frame changes of the width are the strand's and not a different choice of calipers.
+class StrandTracker {
+ public:
+  // Throws std::invalid_argument when the options do not validate.
+  explicit StrandTracker(const StrandMeasureOptions& options);
+
+  // Measures one frame (as MeasureStrand does).
+  StrandMeasurement Measure(const cv::Mat& frame);
+
+  // Forgets the strand: the next frame is searched from scratch.
+  void Reset() { tracking_ = false; }
+
+  int full_detections() const { return full_detections_; }
+  int tracked_frames() const { return tracked_frames_; }
+
+ private:
+  StrandMeasurement Detect(const cv::Mat& frame);
+  bool Follow(const cv::Mat& frame, StrandMeasurement* out);
+  void Remember(const SceneResult& scene, const StrandMeasurement& m, cv::Size frame_size);
+
+  StrandMeasureOptions options_;
+  bool tracking_ = false;
+  SceneResult scene_;  // the last good scene; its geometry holds the fitted edge lines
+  double width_px_ = 0;
+  cv::Size frame_size_;
+  int full_detections_ = 0;
+  int tracked_frames_ = 0;
+};
+
+}  // namespace clogscope::vision

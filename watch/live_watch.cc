@@ -1,0 +1,354 @@
+#include "watch/live_watch.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <stdexcept>
+#include <thread>
+
+#include "vision/scene/scene_memory.h"
+#include "vision/scene/track.h"
+
+namespace clogscope::pipeline {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
+
+// Frames between the reader thread and the measuring thread. A live source keeps only the newest
+// frames (what a watch wants is now, not a backlog); a file's reader waits for room instead.
+class FrameQueue {
+ public:
+  FrameQueue(size_t capacity, bool drop_oldest) : capacity_(capacity), drop_oldest_(drop_oldest) {}
+
+  // False when the queue was closed while waiting for room.
+  bool Push(vision::LiveFrame frame, const std::atomic<bool>* stop) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (drop_oldest_) {
+      while (queue_.size() >= capacity_) {
+        queue_.pop_front();
+        ++skipped_;
+      }
+    } else {
+      room_.wait(lock, [&] { return queue_.size() < capacity_ || closed_ || stop->load(); });
+      if (closed_ || stop->load()) return false;
+    }
+    queue_.push_back(std::move(frame));
+    ready_.notify_one();
+    return true;
+  }
+  // Waits up to `timeout` for a frame. False with *ended set when the reader has finished.
+  bool Pop(vision::LiveFrame* out, Clock::duration timeout, bool* ended) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    ready_.wait_for(lock, timeout, [&] { return !queue_.empty() || closed_; });
+    *ended = queue_.empty() && closed_;
+    if (queue_.empty()) return false;
+    *out = std::move(queue_.front());
+    queue_.pop_front();
+    room_.notify_one();
+    return true;
+  }
+  void Close() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    closed_ = true;
+    ready_.notify_all();
+    room_.notify_all();
+  }
+  long long skipped() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return skipped_;
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::condition_variable ready_, room_;
+  std::deque<vision::LiveFrame> queue_;
+  size_t capacity_;
+  bool drop_oldest_;
+  bool closed_ = false;
+  long long skipped_ = 0;
+};
+
+// Reads frames into the queue; reopens a live source that drops, with back-off.
+struct Reader {
+  const LiveWatchOptions& options;
+  const LiveWatchEvents& events;
+  std::unique_ptr<vision::LiveSource> source;
+  FrameQueue* queue;
+  std::atomic<bool>* stop;
+  std::atomic<bool> up{true};
+  std::atomic<long long> reconnects{0};
+  std::string ended_because;  // written by the reader before Close()
+  std::string error;          // why the source could not go on, or empty
+
+  void Warn(const std::string& message) const {
+    if (events.on_warning) events.on_warning(message);
+  }
+
+  bool Wait(double seconds) const {
+    return vision::SleepUnlessStopped(Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                                         std::chrono::duration<double>(seconds)),
+                                      stop);
+  }
+
+  void Run() {
+    vision::LiveFrame frame;
+    std::string why;
+    while (!stop->load()) {
+      vision::LiveRead r;
+      try {
+        r = source->Next(&frame, &why);
+      } catch (const std::exception& e) {
+        // A source that cannot go on (its frames would take too much memory): the watch ends
+        // with the reason; nothing thrown may leave this thread.
+        error = fmt::format("{}: {}", options.source, e.what());
+        ended_because = "the source failed";
+        break;
+      }
+      if (r == vision::LiveRead::kFrame) {
+        if (!queue->Push(std::move(frame), stop)) break;
+        frame = vision::LiveFrame{};
+        continue;
+      }
+      if (r == vision::LiveRead::kEnd) {
+        ended_because = "the file ended";
+        break;
+      }
+      if (r == vision::LiveRead::kStopped) break;
+      // Dropped: reopen with back-off until it comes back or the watch stops.
+      up = false;
+      Warn(fmt::format("{}: {}; reconnecting", options.source, why));
+      source.reset();
+      double wait_s = options.reconnect_initial_s;
+      while (!source && Wait(wait_s)) {
+        try {
+          source = vision::LiveSource::Open(options.source, options.source_options, stop);
+        } catch (const std::invalid_argument& e) {
+          Warn(fmt::format("{} (next try in {:g} s)", e.what(),
+                           std::min(2 * wait_s, options.reconnect_max_s)));
+          wait_s = std::min(2 * wait_s, options.reconnect_max_s);
+        }
+      }
+      if (!source) break;
+      ++reconnects;
+      up = true;
+      Warn(options.source + ": reconnected");
+    }
+    if (ended_because.empty()) ended_because = "stopped";
+    queue->Close();
+  }
+};
+
+// The median and 95th percentile of the recent latencies.
+class LatencyLog {
+ public:
+  void Add(double ms) {
+    if (values_.size() == kKeep) values_.pop_front();
+    values_.push_back(ms);
+    max_ = std::max(max_, ms);
+  }
+  double Quantile(double q) const {
+    if (values_.empty()) return 0;
+    std::vector<double> v(values_.begin(), values_.end());
+    const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * v.size()));
+    std::nth_element(v.begin(), v.begin() + k, v.end());
+    return v[k];
+  }
+  double max() const { return max_; }
+
+ private:
+  static constexpr size_t kKeep = 512;
+  std::deque<double> values_;
+  double max_ = 0;
+};
+
+}  // namespace
+
+bool LiveWatchOptions::Validate(std::string* why) const {
+  if (source.empty())
+    *why = "no source given";
+  else if (!source_options.Validate(why) || !watch.Validate(why) || !strand.Validate(why))
+    return false;
+  else if (!(report_every_s >= 0 && report_every_s <= 3600))
+    *why = fmt::format("--report-s {:g}: must be in [0, 3600] s", report_every_s);
+  else if (!(duration_s >= 0))
+    *why = fmt::format("--duration-s {:g}: must not be negative", duration_s);
+  else if (!(reconnect_initial_s > 0 && reconnect_max_s >= reconnect_initial_s))
+    *why = "reconnect back-off: initial > 0 and max ≥ initial";
+  else if (extruder && !conversion)
+    *why = "--extruder needs a pixel scale (--scale-um-per-px or --calib) for the clog index";
+  else
+    return true;
+  return false;
+}
+
+void WatchBoard::Publish(WatchSnapshot snapshot) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  latest_ = std::move(snapshot);
+}
+
+void WatchBoard::PublishState(const WatchStatus& status, const std::optional<ClogIndex>& clog,
+                              const WatchCounters& counters) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  latest_.status = status;
+  latest_.clog = clog;
+  latest_.counters = counters;
+}
+
+WatchSnapshot WatchBoard::Read() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return latest_;
+}
+
+LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEvents& events,
+                              WatchBoard* board, std::atomic<bool>* stop) {
+  std::string why;
+  if (!options.Validate(&why)) throw std::invalid_argument(why);
+  return RunLiveWatch(options, events, board, stop,
+                      vision::LiveSource::Open(options.source, options.source_options, stop));
+}
+
+LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEvents& events,
+                              WatchBoard* board, std::atomic<bool>* stop,
+                              std::unique_ptr<vision::LiveSource> source) {
+  std::string why;
+  if (!options.Validate(&why)) throw std::invalid_argument(why);
+  WatchState state(options.watch, options.conversion);
+  vision::StrandTracker tracker(options.strand);
+  vision::SceneMemory memory(options.strand.target);
+  const auto started = Clock::now();
+
+  Reader reader{options, events, std::move(source), nullptr, stop, {true}, {0}, {}, {}};
+  const bool live = reader.source->live();
+  FrameQueue queue(2, /*drop_oldest=*/live || options.source_options.realtime);
+  reader.queue = &queue;
+  WatchCounters counters;
+  counters.source = options.source;
+  counters.source_kind = vision::LiveSourceKindName(reader.source->kind());
+  std::thread reading([&] { reader.Run(); });
+
+  const double report_every =
+      options.report_every_s > 0 ? options.report_every_s : options.watch.window_s;
+  LiveWatchSummary summary;
+  LatencyLog latency;
+  std::optional<ClogIndex> clog;
+  std::optional<double> next_report_s;
+  bool warned_measure = false;
+  const auto emit = [&](const std::string& event) {
+    if (events.on_line) events.on_line(StatusJson(state.status(), clog, counters, event));
+  };
+  const auto update_counters = [&] {
+    counters.frames_skipped_total = queue.skipped();
+    counters.reconnects_total = reader.reconnects;
+    counters.alerts_total = state.status().level_changes;
+    counters.latency_median_ms = latency.Quantile(0.5);
+    counters.latency_max_ms = latency.max();
+    counters.uptime_s = Seconds(Clock::now() - started);
+  };
+  const auto after_update = [&](bool changed, double t) {
+    if (options.extruder) {
+      std::string no_index;
+      clog = ComputeClogIndex(*options.extruder, options.temperature_c, state.status(), &no_index);
+    }
+    update_counters();
+    if (changed) {
+      emit("level");
+      if (events.on_level_change) events.on_level_change(state.status(), clog);
+    }
+    if (!next_report_s) next_report_s = t + report_every;
+    if (t >= *next_report_s) {
+      emit("status");
+      // The next slot on the same grid after t (frames may skip slots).
+      *next_report_s += report_every * (std::floor((t - *next_report_s) / report_every) + 1);
+    }
+  };
+
+  vision::LiveFrame frame;
+  while (true) {
+    bool ended = false;
+    if (options.duration_s > 0 && Seconds(Clock::now() - started) >= options.duration_s) {
+      summary.ended_because = "--duration-s reached";
+      break;
+    }
+    if (stop->load()) {
+      summary.ended_because = "stopped";
+      break;
+    }
+    if (!queue.Pop(&frame, std::chrono::milliseconds(100), &ended)) {
+      if (ended) {
+        summary.ended_because = reader.ended_because;
+        summary.error = reader.error;
+        break;
+      }
+      if (!live) continue;  // a file's clock is its own: no frame, no time
+      state.SetSourceUp(reader.up);
+      const double t = Seconds(Clock::now() - started);
+      const bool changed = state.Tick(t);
+      after_update(changed, t);
+      if (board) board->PublishState(state.status(), clog, counters);
+      continue;
+    }
+    // A file read as fast as it decodes is read ahead by design: its frames' wait in the queue is
+    // no latency anyone sees, so theirs counts from here.
+    if (!live && !options.source_options.realtime) frame.arrival = Clock::now();
+    // Measure; a frame that cannot be measured is a frame without a view, never a stop.
+    vision::StrandMeasurement m;
+    FrameView view = FrameView::kNothing;
+    if (!frame.image.empty()) {
+      try {
+        m = tracker.Measure(frame.image);
+        if (m.valid()) {
+          view = FrameView::kStrand;
+          memory.Remember(frame.image, m);
+        } else if (memory.SeesNozzle(frame.image)) {
+          view = FrameView::kNozzleOnly;
+        }
+      } catch (const std::exception& e) {
+        m = vision::StrandMeasurement{};
+        m.detail = e.what();
+        if (!warned_measure && events.on_warning)
+          events.on_warning(
+              fmt::format("{}: frame {} not measured: {}", options.source, frame.index, e.what()));
+        warned_measure = true;
+      }
+    } else {
+      m.status = vision::FrameStatus::kUnreadable;
+      m.detail = frame.error;
+    }
+    const double t = live ? Seconds(frame.arrival - started) : frame.time_s;
+    state.SetSourceUp(true);
+    const bool changed = state.Add(t, view, m.width_px);
+    ++counters.frames_total;
+    counters.frames_valid_total += view == FrameView::kStrand;
+    after_update(changed, t);
+    if (board) {
+      board->Publish({state.status(), clog, counters, std::move(frame.image), std::move(m),
+                      counters.frames_total});
+    }
+    // Arrival (decoded, in hand) to the state published: what a reader of /status waits for.
+    latency.Add(1e3 * Seconds(Clock::now() - frame.arrival));
+    frame = vision::LiveFrame{};
+  }
+  stop->store(true);  // the reader stops too
+  queue.Close();
+  reading.join();
+  update_counters();
+  emit("stop");
+  summary.frames = counters.frames_total;
+  summary.valid_frames = counters.frames_valid_total;
+  summary.skipped_frames = queue.skipped();
+  summary.reconnects = reader.reconnects;
+  summary.level_changes = state.status().level_changes;
+  summary.final_level = state.status().level;
+  summary.latency_median_ms = latency.Quantile(0.5);
+  summary.latency_p95_ms = latency.Quantile(0.95);
+  summary.latency_max_ms = latency.max();
+  summary.seconds = Seconds(Clock::now() - started);
+  return summary;
+}
+
+}  // namespace clogscope::pipeline

@@ -1,0 +1,93 @@
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <mutex>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+
+#include "calib/pixel_scale.h"
+#include "model/parameters.h"
+#include "vision/io/live_source.h"
+#include "vision/scene/strand_measure.h"
+#include "watch/watch_report.h"
+#include "watch/watch_state.h"
+
+namespace clogscope::pipeline {
+
+struct LiveWatchOptions {
+  std::string source;  // device, stream URL, video file or folder (vision::LiveSource)
+  vision::LiveSourceOptions source_options;
+  vision::StrandMeasureOptions strand;                // band already in px
+  std::optional<calib::ScaleCalibration> conversion;  // px → µm; nullopt: px only
+  WatchOptions watch;
+  std::optional<model::ExtruderParams> extruder;  // the clog index, when given
+  double temperature_c = 0;                       // the nozzle's, for the clog index
+  double report_every_s = 0;                      // periodic status line; 0: every window_s
+  double duration_s = 0;                          // stop after this long; 0: until stopped/ended
+  double reconnect_initial_s = 0.5;               // back-off after a drop: doubles up to max
+  double reconnect_max_s = 10;
+  bool Validate(std::string* why) const;
+};
+
+// The latest state, shared with readers on other threads (the HTTP server).
+struct WatchSnapshot {
+  WatchStatus status;
+  std::optional<ClogIndex> clog;
+  WatchCounters counters;
+  cv::Mat frame;                          // the latest frame, as read
+  vision::StrandMeasurement measurement;  // and what was measured in it
+  long long sequence = 0;                 // frames published so far
+};
+
+class WatchBoard {
+ public:
+  void Publish(WatchSnapshot snapshot);
+  // The state without a new frame (time passing while none arrive): the latest frame stays.
+  void PublishState(const WatchStatus& status, const std::optional<ClogIndex>& clog,
+                    const WatchCounters& counters);
+  WatchSnapshot Read() const;  // a copy (the frame is shared, never written again)
+
+ private:
+  mutable std::mutex mutex_;
+  WatchSnapshot latest_;
+};
+
+// What the watch tells its caller, on the measuring thread.
+struct LiveWatchEvents {
+  // One JSON line (StatusJson): every report_every_s, on every level change and at the stop.
+  std::function<void(const std::string& line)> on_line;
+  // On every level change, after its line.
+  std::function<void(const WatchStatus&, const std::optional<ClogIndex>&)> on_level_change;
+  // Warnings worth a log line (the source dropped, reconnecting, a frame that could not be
+  // measured).
+  std::function<void(const std::string& message)> on_warning;
+};
+
+struct LiveWatchSummary {
+  long long frames = 0, valid_frames = 0, skipped_frames = 0, reconnects = 0;
+  int level_changes = 0;
+  WatchLevel final_level = WatchLevel::kOk;
+  std::string ended_because;  // "the file ended", "stopped", "--duration-s reached"
+  std::string error;          // the one line of a source that failed mid-way, or empty
+  double latency_median_ms = 0, latency_p95_ms = 0, latency_max_ms = 0;
+  double seconds = 0;
+};
+
+// Watches SOURCE until *stop turns true, a file ends, or duration_s passes: a reader thread takes
+// frames from the source (reopening a live source that drops, with back-off, while the state says
+// no_view), and this thread measures each one (tracking the strand), feeds the rolling state and
+// publishes it to `board`. A live source's newest frame wins when measuring falls behind (the
+// skipped frames are counted); a file's frames are all measured. Throws std::invalid_argument
+// when the options do not validate or the source cannot be opened at the start. Sets *stop on
+// return (the reader thread ends with it).
+LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEvents& events,
+                              WatchBoard* board, std::atomic<bool>* stop);
+// The same on a source already open (benchmarks and tests feed their own); a drop reopens
+// options.source.
+LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEvents& events,
+                              WatchBoard* board, std::atomic<bool>* stop,
+                              std::unique_ptr<vision::LiveSource> source);
+
+}  // namespace clogscope::pipeline

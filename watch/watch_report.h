@@ -1,0 +1,48 @@
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "model/parameters.h"
+#include "watch/watch_state.h"
+
+namespace clogscope::pipeline {
+
+// What the drift means physically (predictor.md): the predictor run at the baseline and at the
+// current diameter, both at temperature_c.
+struct ClogIndex {
+  double temperature_c = 0;
+  double back_pressure_ratio = 1;     // F_bp / F_bp,0
+  double vibration_increase_pct = 0;  // (A / A_0 − 1) · 100 at the mount's natural frequency
+  std::optional<double> current_ma;   // feeding motor current at the current diameter
+};
+
+// nullopt with the reason in *why when the predictor refuses the diameters (e.g. wider than the
+// entry bore) or the status has no drift yet.
+std::optional<ClogIndex> ComputeClogIndex(const model::ExtruderParams& params, double temperature_c,
+                                          const WatchStatus& status, std::string* why);
+
+// Counters of the watch run that go with the state.
+struct WatchCounters {
+  std::string source;
+  std::string source_kind;
+  long long frames_total = 0;          // frames received
+  long long frames_valid_total = 0;    // with a width
+  long long frames_skipped_total = 0;  // dropped because measurement fell behind a live source
+  long long reconnects_total = 0;
+  long long alerts_total = 0;    // level changes
+  double latency_median_ms = 0;  // frame arrival to state update, over the recent frames
+  double latency_max_ms = 0;
+  double uptime_s = 0;
+};
+
+// The rolling state as one line of JSON (no newline): the /status document and the log's lines.
+// `event` is "status" for the periodic line, "level" for a level change, "stop" for the last.
+std::string StatusJson(const WatchStatus& status, const std::optional<ClogIndex>& clog,
+                       const WatchCounters& counters, const std::string& event);
+
+// The same as Prometheus text exposition format (version 0.0.4), metrics prefixed clogscope_.
+std::string PrometheusText(const WatchStatus& status, const std::optional<ClogIndex>& clog,
+                           const WatchCounters& counters);
+
+}  // namespace clogscope::pipeline
