@@ -1,4 +1,3 @@
-#include "apps/band.h"
 #include "apps/inspect_command.h"
 
 #include <fmt/format.h>
@@ -10,6 +9,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "apps/band.h"
 #include "apps/cli_util.h"
 #include "common/path_check.h"
 #include "vision/io/frame_source.h"
@@ -134,7 +134,7 @@ InspectReport InspectInput(const InspectCommandOptions& o) {
         "score {:5.0f}  {}\n",
         i + 1, c.width_px, c.length_px, std::atan2(c.axis.dx, c.axis.dy) * 180 / M_PI,
         vision::PolarityName(c.polarity), c.snr, c.score,
-        c.verdict.empty() ? "not examined" : c.verdict);
+        c.verdict == vision::PairVerdict::kNotExamined ? "not examined" : c.why);
   }
   if (rep.scene.candidates.empty()) t += "  none\n";
   if (m.valid()) {

@@ -126,9 +126,7 @@ void DrawCandidates(cv::Mat& overlay, const SceneResult& scene, cv::Point roi_of
   for (int i = std::min<int>(max_candidates, scene.candidates.size()) - 1; i >= 0; --i) {
     const PairCandidate& c = scene.candidates[i];
     const bool chosen = i == scene.chosen;
-    const bool ruled_out = c.verdict.find("inside") != std::string::npos ||
-                           c.verdict.find("spans") != std::string::npos ||
-                           c.verdict.find("tip") != std::string::npos;
+    const bool ruled_out = RulesOut(c.verdict);
     const cv::Scalar colour = chosen ? kGreen : ruled_out ? kGrey : kOrange;
     for (double u0 : {c.left_u0, c.right_u0}) {
       const cv::Point2d a(c.axis.ImageX(0, u0), c.axis.ImageY(0, u0));

@@ -260,7 +260,9 @@ void SuppressNested(MeasureTarget target, std::vector<PairCandidate>* cands) {
   auto& c = *cands;
   for (size_t i = 0; i < c.size(); ++i) {
     for (size_t j = 0; j < c.size(); ++j) {
-      if (i == j || !c[j].verdict.empty() || !c[i].verdict.empty()) continue;
+      if (i == j || c[j].verdict != PairVerdict::kNotExamined ||
+          c[i].verdict != PairVerdict::kNotExamined)
+        continue;
       if (c[i].width_px <= c[j].width_px + 3.0) continue;
       // Inside, or sharing one edge and inside with the other (half a highlight stripe with the
       // strand's far edge; a shading ridge with the other silhouette).
@@ -282,7 +284,8 @@ void SuppressNested(MeasureTarget target, std::vector<PairCandidate>* cands) {
            (c[i].polarity == Polarity::kDarkOnBright && c[j].polarity == Polarity::kBrightOnDark));
       const bool same_kind = c[i].polarity == c[j].polarity;
       if (c[i].score >= (same_kind || opposite ? 0.3 : 0.8) * c[j].score) {
-        c[j].verdict = fmt::format("inside a wider pair ({:.1f} px)", c[i].width_px);
+        c[j].verdict = PairVerdict::kInsideWider;
+        c[j].why = fmt::format("inside a wider pair ({:.1f} px)", c[i].width_px);
         c[j].suppressed_by = static_cast<int>(i);
       }
     }
@@ -468,11 +471,12 @@ std::string Describe(const PairCandidate& c) {
 }  // namespace
 
 bool FollowPair(const GreyImage& img, const SceneOptions& o, const PairCandidate& c, int left_sign,
-                int right_sign, StrandGeometry* g, std::string* why) {
+                int right_sign, StrandGeometry* g, PairVerdict* failure, std::string* why) {
   const AxisFrame& a = c.axis;
   const double ref_l = ReferenceContrast(img, a, c.left_u0, c.edge_slope, left_sign, c.length_px);
   const double ref_r = ReferenceContrast(img, a, c.right_u0, c.edge_slope, right_sign, c.length_px);
   if (!(ref_l > 0.5 * o.min_contrast && ref_r > 0.5 * o.min_contrast)) {
+    *failure = PairVerdict::kWeakEdges;
     *why = fmt::format("edge contrast {:.0f}/{:.0f} too weak along the pair", ref_l, ref_r);
     return false;
   }
@@ -491,6 +495,7 @@ bool FollowPair(const GreyImage& img, const SceneOptions& o, const PairCandidate
   g->has_tip = up_l.at_object && up_r.at_object;
   if (o.target == MeasureTarget::kStrand) {
     if (!g->has_tip) {
+      *failure = PairVerdict::kNoTip;
       *why = up_l.at_object || up_r.at_object
                  ? "only one edge ends upward: no nozzle tip across the strand"
                  : "the edges run to the frame or ROI top: no nozzle tip in view";
@@ -505,6 +510,7 @@ bool FollowPair(const GreyImage& img, const SceneOptions& o, const PairCandidate
     // A nozzle face ends both edges together (a strand hanging up to ~8° off the nozzle axis).
     const double mismatch = std::abs(up_l.s - up_r.s);
     if (!trace.found && mismatch > std::max(4.0, 0.14 * c.width_px)) {
+      *failure = PairVerdict::kNoTip;
       *why = fmt::format("the edges end {:.0f} px apart: no common nozzle tip", mismatch);
       return false;
     }
@@ -537,7 +543,10 @@ bool FollowPair(const GreyImage& img, const SceneOptions& o, const PairCandidate
   return true;
 }
 
-namespace {}  // namespace
+bool RulesOut(PairVerdict v) {
+  return v == PairVerdict::kSpansObjects || v == PairVerdict::kInsideWider ||
+         v == PairVerdict::kNoTip || v == PairVerdict::kNotAtFace;
+}
 
 PairContest ContestPairs(const PairCandidate& b, const StrandGeometry& bg, const PairCandidate& c,
                          const StrandGeometry& cg, const SceneOptions& o) {
@@ -581,26 +590,31 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
 
   // Follow the best candidates on the full-resolution image; the first that holds up is chosen.
   std::string first_reason;
+  PairVerdict first_failure = PairVerdict::kNotExamined;
   int examined = 0;
   for (int i = 0; i < static_cast<int>(r.candidates.size()) && examined < kMaxFollowed; ++i) {
     PairCandidate& c = r.candidates[i];
-    if (!c.verdict.empty()) continue;
+    if (c.verdict != PairVerdict::kNotExamined) continue;
     if (c.score < o.min_score) {
-      c.verdict = fmt::format("score below {:.0f}", o.min_score);
+      c.verdict = PairVerdict::kScoreBelow;
+      c.why = fmt::format("score below {:.0f}", o.min_score);
       continue;
     }
     ++examined;
     StrandGeometry g;
-    std::string why;
-    if (!FollowPair(img, o, c, r.edges[c.left].sign, r.edges[c.right].sign, &g, &why)) {
-      c.verdict = why;
-      if (first_reason.empty()) first_reason = why;
+    if (!FollowPair(img, o, c, r.edges[c.left].sign, r.edges[c.right].sign, &g, &c.verdict,
+                    &c.why)) {
+      if (first_reason.empty()) {
+        first_reason = c.why;
+        first_failure = c.verdict;
+      }
       // The pairs this one outranked as their wider silhouette compete again, best first.
       bool reinstated = false;
       for (auto& inner : r.candidates) {
         if (inner.suppressed_by != i) continue;
         inner.suppressed_by = -1;
-        inner.verdict.clear();
+        inner.verdict = PairVerdict::kNotExamined;
+        inner.why.clear();
         reinstated = true;
       }
       if (reinstated) i = -1;
@@ -609,31 +623,37 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
     if (r.chosen < 0) {
       r.chosen = i;
       r.geometry = g;
-      c.verdict = "chosen";
+      c.verdict = PairVerdict::kChosen;
+      c.why = "chosen";
       continue;
     }
     // A second pair that holds up: ambiguous when it is a separate object of similar score.
     const PairCandidate& b = r.candidates[r.chosen];
     const PairContest contest = ContestPairs(b, r.geometry, c, g, o);
     if (contest == PairContest::kSecondAtFace) {
-      r.candidates[r.chosen].verdict = kNotAtFaceVerdict;
+      r.candidates[r.chosen].verdict = PairVerdict::kNotAtFace;
+      r.candidates[r.chosen].why = kNotAtFaceWhy;
       r.runners_up.clear();
       r.chosen = i;
       r.geometry = g;
-      c.verdict = "chosen";
+      c.verdict = PairVerdict::kChosen;
+      c.why = "chosen";
       continue;
     }
     if (contest == PairContest::kFirstAtFace) {
-      c.verdict = kNotAtFaceVerdict;
+      c.verdict = PairVerdict::kNotAtFace;
+      c.why = kNotAtFaceWhy;
       continue;
     }
     if (Ambiguous(contest)) {
-      c.verdict = "as likely as the chosen pair";
+      c.verdict = PairVerdict::kAsLikely;
+      c.why = "as likely as the chosen pair";
       r.status = FrameStatus::kAmbiguous;
       r.detail = AmbiguityDetail(contest, b, c);
       return;
     }
-    c.verdict = fmt::format("scores {:.0f} % of the chosen pair", 100 * c.score / b.score);
+    c.verdict = PairVerdict::kOutscored;
+    c.why = fmt::format("scores {:.0f} % of the chosen pair", 100 * c.score / b.score);
     r.runners_up.emplace_back(i, g);
   }
   if (r.chosen >= 0) {
@@ -645,7 +665,7 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
   for (const auto& c : r.candidates)
     if (!top || c.score > top->score) top = &c;
   if (top && top->score >= o.min_score && o.target == MeasureTarget::kStrand &&
-      first_reason.find("tip") != std::string::npos) {
+      first_failure == PairVerdict::kNoTip) {
     r.status = FrameStatus::kNoTip;
     r.detail = fmt::format("best pair ({}): {}", Describe(*top), first_reason);
     return;
@@ -657,8 +677,9 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
   }
   r.status = FrameStatus::kNoStrand;
   if (top) {
-    r.detail = fmt::format("best pair ({}) lost: {}", Describe(*top),
-                           top->verdict.empty() ? "no better candidate" : top->verdict);
+    r.detail =
+        fmt::format("best pair ({}) lost: {}", Describe(*top),
+                    top->verdict == PairVerdict::kNotExamined ? "no better candidate" : top->why);
   } else {
     r.detail = fmt::format("no pair of parallel edges at least {:.0f} px long ({} straight edges)",
                            o.min_length_px, r.edges.size());
@@ -685,13 +706,15 @@ SceneResult FindScene(const std::vector<cv::Mat>& channels, const SceneOptions& 
     }
     r.candidates = PairSegments(d, r.edges, r.gradient_noise, channels[ch].cols, o);
     for (auto& c : r.candidates) {
-      if (!InsideIsOneObject(d, c))
-        c.verdict = "spans separate objects: the background shows between its edges";
+      if (!InsideIsOneObject(d, c)) {
+        c.verdict = PairVerdict::kSpansObjects;
+        c.why = "spans separate objects: the background shows between its edges";
+      }
     }
     SuppressNested(o.target, &r.candidates);
     double top = 0;
     for (const auto& c : r.candidates)
-      if (c.verdict.empty()) top = std::max(top, c.score);
+      if (c.verdict == PairVerdict::kNotExamined) top = std::max(top, c.score);
     found.push_back(std::move(r));
     top_score.push_back(top);
   }

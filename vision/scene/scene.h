@@ -33,6 +33,24 @@ struct EdgeSegment {
   double length_px() const { return cv::norm(bottom - top); }
 };
 
+// What became of a candidate pair: chosen, or why not. Overlays colour by it and the frame's
+// reason follows from it; PairCandidate::why says it in words, with its numbers.
+enum class PairVerdict {
+  kNotExamined,
+  kChosen,
+  kSpansObjects,     // the background shows between its edges
+  kInsideWider,      // inside a wider pair: a stripe, a lens's core, a clear strand's lines
+  kScoreBelow,       // below the minimum score
+  kWeakEdges,        // its edges' contrast fades along the full-resolution image
+  kNoTip,            // its edges do not end together at a nozzle tip
+  kNotAtFace,        // another pair hangs from the nozzle's face; this one does not
+  kAsLikely,         // a rival as likely as it: the frame is ambiguous
+  kOutscored,        // held up, but scored clearly below the chosen pair
+  kMeasuredRefused,  // chosen, then refused by the calipers (its measurement's status)
+};
+// A verdict that rules the pair out as the object, rather than ranking it below another.
+bool RulesOut(PairVerdict verdict);
+
 // One candidate: two edges as the strand's silhouette. The axis is the bisector of the pair.
 struct PairCandidate {
   int left = -1, right = -1;            // indices into SceneResult::edges
@@ -44,7 +62,8 @@ struct PairCandidate {
   double width_px = 0;   // perpendicular separation
   double snr = 0;        // weaker edge's gradient over the gradient noise
   double score = 0;
-  std::string verdict;     // "chosen", or why it lost
+  PairVerdict verdict = PairVerdict::kNotExamined;
+  std::string why;         // the verdict in words
   int suppressed_by = -1;  // the wider pair it lies inside (index into the candidates), if any
 };
 
@@ -104,8 +123,8 @@ PairContest ContestPairs(const PairCandidate& b, const StrandGeometry& bg, const
 inline bool Ambiguous(PairContest c) {
   return c == PairContest::kSideBySide || c == PairContest::kSimilarScore;
 }
-// The verdict of a pair that loses to one hanging from the nozzle's face.
-inline constexpr const char* kNotAtFaceVerdict = "its top is not at the nozzle's face";
+// The words of a kNotAtFace verdict.
+inline constexpr const char* kNotAtFaceWhy = "its top is not at the nozzle's face";
 // The `ambiguous` detail for a kSideBySide or kSimilarScore contest.
 std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const PairCandidate& c);
 
@@ -115,8 +134,10 @@ std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const P
 SceneResult FindScene(const std::vector<cv::Mat>& channels, const SceneOptions& options);
 
 // Follows a known pair (from an earlier frame) in `grey`: finds its ends again. Used by tracking;
-// returns false when the pair's edges are not there.
+// returns false when the pair's edges are not there, with the verdict (kWeakEdges or kNoTip) and
+// why in words.
 bool FollowPair(const GreyImage& img, const SceneOptions& options, const PairCandidate& pair,
-                int left_sign, int right_sign, StrandGeometry* out, std::string* why);
+                int left_sign, int right_sign, StrandGeometry* out, PairVerdict* failure,
+                std::string* why);
 
 }  // namespace clogscope::vision

@@ -142,7 +142,8 @@ StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOption
   // gets its turn, as long as it scored near the chosen one.
   if (scene.chosen >= 0 && RejectsPair(m.status)) {
     PairCandidate& first = scene.candidates[scene.chosen];
-    first.verdict = fmt::format("measured {}: {}", FrameStatusName(m.status), m.detail);
+    first.verdict = PairVerdict::kMeasuredRefused;
+    first.why = fmt::format("measured {}: {}", FrameStatusName(m.status), m.detail);
     for (size_t k = 0; k < scene.runners_up.size() && k < kMaxFallbacks; ++k) {
       const auto& [index, g] = scene.runners_up[k];
       PairCandidate& next = scene.candidates[index];
@@ -163,11 +164,13 @@ StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOption
         break;
       }
       if (contest == PairContest::kSecondAtFace) {
-        next.verdict = kNotAtFaceVerdict;
+        next.verdict = PairVerdict::kNotAtFace;
+        next.why = kNotAtFaceWhy;
         continue;
       }
       if (Ambiguous(contest)) {
-        next.verdict = "as likely as another pair";
+        next.verdict = PairVerdict::kAsLikely;
+        next.why = "as likely as another pair";
         m.status = FrameStatus::kAmbiguous;
         m.detail = AmbiguityDetail(contest, next, scene.candidates[scene.runners_up[rival].first]);
         break;
@@ -175,10 +178,12 @@ StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOption
       StrandMeasurement alt =
           MeasureInScene(channel, data_max, FrameStatus::kValid, "", g, roi, opt);
       if (!alt.valid()) {
-        next.verdict = fmt::format("measured {}: {}", FrameStatusName(alt.status), alt.detail);
+        next.verdict = PairVerdict::kMeasuredRefused;
+        next.why = fmt::format("measured {}: {}", FrameStatusName(alt.status), alt.detail);
         continue;
       }
-      next.verdict = "chosen";
+      next.verdict = PairVerdict::kChosen;
+      next.why = "chosen";
       scene.chosen = index;
       scene.geometry = g;
       m = std::move(alt);

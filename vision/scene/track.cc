@@ -63,9 +63,10 @@ bool StrandTracker::Follow(const cv::Mat& frame, StrandMeasurement* out) {
                            std::min(g.s_end, options_.band_start_px + options_.band_height_px));
     const GreyImage img{channel, channel.depth() == CV_16U};
     StrandGeometry now;
+    PairVerdict failure;
     std::string why;
     if (!FollowPair(img, SceneOptionsFor(options_, data_max), c, g.left_sign, g.right_sign, &now,
-                    &why)) {
+                    &failure, &why)) {
       return false;
     }
     const double tip_shift = g.axis.S(now.axis.ox, now.axis.oy);

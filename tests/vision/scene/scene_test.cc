@@ -121,6 +121,31 @@ TEST(SceneTest, HighlightStripeAndClearStrandLinesAreNotTheStrand) {
   r = Find(RenderFrame(p, 0, &t));
   ASSERT_EQ(r.status, FrameStatus::kValid) << r.detail;
   EXPECT_NEAR(r.geometry.width_px, t.width_px, 1.0);
+  // The verdicts say so as values (overlays grey out the pairs they rule out): the clear
+  // strand's internal lines lie inside the chosen silhouette.
+  ASSERT_GE(r.chosen, 0);
+  EXPECT_EQ(r.candidates[r.chosen].verdict, PairVerdict::kChosen);
+  int inside = 0;
+  for (const PairCandidate& c : r.candidates) {
+    if (c.verdict != PairVerdict::kInsideWider) continue;
+    ++inside;
+    EXPECT_TRUE(RulesOut(c.verdict));
+    EXPECT_LT(c.width_px, r.candidates[r.chosen].width_px - 3.0);
+  }
+  EXPECT_GE(inside, 1);
+}
+
+TEST(SceneTest, NoTipIsTheFollowedPairsVerdictNotAWordInItsMessage) {
+  // A strand with no nozzle above it: its pair is followed and fails for want of a tip; the
+  // frame's reason comes from that verdict.
+  SceneParams p;
+  p.nozzle = false;
+  const SceneResult r = Find(RenderFrame(p, 0, nullptr));
+  ASSERT_EQ(r.status, FrameStatus::kNoTip) << r.detail;
+  ASSERT_FALSE(r.candidates.empty());
+  EXPECT_EQ(r.candidates[0].verdict, PairVerdict::kNoTip) << r.candidates[0].why;
+  EXPECT_TRUE(RulesOut(PairVerdict::kNoTip));
+  EXPECT_FALSE(RulesOut(PairVerdict::kOutscored));
 }
 
 }  // namespace
