@@ -125,7 +125,7 @@ void HuberFit(const std::vector<LineMark>& m, Lattice* lat) {
     std::vector<double> abs_res;
     for (const auto& [k, slot] : lat->slots)
       abs_res.push_back(std::abs(m[slot.line].position_px - lat->a - lat->b * k));
-    const double c = 2.5 * std::max(1.4826 * UpperMedian(abs_res), 0.01);
+    const double c = 2.5 * std::max(kMadToSigma * UpperMedian(abs_res), 0.01);
     for (size_t q = 0; q < abs_res.size(); ++q)
       w[q] = std::min(1.0, c / std::max(abs_res[q], 1e-12));
   }

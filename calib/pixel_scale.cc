@@ -91,7 +91,7 @@ void SolveRobust(RobustProblem& rp, int max_iterations, ceres::Solver::Summary* 
       problem.EvaluateResidualBlock(id, /*apply_loss_function=*/false, nullptr, &r, nullptr);
       abs_r.push_back(std::abs(r));
     }
-    const double spread = std::max(1.0, 1.4826 * UpperMedian(abs_r));
+    const double spread = std::max(1.0, kMadToSigma * UpperMedian(abs_r));
     for (auto id : blocks) problem.RemoveResidualBlock(id);
     for (size_t i = 0; i < costs.size(); ++i) {
       blocks[i] = problem.AddResidualBlock(costs[i], new ceres::HuberLoss(3.0 * spread), params[i]);
@@ -242,7 +242,7 @@ ScaleCalibration FitPinScale(const std::vector<PinObservation>& pins, const Scal
   const bool ok = ParameterSigmas(problem, blocks, residual_var, &sig);
   cal.scale_sigma_um_per_px = ok ? sig[0] : NAN;
   cal.edge_bias_sigma_px = ok && with_bias ? sig[1] : 0.0;
-  Summarise(&cal, opt, std::max(1.4826 * UpperMedian(abs_res), kSigmaFloorPx));
+  Summarise(&cal, opt, std::max(kMadToSigma * UpperMedian(abs_res), kSigmaFloorPx));
   const bool converged = summary.termination_type == ceres::CONVERGENCE;
   cal.usable = converged && ok;
   if (!converged) {
@@ -380,7 +380,7 @@ ScaleCalibration FitMicrometerScale(const std::vector<LineObservation>& lines, d
   const bool ok = ParameterSigmas(problem, blocks, chi2 / dof, &sig);
   cal.scale_sigma_um_per_px = ok ? sig[0] : NAN;
   cal.distortion_sigma_px = ok && opt.fit_distortion ? sig[1] : 0.0;
-  Summarise(&cal, opt, std::max(1.4826 * UpperMedian(abs_res), kSigmaFloorPx));
+  Summarise(&cal, opt, std::max(kMadToSigma * UpperMedian(abs_res), kSigmaFloorPx));
   const bool converged = summary.termination_type == ceres::CONVERGENCE;
   cal.usable = converged && ok;
   cal.message = !converged ? "the fit did not converge: " + summary.message

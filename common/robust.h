@@ -6,6 +6,11 @@
 
 namespace clogscope {
 
+// σ of normally distributed data per unit of its median absolute deviation (1/Φ⁻¹(0.75)).
+inline constexpr double kMadToSigma = 1.4826;
+// The standard normal's 97.5 % quantile: a two-sided 95 % interval is ±kZ95 σ.
+inline constexpr double kZ95 = 1.959963984540054;
+
 // Median (the mean of the two middle values for an even count); 0 for no values.
 inline double Median(std::vector<double> v) {
   if (v.empty()) return 0;
@@ -24,7 +29,7 @@ inline double UpperMedian(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-// Median absolute deviation from `median` (unscaled: σ ≈ 1.4826·MAD for normal data).
+// Median absolute deviation from `median` (unscaled: σ ≈ kMadToSigma·MAD for normal data).
 inline double Mad(const std::vector<double>& v, double median) {
   std::vector<double> dev;
   dev.reserve(v.size());

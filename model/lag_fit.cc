@@ -173,7 +173,7 @@ LagFitSummary FitLag(const FlowProfile& p, const std::vector<WidthSample>& sampl
   std::vector<double> abs_dev(r.size());
   const double med = UpperMedian(r);
   for (size_t i = 0; i < r.size(); ++i) abs_dev[i] = std::abs(r[i] - med);
-  const double robust_sigma = 1.4826 * UpperMedian(abs_dev);
+  const double robust_sigma = kMadToSigma * UpperMedian(abs_dev);
   out.outlier.assign(samples.size(), false);
   std::vector<WidthSample> inliers;
   for (size_t i = 0; i < samples.size(); ++i) {

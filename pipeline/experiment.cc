@@ -15,6 +15,7 @@
 #include "common/csv.h"
 #include "common/plot.h"
 #include "common/provenance.h"
+#include "common/robust.h"
 #include "pipeline/feedstock_io.h"
 #include "pipeline/statistics.h"
 #include "pipeline/step_file.h"
@@ -143,7 +144,7 @@ double MeanCi95Um(const SampleStats& st, const calib::ScaleCalibration& c, doubl
   *cal_sigma_um = std::hypot((st.mean - c.edge_bias_px) * c.scale_sigma_um_per_px,
                              c.scale_um_per_px * c.edge_bias_sigma_px);
   const double t = st.n_used >= 2 ? StudentT975(st.n_used - 1) : NAN;
-  return std::hypot(t * st.sem * c.scale_um_per_px, 1.959963984540054 * *cal_sigma_um);
+  return std::hypot(t * st.sem * c.scale_um_per_px, kZ95 * *cal_sigma_um);
 }
 
 calib::ScaleCalibration PlainScale(double scale) {

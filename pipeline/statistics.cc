@@ -12,7 +12,7 @@ double StudentT975(int dof) {
   static const double kTable[] = {0, 12.7062047, 4.30265273, 3.18244631, 2.77644511, 2.57058184};
   if (dof < 1) return NAN;
   if (dof <= 5) return kTable[dof];
-  const double z = 1.959963984540054, v = dof;
+  const double z = kZ95, v = dof;
   const double z3 = z * z * z, z5 = z3 * z * z, z7 = z5 * z * z, z9 = z7 * z * z;
   return z + (z3 + z) / (4 * v) + (5 * z5 + 16 * z3 + 3 * z) / (96 * v * v) +
          (3 * z7 + 19 * z5 + 17 * z3 - 15 * z) / (384 * v * v * v) +
@@ -29,7 +29,7 @@ SampleStats RobustStats(const std::vector<double>& values, double k, double min_
   const double mad = std::max(Median(dev), min_mad);
   double sum = 0;
   for (size_t i = 0; i < values.size(); ++i) {
-    s.used[i] = values.size() < 3 || std::abs(values[i] - med) <= k * 1.4826 * mad;
+    s.used[i] = values.size() < 3 || std::abs(values[i] - med) <= k * kMadToSigma * mad;
     if (s.used[i]) {
       sum += values[i];
       ++s.n_used;

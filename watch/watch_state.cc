@@ -12,7 +12,6 @@
 namespace clogscope::pipeline {
 namespace {
 
-constexpr double kZ95 = 1.959963984540054;
 constexpr int kMinRecentFrames = 5;
 constexpr int kMinBaselineFrames = 10;
 

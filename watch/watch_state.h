@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "calib/pixel_scale.h"
+#include "common/robust.h"
 
 namespace clogscope::pipeline {
 
@@ -141,7 +142,7 @@ class WatchState {
 };
 
 // Wilson score interval of a proportion k/n at z (1.96 for 95 %): {lower, upper}; {0, 1} for n = 0.
-std::pair<double, double> WilsonInterval(int k, int n, double z = 1.959963984540054);
+std::pair<double, double> WilsonInterval(int k, int n, double z = kZ95);
 
 // n/τ with τ the integrated autocorrelation time of the values (Sokal's automatic window), at
 // least 2 and at most n: how many independent samples a correlated series is worth for its mean.

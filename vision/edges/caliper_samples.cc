@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include "common/robust.h"
+
 namespace clogscope::vision {
 
 namespace {
@@ -144,7 +146,7 @@ double InnerEdgeDistance(const GreyImage& img, const AxisFrame& f, double s0, do
   double noise = 0;
   if (diffs.size() >= 5) {
     std::nth_element(diffs.begin(), diffs.begin() + diffs.size() / 2, diffs.end());
-    noise = 1.4826 * diffs[diffs.size() / 2] / std::sqrt(2.0);
+    noise = kMadToSigma * diffs[diffs.size() / 2] / std::sqrt(2.0);
   }
   min_step = std::max(min_step, 8.0 * noise);
   int peak = edge_i;

@@ -122,7 +122,7 @@ CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_g
     std::vector<double> abs_r(residuals.size());
     std::transform(residuals.begin(), residuals.end(), abs_r.begin(),
                    [](double r) { return std::abs(r); });
-    return std::max(1.4826 * Median(abs_r), 1e-6);
+    return std::max(kMadToSigma * Median(abs_r), 1e-6);
   };
   const auto reweight = [&](double scale) {
     for (size_t i = 0; i < samples.size(); ++i) {

@@ -79,7 +79,7 @@ EdgeLines FitEdgeLines(const std::vector<CaliperFit>& fits, double band_s0, doub
   EdgeLines out;
   if (widths.size() < 2) return out;
   const double med = Median(widths);
-  const double tol = std::max(4.0 * 1.4826 * Mad(widths, med), 0.1);
+  const double tol = std::max(4.0 * kMadToSigma * Mad(widths, med), 0.1);
   double n = 0, ss = 0, sss = 0, sl = 0, sr = 0, sls = 0, srs = 0;
   for (size_t k = 0; k < fits.size(); ++k) {
     const CaliperFit& cf = fits[k];
@@ -481,7 +481,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
 
   const double med = Median(cal_widths);
   const double mad = Mad(cal_widths, med);
-  const double tol = std::max(4.0 * 1.4826 * mad, 0.1);
+  const double tol = std::max(4.0 * kMadToSigma * mad, 0.1);
   double sum = 0, sum2 = 0;
   int used = 0;
   // A strand relaxing from die swell is wider at the band's top and narrows steadily down it:

@@ -162,7 +162,7 @@ std::optional<MicrometerLine> CombineStrips(const std::vector<StripFit>& strips,
   const double med = UpperMedian(centres);
   std::vector<double> dev;
   for (double c : centres) dev.push_back(std::abs(c - med));
-  const double keep = std::max(3 * 1.4826 * UpperMedian(dev), 0.05);
+  const double keep = std::max(3 * kMadToSigma * UpperMedian(dev), 0.05);
   SlopeSums drift;
   double sw = 0, swc = 0;
   int samples = 0;

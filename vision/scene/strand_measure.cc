@@ -293,7 +293,7 @@ int FlagWidthOutliers(std::vector<StrandMeasurement>& frames, int half_window, d
     const double med = Median(window);
     const double mad = Mad(window, med);
     const double dev = std::abs(frames[i].width_px - med);
-    if (dev > k * 1.4826 * mad && dev > min_deviation_px) flag[i] = true;
+    if (dev > k * kMadToSigma * mad && dev > min_deviation_px) flag[i] = true;
   }
   int count = 0;
   for (int i = 0; i < n; ++i) {
