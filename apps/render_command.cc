@@ -231,7 +231,7 @@ int RunRender(int argc, char** argv) {
       "2 --tick-length-um 80 --numerals --dust 12 --fibres 2 --bit-depth 16 --data-bits 12 "
       "--silhouette --out stage/");
   if (!ParseCommandLine(app, argc, argv)) return 0;  // --help printed
-  s.target = vision::ParseTarget(target);
+  s.target = vision::ParseRenderTarget(target);
   o.lag_profile_form = model::ParseProfileForm(lag_form);
   s.nozzle = !no_nozzle;
   s.strand = !no_strand;

@@ -46,22 +46,22 @@ std::mt19937_64 FrameRng(uint64_t seed, int frame, uint64_t stream) {
 
 }  // namespace
 
-const char* TargetName(Target t) {
+const char* RenderTargetName(RenderTarget t) {
   switch (t) {
-    case Target::kStrand:
+    case RenderTarget::kStrand:
       return "strand";
-    case Target::kPin:
+    case RenderTarget::kPin:
       return "pin";
-    case Target::kMicrometer:
+    case RenderTarget::kMicrometer:
       return "micrometer";
   }
   return "?";
 }
 
-Target ParseTarget(const std::string& name) {
-  if (name == "strand") return Target::kStrand;
-  if (name == "pin") return Target::kPin;
-  if (name == "micrometer") return Target::kMicrometer;
+RenderTarget ParseRenderTarget(const std::string& name) {
+  if (name == "strand") return RenderTarget::kStrand;
+  if (name == "pin") return RenderTarget::kPin;
+  if (name == "micrometer") return RenderTarget::kMicrometer;
   throw std::invalid_argument("target '" + name + "': expected strand, pin or micrometer");
 }
 
@@ -89,10 +89,10 @@ bool SceneParams::Validate(std::string* why) const {
     return fail("knurl: depth ≥ 0, pitch > 0, a finite start");
   for (double w : frame_width_um) {
     if (!(w > 0) || !std::isfinite(w)) return fail("frame_width_um: every width must be positive");
-    if (target == Target::kStrand && nozzle && nozzle_tip_width_um <= w)
+    if (target == RenderTarget::kStrand && nozzle && nozzle_tip_width_um <= w)
       return fail("nozzle_tip_width_um must exceed every scheduled width");
   }
-  if (target == Target::kStrand && nozzle && nozzle_tip_width_um <= strand_width_um)
+  if (target == RenderTarget::kStrand && nozzle && nozzle_tip_width_um <= strand_width_um)
     return fail("nozzle_tip_width_um must exceed strand_width_um");
   if (!(nozzle_cone_half_angle_deg > 0 && nozzle_cone_half_angle_deg < 85))
     return fail("nozzle_cone_half_angle_deg must be in (0, 85)");
@@ -100,7 +100,7 @@ bool SceneParams::Validate(std::string* why) const {
   if (std::abs(gradient_fraction) >= 1) return fail("gradient_fraction must be within (-1, 1)");
   if (bit_depth != 8 && bit_depth != 16) return fail("bit_depth must be 8 or 16");
   if (std::abs(edge_bias_px) > 10) return fail("edge_bias_px must be within ±10 px");
-  if (target == Target::kMicrometer) {
+  if (target == RenderTarget::kMicrometer) {
     if (!(line_width_um > 0)) return fail("line_width_um must be positive");
     if (!(pitch_um > 2 * line_width_um)) return fail("pitch_um must exceed twice the line width");
     if (pitch_um / scale_um_per_px < 4) return fail("micrometer lines closer than 4 px");
@@ -109,7 +109,7 @@ bool SceneParams::Validate(std::string* why) const {
   }
   if (dust_specks < 0 || dust_fibres < 0 || dust_specks + dust_fibres > 200)
     return fail("dust: 0 to 200 specks and fibres");
-  if (target != Target::kMicrometer &&
+  if (target != RenderTarget::kMicrometer &&
       (tick_length_um > 0 || numerals || dust_specks > 0 || dust_fibres > 0))
     return fail("ticks, numerals and dust go with the micrometer target");
   if (data_bits != 0 && !(bit_depth == 16 && data_bits >= 9 && data_bits <= 16))
@@ -235,7 +235,7 @@ FrameTruth FrameTruthFor(const SceneParams& p, int frame_index) {
           ? p.strand_width_um
           : p.frame_width_um[std::min<size_t>(frame_index, p.frame_width_um.size() - 1)];
   t.width_um = base + jitter;
-  if (p.target == Target::kMicrometer) t.width_um = p.line_width_um;
+  if (p.target == RenderTarget::kMicrometer) t.width_um = p.line_width_um;
   t.width_px = t.width_um / p.scale_um_per_px + p.edge_bias_px;
   t.angle_deg = p.tilt_deg + sway;
   t.tip_x_px = p.tip_x_px;
@@ -370,16 +370,17 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
   const std::vector<render::ClutterObject> clutter = render::PlaceClutter(
       p.clutter_discs, p.clutter_gears, p.tip_x_px, p.tip_y_px, -n_strand.y, n_strand.x, w,
       p.nozzle ? p.tip_y_px : 0.0, p.width_px, p.height_px, p.strand_level, p.seed);
-  const bool shaded = p.shading_ambient < 1.0 && p.target != Target::kMicrometer;
+  const bool shaded = p.shading_ambient < 1.0 && p.target != RenderTarget::kMicrometer;
   const render::ShadingProfile shading(shaded ? w : 1.0, p.strand_level, p.shading_ambient, sigma,
                                        n_strand.x, n_strand.y);
   const double cl_h = 0.03 * w;
   const SoftHalfPlane clear_l1{n_strand, -0.3 * w - cl_h}, clear_r1{n_strand, -0.3 * w + cl_h};
   const SoftHalfPlane clear_l2{n_strand, 0.3 * w - cl_h}, clear_r2{n_strand, 0.3 * w + cl_h};
-  const bool has_nozzle = p.target == Target::kStrand && p.nozzle;
+  const bool has_nozzle = p.target == RenderTarget::kStrand && p.nozzle;
   const Vec2 d_strand{std::sin(th_strand), std::cos(th_strand)};
-  const SurfaceTexture surface(p.target == Target::kMicrometer ? 0 : p.surface_texture_amplitude,
-                               p.seed, sigma, d_strand.x, d_strand.y);
+  const SurfaceTexture surface(
+      p.target == RenderTarget::kMicrometer ? 0 : p.surface_texture_amplitude, p.seed, sigma,
+      d_strand.x, d_strand.y);
   const DriveGear gear(p, truth.gear_angle_rad, sigma);
   render::MicrometerMarkParams mp;
   mp.pitch_px = pitch_px;
@@ -396,7 +397,7 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
   mp.image_width = p.width_px;
   mp.image_height = p.height_px;
   mp.seed = p.seed;
-  const bool marked = p.target == Target::kMicrometer &&
+  const bool marked = p.target == RenderTarget::kMicrometer &&
                       (p.tick_length_um > 0 || p.dust_specks > 0 || p.dust_fibres > 0);
   const render::MicrometerMarks marks(mp);
   const int nc = p.colour ? 3 : 1;
@@ -442,7 +443,7 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
         if (marked) {
           cov = marks.Coverage(x, y);
           front = p.strand_level * cov;
-        } else if (p.target == Target::kMicrometer) {
+        } else if (p.target == RenderTarget::kMicrometer) {
           // The nearest lines only: they are at least 4 px apart and the reach of one is 9 sigma.
           const double u = Dot(n_strand, d);
           const long k0 = std::lround(u / pitch_px);
@@ -477,7 +478,7 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
           }
         }
         double bed_a = 0, nozzle_a = 0;
-        if (p.target == Target::kStrand && p.bed) bed_a = bed.Eval(d, sigma);
+        if (p.target == RenderTarget::kStrand && p.bed) bed_a = bed.Eval(d, sigma);
         if (has_nozzle) {
           // The product of three soft half-planes is exact away from the two flank corners, which
           // lie far from the measurement band.
@@ -566,7 +567,7 @@ std::string TruthToJson(const SceneParams& p, const std::vector<FrameTruth>& tru
       {"gear_teeth", p.gear_teeth},
       {"gear_surface_speed_mm_s", p.gear_surface_speed_mm_s},
       {"knurl_px", {p.knurl_depth_px, p.knurl_pitch_px, p.knurl_start_px}},
-      {"target", TargetName(p.target)},
+      {"target", RenderTargetName(p.target)},
       {"edge_bias_px", p.edge_bias_px},
       {"pitch_um", p.pitch_um},
       {"line_width_um", p.line_width_um},

@@ -11,11 +11,12 @@
 namespace clogscope::vision {
 
 // What the scene shows: the strand below a nozzle, a calibration pin gauge (a cylinder across the
-// whole frame, no nozzle), or a stage micrometer (parallel lines at a known pitch).
-enum class Target { kStrand, kPin, kMicrometer };
-const char* TargetName(Target t);
+// whole frame, no nozzle), or a stage micrometer (parallel lines at a known pitch). (What the
+// measurement looks for in a frame, strand or filament, is vision::MeasureTarget.)
+enum class RenderTarget { kStrand, kPin, kMicrometer };
+const char* RenderTargetName(RenderTarget t);
 // Parses "strand", "pin" or "micrometer"; throws std::invalid_argument otherwise.
-Target ParseTarget(const std::string& name);
+RenderTarget ParseRenderTarget(const std::string& name);
 
 // A side view of a nozzle tip and the strand below it, with exactly known geometry.
 //
@@ -23,7 +24,7 @@ Target ParseTarget(const std::string& name);
 // tilt_deg about the nozzle tip; the strand axis leans by tilt_deg (+ per-frame sway), positive
 // when the strand moves to +x going down.
 struct SceneParams {
-  Target target = Target::kStrand;
+  RenderTarget target = RenderTarget::kStrand;
   int width_px = 1280;
   int height_px = 720;
   double scale_um_per_px = 3.0;

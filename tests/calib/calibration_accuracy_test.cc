@@ -18,7 +18,7 @@ constexpr double kScale = 3.0, kBias = 0.35;
 
 SceneParams PinScene(double diameter_um, uint64_t seed, int width = 1280, int height = 720) {
   SceneParams p;
-  p.target = vision::Target::kPin;
+  p.target = vision::RenderTarget::kPin;
   p.width_px = width;
   p.height_px = height;
   p.tip_x_px = width / 2.0;
@@ -57,7 +57,7 @@ TEST(CalibrationAccuracyTest, FivePinsWithinFiveHundredthsOfAPercent) {
 
 TEST(CalibrationAccuracyTest, MicrometerWithinTwoHundredthsOfAPercent) {
   SceneParams p;
-  p.target = vision::Target::kMicrometer;
+  p.target = vision::RenderTarget::kMicrometer;
   p.pitch_um = 100;
   p.line_width_um = 8;
   p.tilt_deg = -3;

@@ -110,7 +110,7 @@ TEST(LineLatticeTest, UnevenSpacingIsRefused) {
 // fibres, noise 3 grey levels (8-bit scale).
 vision::SceneParams StageMicrometer(double tilt_deg, int bit_depth, uint64_t seed) {
   vision::SceneParams p;
-  p.target = vision::Target::kMicrometer;
+  p.target = vision::RenderTarget::kMicrometer;
   p.scale_um_per_px = 0.5;
   p.pitch_um = 10;
   p.line_width_um = 2;

@@ -62,7 +62,7 @@ TEST(SyntheticTest, EdgesHoldTheTruthExactly) {
 // as a silhouette.
 SceneParams NoiselessMicrometer(int width_px, double tip_x_px, double tip_y_px) {
   SceneParams p;
-  p.target = Target::kMicrometer;
+  p.target = RenderTarget::kMicrometer;
   p.width_px = width_px;
   p.height_px = 360;
   p.tip_x_px = tip_x_px;
