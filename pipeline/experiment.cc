@@ -15,6 +15,7 @@
 #include "common/csv.h"
 #include "common/plot.h"
 #include "common/provenance.h"
+#include "common/work_queue.h"
 #include "pipeline/feedstock_io.h"
 #include "pipeline/statistics.h"
 #include "pipeline/step_file.h"
@@ -279,75 +280,70 @@ std::vector<StepResult> RunExperiment(const Manifest& m, const ExperimentOptions
     ++done;
     if (o.on_step) o.on_step(*results[i], done, total);
   }
-  std::atomic<size_t> next{0};
   const int jobs =
       std::max(1, std::min<int>(o.jobs > 0 ? o.jobs : std::thread::hardware_concurrency(),
                                 static_cast<int>(todo.size())));
   // With several steps at once each decoder gets one thread; a lone step lets FFmpeg choose.
   const int decoder_threads = jobs > 1 ? 1 : 0;
-  auto worker = [&]() {
-    while (true) {
-      if (o.cancel && o.cancel->load()) return;
-      const size_t j = next++;
-      if (j >= todo.size()) return;
-      const int i = todo[j];
-      std::vector<std::pair<int, cv::Mat>> overlays;
-      // Whatever goes wrong in one step (a library error, no memory, a full disk) fails that
-      // step with its reason; the other steps, the tables and the summary still get done.
-      StepResult r;
-      try {
-        r = MeasureStep(m.steps[i], o, decoder_threads, &overlays);
-        const StepSpec& s = m.steps[i];
-        if (o.feedstock && !s.feedstock_video.empty()) {
-          try {
-            r.feedstock =
-                MeasureFeedstock(s.feedstock_video, s.start_s + s.settle_s, s.end_s, *o.feedstock);
-          } catch (const std::exception& e) {
-            // The strand's diameter stands without the feedstock's.
-            r.feedstock = FeedstockResult{};
-            r.feedstock->status = "failed";
-            r.feedstock->detail = e.what();
-            r.feedstock->video = s.feedstock_video;
-          }
+  // One step from its frames to its step file; whatever goes wrong in it is its own.
+  const auto run_step = [&](int i) {
+    std::vector<std::pair<int, cv::Mat>> overlays;
+    // Whatever goes wrong in one step (a library error, no memory, a full disk) fails that
+    // step with its reason; the other steps, the tables and the summary still get done.
+    StepResult r;
+    try {
+      r = MeasureStep(m.steps[i], o, decoder_threads, &overlays);
+      const StepSpec& s = m.steps[i];
+      if (o.feedstock && !s.feedstock_video.empty()) {
+        try {
+          r.feedstock =
+              MeasureFeedstock(s.feedstock_video, s.start_s + s.settle_s, s.end_s, *o.feedstock);
+        } catch (const std::exception& e) {
+          // The strand's diameter stands without the feedstock's.
+          r.feedstock = FeedstockResult{};
+          r.feedstock->status = "failed";
+          r.feedstock->detail = e.what();
+          r.feedstock->video = s.feedstock_video;
         }
-      } catch (const std::exception& e) {
-        r = FailedStep(m.steps[i], fmt::format("measuring stopped: {}", e.what()));
-      } catch (...) {
-        r = FailedStep(m.steps[i], "measuring stopped: unknown error");
       }
-      if (o.cancel && o.cancel->load()) return;  // a partial step is not kept
-      std::vector<std::string> unsaved;
-      try {
-        for (const auto& [frame_idx, image] : overlays) {
-          const FrameRecord& f = r.frames[frame_idx];
-          const std::string name =
-              (overlay_dir / fmt::format("step{:02d}_{:.0f}C_f{:06d}.png", r.spec.step,
-                                         r.spec.temperature_c, f.frame))
-                  .string();
-          const double scale = o.conversion ? o.conversion->scale_um_per_px : 0.0;
-          const double bias = o.conversion ? o.conversion->edge_bias_px : 0.0;
-          vision::WriteImageAtomically(name, vision::DrawOverlay(image, f.m, scale, bias));
-        }
-      } catch (const std::exception& e) {
-        unsaved.push_back(fmt::format("overlay not written: {}", e.what()));
-      }
-      try {
-        WriteFileAtomically((steps_dir / StepFileName(r.spec.step)).string(), StepFileText(r, o));
-      } catch (const std::exception& e) {
-        unsaved.push_back(
-            fmt::format("step file not written (--resume will measure it again): {}", e.what()));
-      }
-      // The measurement stands; the step's detail says what could not be saved.
-      for (const auto& u : unsaved) r.detail += (r.detail.empty() ? "" : "; ") + u;
-      std::lock_guard<std::mutex> lock(mu);
-      ++done;
-      if (o.on_step) o.on_step(r, done, total);
-      results[i] = std::move(r);
+    } catch (const std::exception& e) {
+      r = FailedStep(m.steps[i], fmt::format("measuring stopped: {}", e.what()));
+    } catch (...) {
+      r = FailedStep(m.steps[i], "measuring stopped: unknown error");
     }
+    if (o.cancel && o.cancel->load()) return;  // a partial step is not kept
+    std::vector<std::string> unsaved;
+    try {
+      for (const auto& [frame_idx, image] : overlays) {
+        const FrameRecord& f = r.frames[frame_idx];
+        const std::string name =
+            (overlay_dir / fmt::format("step{:02d}_{:.0f}C_f{:06d}.png", r.spec.step,
+                                       r.spec.temperature_c, f.frame))
+                .string();
+        const double scale = o.conversion ? o.conversion->scale_um_per_px : 0.0;
+        const double bias = o.conversion ? o.conversion->edge_bias_px : 0.0;
+        vision::WriteImageAtomically(name, vision::DrawOverlay(image, f.m, scale, bias));
+      }
+    } catch (const std::exception& e) {
+      unsaved.push_back(fmt::format("overlay not written: {}", e.what()));
+    }
+    try {
+      WriteFileAtomically((steps_dir / StepFileName(r.spec.step)).string(), StepFileText(r, o));
+    } catch (const std::exception& e) {
+      unsaved.push_back(
+          fmt::format("step file not written (--resume will measure it again): {}", e.what()));
+    }
+    // The measurement stands; the step's detail says what could not be saved.
+    for (const auto& u : unsaved) r.detail += (r.detail.empty() ? "" : "; ") + u;
+    std::lock_guard<std::mutex> lock(mu);
+    ++done;
+    if (o.on_step) o.on_step(r, done, total);
+    results[i] = std::move(r);
   };
-  std::vector<std::thread> pool;
-  for (int k = 0; k < jobs; ++k) pool.emplace_back(worker);
-  for (auto& th : pool) th.join();
+  // Steps are taken in manifest order; each reports as it finishes. Cancelling stops taking new
+  // steps; an error that escapes a step (a callback's) reaches the caller after the others end.
+  ParallelFor(
+      todo.size(), jobs, [&](size_t j) { run_step(todo[j]); }, o.cancel);
   std::vector<StepResult> out_results;
   for (auto& r : results) {
     if (r) out_results.push_back(std::move(*r));
