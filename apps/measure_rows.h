@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <cstdint>
 #include <map>
 #include <optional>
 #include <set>
@@ -21,7 +22,7 @@ namespace clogscope::apps {
 // speeds.
 struct Row {
   std::string source;
-  int frame = 0;
+  int64_t frame = 0;  // the input frame's index
   double time_s = -1;
   vision::StrandMeasurement m;
   vision::FeedSpeedSample speed;

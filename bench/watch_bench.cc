@@ -24,24 +24,24 @@ enum class Shows { kSteady, kNarrowed, kOccluded, kBlob };
 
 // Frames from pools of pre-rendered ones, chosen per frame time by a schedule; paced at 25
 // frames/s (live clock) or as fast as they are taken (the frame times as clock).
-class PoolSource : public vision::LiveSource {
+class PoolSource : public vision::FrameSource {
  public:
   PoolSource(std::function<const cv::Mat&(int64_t)> frame, int64_t frames, bool paced)
-      : LiveSource("pool", vision::LiveSourceKind::kFile),
+      : FrameSource("pool", vision::SourceKind::kVideo),
         frame_(std::move(frame)),
         frames_(frames),
         paced_(paced),
         start_(Clock::now()) {}
   bool live() const override { return paced_; }
-  vision::LiveRead Next(vision::LiveFrame* out, std::string*) override {
-    if (index_ >= frames_) return vision::LiveRead::kEnd;
+  vision::FrameRead Read(vision::InputFrame* out, std::string*) override {
+    if (index_ >= frames_) return vision::FrameRead::kEnd;
     const double t = index_ / 25.0;
     if (paced_) std::this_thread::sleep_until(start_ + std::chrono::microseconds(int64_t(t * 1e6)));
     out->image = frame_(index_);
     out->time_s = t;
     out->index = index_++;
     out->arrival = Clock::now();
-    return vision::LiveRead::kFrame;
+    return vision::FrameRead::kFrame;
   }
 
  private:

@@ -16,10 +16,11 @@
 #include "common/plot.h"
 #include "common/provenance.h"
 #include "common/robust.h"
+#include "common/work_queue.h"
 #include "pipeline/feedstock_io.h"
 #include "pipeline/statistics.h"
 #include "pipeline/step_file.h"
-#include "vision/io/video_decoder.h"
+#include "vision/io/frame_source.h"
 #include "vision/io/video_io.h"
 #include "vision/overlay/overlay.h"
 #include "vision/scene/track.h"
@@ -34,58 +35,6 @@ using nlohmann::json;
 constexpr double kSeekAheadS = 2.0;
 // Floor on the MAD of a step's widths: identical widths must not make 0.01 px an outlier.
 constexpr double kMinMadPx = 0.02;
-
-// A frame source for a step: video frames by time, or a directory's images by index.
-class StepFrames {
- public:
-  virtual ~StepFrames() = default;
-  virtual bool Next(double* t, int* index, cv::Mat* img, std::string* source) = 0;
-  virtual void SeekTo(double t) = 0;
-  virtual double period() const = 0;  // time between frames (1 for images: t is the index)
-};
-
-class VideoFrames : public StepFrames {
- public:
-  VideoFrames(const std::string& path, int threads) : dec_(path, threads), path_(path) {}
-  bool Next(double* t, int* index, cv::Mat* img, std::string* source) override {
-    vision::DecodedFrame f;
-    if (!dec_.Read(&f)) return false;
-    *t = f.time_s;
-    *index = f.index;
-    *img = f.grey;
-    *source = path_;
-    return true;
-  }
-  void SeekTo(double t) override { dec_.SeekToTime(t); }
-  double period() const override { return dec_.fps() > 0 ? 1.0 / dec_.fps() : 0.04; }
-  double duration() const { return dec_.duration_s(); }
-
- private:
-  vision::VideoDecoder dec_;
-  std::string path_;
-};
-
-class ImageFrames : public StepFrames {
- public:
-  explicit ImageFrames(std::vector<std::string> files) : files_(std::move(files)) {}
-  bool Next(double* t, int* index, cv::Mat* img, std::string* source) override {
-    if (next_ >= files_.size()) return false;
-    *t = static_cast<double>(next_);
-    *index = static_cast<int>(next_);
-    *source = files_[next_];
-    std::string error;  // an unreadable image is an unreadable frame
-    *img = vision::ReadImage(files_[next_], &error);
-    ++next_;
-    return true;
-  }
-  void SeekTo(double t) override { next_ = static_cast<size_t>(std::max(0.0, std::floor(t))); }
-  double period() const override { return 1.0; }
-  size_t count() const { return files_.size(); }
-
- private:
-  std::vector<std::string> files_;
-  size_t next_ = 0;
-};
 
 void Summarise(StepResult* r, const ExperimentOptions& o) {
   std::vector<double> widths;
@@ -204,30 +153,23 @@ StepResult MeasureStep(const StepSpec& spec, const ExperimentOptions& o, int dec
                        std::vector<std::pair<int, cv::Mat>>* overlay_frames) {
   StepResult r;
   r.spec = spec;
-  std::unique_ptr<StepFrames> frames;
+  std::unique_ptr<vision::FrameSource> frames;
+  const bool video = !spec.video.empty();
   double a = 0, b = 0;  // the settled part: [a, b) in seconds (video) or image index
   try {
-    if (!spec.video.empty()) {
-      auto v = std::make_unique<VideoFrames>(spec.video, decoder_threads);
-      const double end = spec.end_s >= 0 ? spec.end_s : v->duration();
+    if (video) {
+      vision::VideoReadOptions vo;
+      vo.decoder_threads = decoder_threads;
+      vo.gap_entries = false;  // a step samples the frames decoded
+      frames = vision::FrameSource::OpenVideo(spec.video, vo);
+      const double duration = frames->duration_s();
+      const double end = spec.end_s >= 0 ? spec.end_s : duration;
       a = spec.start_s + spec.settle_s;
-      b = v->duration() > 0 ? std::min(end, v->duration()) : end;
-      frames = std::move(v);
+      b = duration > 0 ? std::min(end, duration) : end;
     } else {
-      std::vector<std::string> files;
-      std::error_code ec;
-      if (!fs::is_directory(spec.images, ec))
-        throw std::invalid_argument(spec.images + ": no such directory");
-      for (const auto& e : fs::directory_iterator(spec.images, ec)) {
-        std::error_code entry_ec;  // a looping or dangling link is skipped, not thrown
-        if (e.is_regular_file(entry_ec) && !entry_ec && vision::IsImagePath(e.path().string()))
-          files.push_back(e.path().string());
-      }
-      if (files.empty()) throw std::invalid_argument(spec.images + ": directory holds no images");
-      std::sort(files.begin(), files.end());
+      frames = vision::FrameSource::OpenImageFolder(spec.images);
       a = 0;
-      b = static_cast<double>(files.size());
-      frames = std::make_unique<ImageFrames>(std::move(files));
+      b = static_cast<double>(frames->expected_frames());
     }
   } catch (const std::invalid_argument& e) {
     r.status = "failed";
@@ -241,30 +183,37 @@ StepResult MeasureStep(const StepSpec& spec, const ExperimentOptions& o, int dec
                     spec.start_s, spec.settle_s, b);
     return r;
   }
+  // A step's time: a video's seconds, or an image's index (a folder has no clock).
+  const double period = !video ? 1.0 : frames->fps() > 0 ? 1.0 / frames->fps() : 0.04;
+  const auto seek_to = [&](double t) {
+    if (video)
+      frames->SeekToTime(t);
+    else
+      frames->SeekToFrame(static_cast<int64_t>(std::max(0.0, std::floor(t))));
+  };
 
   // N slots; in each, frames from the slot's middle on are measured until one is valid.
   const int n = o.samples;
   const double slot = (b - a) / n;
   std::vector<bool> filled(n, false);
   const std::vector<int> overlay_slots = {0, n / 2, n - 1};
-  if (a > kSeekAheadS) frames->SeekTo(a);
-  double t = 0;
-  int index = 0;
-  cv::Mat img;
-  std::string source;
+  if (a > kSeekAheadS) seek_to(a);
+  vision::InputFrame in;
   // The step's frames show one scene: follow the strand from sample to sample.
   vision::StrandTracker tracker(o.strand);
-  while (frames->Next(&t, &index, &img, &source)) {
+  while (frames->Next(&in)) {
+    const double t = video ? in.time_s : static_cast<double>(in.index);
+    const cv::Mat& img = in.image;
     if (o.cancel && o.cancel->load()) break;
     if (t < a - 1e-9) continue;
     if (t >= b - 1e-9) break;
     const int k = std::min(n - 1, static_cast<int>((t - a) / slot));
     // A frame stands for [t − period/2, t + period/2): it may serve a slot whose middle it covers.
-    if (filled[k] || t + 0.5 * frames->period() < a + (k + 0.5) * slot - 1e-6) continue;
+    if (filled[k] || t + 0.5 * period < a + (k + 0.5) * slot - 1e-6) continue;
     FrameRecord f;
-    f.source = source;
-    f.frame = index;
-    f.time_s = spec.video.empty() ? -1 : t;
+    f.source = in.source;
+    f.frame = static_cast<int>(in.index);
+    f.time_s = video ? t : -1;
     if (img.empty()) {
       f.m.status = vision::FrameStatus::kUnreadable;
       f.m.detail = "cannot decode";
@@ -286,7 +235,7 @@ StepResult MeasureStep(const StepSpec& spec, const ExperimentOptions& o, int dec
     while (next < n && filled[next]) ++next;
     if (next >= n) break;
     const double target = a + (next + 0.5) * slot;
-    if (target - t > kSeekAheadS) frames->SeekTo(target);
+    if (target - t > kSeekAheadS) seek_to(target);
   }
   Summarise(&r, o);
   return r;
@@ -332,75 +281,70 @@ std::vector<StepResult> RunExperiment(const Manifest& m, const ExperimentOptions
     ++done;
     if (o.on_step) o.on_step(*results[i], done, total);
   }
-  std::atomic<size_t> next{0};
   const int jobs =
       std::max(1, std::min<int>(o.jobs > 0 ? o.jobs : std::thread::hardware_concurrency(),
                                 static_cast<int>(todo.size())));
   // With several steps at once each decoder gets one thread; a lone step lets FFmpeg choose.
   const int decoder_threads = jobs > 1 ? 1 : 0;
-  auto worker = [&]() {
-    while (true) {
-      if (o.cancel && o.cancel->load()) return;
-      const size_t j = next++;
-      if (j >= todo.size()) return;
-      const int i = todo[j];
-      std::vector<std::pair<int, cv::Mat>> overlays;
-      // Whatever goes wrong in one step (a library error, no memory, a full disk) fails that
-      // step with its reason; the other steps, the tables and the summary still get done.
-      StepResult r;
-      try {
-        r = MeasureStep(m.steps[i], o, decoder_threads, &overlays);
-        const StepSpec& s = m.steps[i];
-        if (o.feedstock && !s.feedstock_video.empty()) {
-          try {
-            r.feedstock =
-                MeasureFeedstock(s.feedstock_video, s.start_s + s.settle_s, s.end_s, *o.feedstock);
-          } catch (const std::exception& e) {
-            // The strand's diameter stands without the feedstock's.
-            r.feedstock = FeedstockResult{};
-            r.feedstock->status = "failed";
-            r.feedstock->detail = e.what();
-            r.feedstock->video = s.feedstock_video;
-          }
+  // One step from its frames to its step file; whatever goes wrong in it is its own.
+  const auto run_step = [&](int i) {
+    std::vector<std::pair<int, cv::Mat>> overlays;
+    // Whatever goes wrong in one step (a library error, no memory, a full disk) fails that
+    // step with its reason; the other steps, the tables and the summary still get done.
+    StepResult r;
+    try {
+      r = MeasureStep(m.steps[i], o, decoder_threads, &overlays);
+      const StepSpec& s = m.steps[i];
+      if (o.feedstock && !s.feedstock_video.empty()) {
+        try {
+          r.feedstock =
+              MeasureFeedstock(s.feedstock_video, s.start_s + s.settle_s, s.end_s, *o.feedstock);
+        } catch (const std::exception& e) {
+          // The strand's diameter stands without the feedstock's.
+          r.feedstock = FeedstockResult{};
+          r.feedstock->status = "failed";
+          r.feedstock->detail = e.what();
+          r.feedstock->video = s.feedstock_video;
         }
-      } catch (const std::exception& e) {
-        r = FailedStep(m.steps[i], fmt::format("measuring stopped: {}", e.what()));
-      } catch (...) {
-        r = FailedStep(m.steps[i], "measuring stopped: unknown error");
       }
-      if (o.cancel && o.cancel->load()) return;  // a partial step is not kept
-      std::vector<std::string> unsaved;
-      try {
-        for (const auto& [frame_idx, image] : overlays) {
-          const FrameRecord& f = r.frames[frame_idx];
-          const std::string name =
-              (overlay_dir / fmt::format("step{:02d}_{:.0f}C_f{:06d}.png", r.spec.step,
-                                         r.spec.temperature_c, f.frame))
-                  .string();
-          const double scale = o.conversion ? o.conversion->scale_um_per_px : 0.0;
-          const double bias = o.conversion ? o.conversion->edge_bias_px : 0.0;
-          vision::WriteImageAtomically(name, vision::DrawOverlay(image, f.m, scale, bias));
-        }
-      } catch (const std::exception& e) {
-        unsaved.push_back(fmt::format("overlay not written: {}", e.what()));
-      }
-      try {
-        WriteFileAtomically((steps_dir / StepFileName(r.spec.step)).string(), StepFileText(r, o));
-      } catch (const std::exception& e) {
-        unsaved.push_back(
-            fmt::format("step file not written (--resume will measure it again): {}", e.what()));
-      }
-      // The measurement stands; the step's detail says what could not be saved.
-      for (const auto& u : unsaved) r.detail += (r.detail.empty() ? "" : "; ") + u;
-      std::lock_guard<std::mutex> lock(mu);
-      ++done;
-      if (o.on_step) o.on_step(r, done, total);
-      results[i] = std::move(r);
+    } catch (const std::exception& e) {
+      r = FailedStep(m.steps[i], fmt::format("measuring stopped: {}", e.what()));
+    } catch (...) {
+      r = FailedStep(m.steps[i], "measuring stopped: unknown error");
     }
+    if (o.cancel && o.cancel->load()) return;  // a partial step is not kept
+    std::vector<std::string> unsaved;
+    try {
+      for (const auto& [frame_idx, image] : overlays) {
+        const FrameRecord& f = r.frames[frame_idx];
+        const std::string name =
+            (overlay_dir / fmt::format("step{:02d}_{:.0f}C_f{:06d}.png", r.spec.step,
+                                       r.spec.temperature_c, f.frame))
+                .string();
+        const double scale = o.conversion ? o.conversion->scale_um_per_px : 0.0;
+        const double bias = o.conversion ? o.conversion->edge_bias_px : 0.0;
+        vision::WriteImageAtomically(name, vision::DrawOverlay(image, f.m, scale, bias));
+      }
+    } catch (const std::exception& e) {
+      unsaved.push_back(fmt::format("overlay not written: {}", e.what()));
+    }
+    try {
+      WriteFileAtomically((steps_dir / StepFileName(r.spec.step)).string(), StepFileText(r, o));
+    } catch (const std::exception& e) {
+      unsaved.push_back(
+          fmt::format("step file not written (--resume will measure it again): {}", e.what()));
+    }
+    // The measurement stands; the step's detail says what could not be saved.
+    for (const auto& u : unsaved) r.detail += (r.detail.empty() ? "" : "; ") + u;
+    std::lock_guard<std::mutex> lock(mu);
+    ++done;
+    if (o.on_step) o.on_step(r, done, total);
+    results[i] = std::move(r);
   };
-  std::vector<std::thread> pool;
-  for (int k = 0; k < jobs; ++k) pool.emplace_back(worker);
-  for (auto& th : pool) th.join();
+  // Steps are taken in manifest order; each reports as it finishes. Cancelling stops taking new
+  // steps; an error that escapes a step (a callback's) reaches the caller after the others end.
+  ParallelFor(
+      todo.size(), jobs, [&](size_t j) { run_step(todo[j]); }, o.cancel);
   std::vector<StepResult> out_results;
   for (auto& r : results) {
     if (r) out_results.push_back(std::move(*r));

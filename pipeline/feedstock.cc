@@ -8,7 +8,7 @@
 
 #include "pipeline/experiment.h"
 #include "pipeline/statistics.h"
-#include "vision/io/video_decoder.h"
+#include "vision/io/frame_source.h"
 #include "vision/motion/feed_speed.h"
 #include "vision/scene/track.h"
 
@@ -52,9 +52,12 @@ FeedstockResult MeasureFeedstock(const std::string& video, double start_s, doubl
   r.video = video;
   std::string why;
   if (!o.Validate(&why)) throw std::invalid_argument(why);
-  std::unique_ptr<vision::VideoDecoder> dec;
+  std::unique_ptr<vision::FrameSource> dec;
   try {
-    dec = std::make_unique<vision::VideoDecoder>(video, 1);
+    vision::VideoReadOptions vo;
+    vo.decoder_threads = 1;
+    vo.gap_entries = false;  // pairs of frames decoded
+    dec = vision::FrameSource::OpenVideo(video, vo);
   } catch (const std::invalid_argument& e) {
     r.status = "failed";
     r.detail = e.what();
@@ -74,7 +77,8 @@ FeedstockResult MeasureFeedstock(const std::string& video, double start_s, doubl
   vision::StrandTracker strand(o.strand);
   std::vector<double> widths, speeds, gears, slips;
   if (a > kSeekAheadS) dec->SeekToTime(a);
-  vision::DecodedFrame f;
+  vision::InputFrame f;
+  f.time_s = 0;  // before the first frame: the stream's start
   for (int k = 0; k < o.pairs; ++k) {
     const double target = a + (k + 0.5) * slot;
     // Fresh speed trackers for each pair: the frame before a seek is no neighbour.
@@ -86,17 +90,17 @@ FeedstockResult MeasureFeedstock(const std::string& video, double start_s, doubl
     while (in_pair < 2) {
       if (!have_target && target - f.time_s > kSeekAheadS) dec->SeekToTime(target);
       have_target = true;
-      if (!dec->Read(&f)) break;
+      if (!dec->Next(&f)) break;
       if (f.time_s < target - 1e-9 && in_pair == 0) continue;
       if (in_pair == 0 && f.time_s >= b - 1e-9) break;  // the step's part is over
-      const vision::StrandMeasurement m = strand.Measure(f.grey);
+      const vision::StrandMeasurement m = strand.Measure(f.image);
       if (in_pair == 0) {
         ++r.n_pairs;
         if (m.valid()) widths.push_back(m.width_px);
       }
-      const vision::FeedSpeedSample v = feed.Next(f.grey, f.time_s, m);
+      const vision::FeedSpeedSample v = feed.Next(f.image, f.time_s, m);
       vision::GearSpeedSample g;
-      if (gear) g = gear->Next(f.grey, f.time_s);
+      if (gear) g = gear->Next(f.image, f.time_s);
       if (in_pair == 1 && conversion) {
         if (v.valid) speeds.push_back(v.SpeedPxPerS() * mm_per_px);
         const vision::GearAndSlip gs = vision::GearAndSlipOf(v, g, mm_per_px, o.gear_radius_mm);

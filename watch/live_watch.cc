@@ -4,11 +4,10 @@
 
 #include <algorithm>
 #include <chrono>
-#include <condition_variable>
 #include <deque>
 #include <stdexcept>
-#include <thread>
 
+#include "common/work_queue.h"
 #include "vision/scene/scene_memory.h"
 #include "vision/scene/track.h"
 
@@ -21,63 +20,23 @@ double Seconds(Clock::duration d) { return std::chrono::duration<double>(d).coun
 
 // Frames between the reader thread and the measuring thread. A live source keeps only the newest
 // frames (what a watch wants is now, not a backlog); a file's reader waits for room instead.
-class FrameQueue {
- public:
-  FrameQueue(size_t capacity, bool drop_oldest) : capacity_(capacity), drop_oldest_(drop_oldest) {}
+using FrameQueue = BoundedQueue<vision::InputFrame>;
 
-  // False when the queue was closed while waiting for room.
-  bool Push(vision::LiveFrame frame, const std::atomic<bool>* stop) {
-    std::unique_lock<std::mutex> lock(mutex_);
-    if (drop_oldest_) {
-      while (queue_.size() >= capacity_) {
-        queue_.pop_front();
-        ++skipped_;
-      }
-    } else {
-      room_.wait(lock, [&] { return queue_.size() < capacity_ || closed_ || stop->load(); });
-      if (closed_ || stop->load()) return false;
-    }
-    queue_.push_back(std::move(frame));
-    ready_.notify_one();
-    return true;
+// Raises the stop flag and cancels the queue when it goes out of scope.
+struct StopOnExit {
+  std::atomic<bool>* stop;
+  FrameQueue* queue;
+  ~StopOnExit() {
+    stop->store(true);
+    queue->Cancel();
   }
-  // Waits up to `timeout` for a frame. False with *ended set when the reader has finished.
-  bool Pop(vision::LiveFrame* out, Clock::duration timeout, bool* ended) {
-    std::unique_lock<std::mutex> lock(mutex_);
-    ready_.wait_for(lock, timeout, [&] { return !queue_.empty() || closed_; });
-    *ended = queue_.empty() && closed_;
-    if (queue_.empty()) return false;
-    *out = std::move(queue_.front());
-    queue_.pop_front();
-    room_.notify_one();
-    return true;
-  }
-  void Close() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    closed_ = true;
-    ready_.notify_all();
-    room_.notify_all();
-  }
-  long long skipped() const {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return skipped_;
-  }
-
- private:
-  mutable std::mutex mutex_;
-  std::condition_variable ready_, room_;
-  std::deque<vision::LiveFrame> queue_;
-  size_t capacity_;
-  bool drop_oldest_;
-  bool closed_ = false;
-  long long skipped_ = 0;
 };
 
 // Reads frames into the queue; reopens a live source that drops, with back-off.
 struct Reader {
   const LiveWatchOptions& options;
   const LiveWatchEvents& events;
-  std::unique_ptr<vision::LiveSource> source;
+  std::unique_ptr<vision::FrameSource> source;
   FrameQueue* queue;
   std::atomic<bool>* stop;
   std::atomic<bool> up{true};
@@ -95,13 +54,15 @@ struct Reader {
                                       stop);
   }
 
+  // Ends with the queue closed, however it ends (an exception reaches RunLiveWatch's caller).
   void Run() {
-    vision::LiveFrame frame;
+    CloseOnExit<vision::InputFrame> close(queue);
+    vision::InputFrame frame;
     std::string why;
     while (!stop->load()) {
-      vision::LiveRead r;
+      vision::FrameRead r;
       try {
-        r = source->Next(&frame, &why);
+        r = source->Read(&frame, &why);
       } catch (const std::exception& e) {
         // A source that cannot go on (its frames would take too much memory): the watch ends
         // with the reason; nothing thrown may leave this thread.
@@ -109,16 +70,16 @@ struct Reader {
         ended_because = "the source failed";
         break;
       }
-      if (r == vision::LiveRead::kFrame) {
-        if (!queue->Push(std::move(frame), stop)) break;
-        frame = vision::LiveFrame{};
+      if (r == vision::FrameRead::kFrame) {
+        if (!queue->Push(std::move(frame))) break;
+        frame = vision::InputFrame{};
         continue;
       }
-      if (r == vision::LiveRead::kEnd) {
+      if (r == vision::FrameRead::kEnd) {
         ended_because = "the file ended";
         break;
       }
-      if (r == vision::LiveRead::kStopped) break;
+      if (r == vision::FrameRead::kStopped) break;
       // Dropped: reopen with back-off until it comes back or the watch stops.
       up = false;
       Warn(fmt::format("{}: {}; reconnecting", options.source, why));
@@ -126,7 +87,7 @@ struct Reader {
       double wait_s = options.reconnect_initial_s;
       while (!source && Wait(wait_s)) {
         try {
-          source = vision::LiveSource::Open(options.source, options.source_options, stop);
+          source = vision::OpenLiveSource(options.source, options.source_options, stop);
         } catch (const std::invalid_argument& e) {
           Warn(fmt::format("{} (next try in {:g} s)", e.what(),
                            std::min(2 * wait_s, options.reconnect_max_s)));
@@ -139,7 +100,6 @@ struct Reader {
       Warn(options.source + ": reconnected");
     }
     if (ended_because.empty()) ended_because = "stopped";
-    queue->Close();
   }
 };
 
@@ -209,12 +169,12 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
   std::string why;
   if (!options.Validate(&why)) throw std::invalid_argument(why);
   return RunLiveWatch(options, events, board, stop,
-                      vision::LiveSource::Open(options.source, options.source_options, stop));
+                      vision::OpenLiveSource(options.source, options.source_options, stop));
 }
 
 LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEvents& events,
                               WatchBoard* board, std::atomic<bool>* stop,
-                              std::unique_ptr<vision::LiveSource> source) {
+                              std::unique_ptr<vision::FrameSource> source) {
   std::string why;
   if (!options.Validate(&why)) throw std::invalid_argument(why);
   WatchState state(options.watch, options.conversion);
@@ -224,12 +184,16 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
 
   Reader reader{options, events, std::move(source), nullptr, stop, {true}, {0}, {}, {}};
   const bool live = reader.source->live();
-  FrameQueue queue(2, /*drop_oldest=*/live || options.source_options.realtime);
+  FrameQueue queue(
+      2, live || options.source_options.realtime ? QueueFull::kDropOldest : QueueFull::kWait);
   reader.queue = &queue;
   WatchCounters counters;
   counters.source = options.source;
-  counters.source_kind = vision::LiveSourceKindName(reader.source->kind());
-  std::thread reading([&] { reader.Run(); });
+  counters.source_kind = vision::SourceKindName(reader.source->kind());
+  Workers reading(1, [&](int) { reader.Run(); });
+  // However this function ends (an event callback may throw), the reader is told to stop and woken
+  // before `reading` waits for it.
+  const StopOnExit stop_reader{stop, &queue};
 
   const double report_every =
       options.report_every_s > 0 ? options.report_every_s : options.watch.window_s;
@@ -242,7 +206,7 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
     if (events.on_line) events.on_line(StatusJson(state.status(), clog, counters, event));
   };
   const auto update_counters = [&] {
-    counters.frames_skipped_total = queue.skipped();
+    counters.frames_skipped_total = queue.dropped();
     counters.reconnects_total = reader.reconnects;
     counters.alerts_total = state.status().level_changes;
     counters.latency_median_ms = latency.Quantile(0.5);
@@ -267,7 +231,7 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
     }
   };
 
-  vision::LiveFrame frame;
+  vision::InputFrame frame;
   while (true) {
     bool ended = false;
     if (options.duration_s > 0 && Seconds(Clock::now() - started) >= options.duration_s) {
@@ -278,7 +242,7 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
       summary.ended_because = "stopped";
       break;
     }
-    if (!queue.Pop(&frame, std::chrono::milliseconds(100), &ended)) {
+    if (!queue.PopFor(&frame, std::chrono::milliseconds(100), &ended)) {
       if (ended) {
         summary.ended_because = reader.ended_because;
         summary.error = reader.error;
@@ -331,16 +295,16 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
     }
     // Arrival (decoded, in hand) to the state published: what a reader of /status waits for.
     latency.Add(1e3 * Seconds(Clock::now() - frame.arrival));
-    frame = vision::LiveFrame{};
+    frame = vision::InputFrame{};
   }
   stop->store(true);  // the reader stops too
-  queue.Close();
-  reading.join();
+  queue.Cancel();     // and a reader waiting for room wakes
+  reading.Join();     // an error that escaped the reader reaches the caller
   update_counters();
   emit("stop");
   summary.frames = counters.frames_total;
   summary.valid_frames = counters.frames_valid_total;
-  summary.skipped_frames = queue.skipped();
+  summary.skipped_frames = queue.dropped();
   summary.reconnects = reader.reconnects;
   summary.level_changes = state.status().level_changes;
   summary.final_level = state.status().level;

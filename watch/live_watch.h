@@ -17,7 +17,7 @@
 namespace clogscope::pipeline {
 
 struct LiveWatchOptions {
-  std::string source;  // device, stream URL, video file or folder (vision::LiveSource)
+  std::string source;  // device, stream URL, video file or folder (OpenLiveSource)
   vision::LiveSourceOptions source_options;
   vision::StrandMeasureOptions strand;                // band already in px
   std::optional<calib::ScaleCalibration> conversion;  // px → µm; nullopt: px only
@@ -88,6 +88,6 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
 // options.source.
 LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEvents& events,
                               WatchBoard* board, std::atomic<bool>* stop,
-                              std::unique_ptr<vision::LiveSource> source);
+                              std::unique_ptr<vision::FrameSource> source);
 
 }  // namespace clogscope::pipeline

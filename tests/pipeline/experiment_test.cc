@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -193,6 +194,53 @@ TEST_F(ExperimentTest, OneStepsErrorDoesNotStopTheRun) {
   std::vector<std::string> warnings;
   WriteExperimentTables(m, results, o, &warnings);
   EXPECT_TRUE(fs::exists(dir_ / "out" / "diameters.csv"));
+}
+
+// A step of images has no clock: an image's time is its index. Ten images in five slots of two:
+// each slot takes the first image that covers its middle (1, 3, 5, 7, 9), as a video's would.
+TEST_F(ExperimentTest, AStepOfImagesIsSampledByIndex) {
+  const fs::path images = dir_ / "images";
+  fs::create_directories(images);
+  for (int k = 0; k < 10; ++k) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "img_%02d.png", k);
+    cv::imwrite((images / name).string(), vision::RenderFrame(SmallScene(400, 7), k, nullptr));
+  }
+  StepSpec s;
+  s.step = 1;
+  s.temperature_c = 220;
+  s.images = images.string();
+  const StepResult r = MeasureStep(s, Options(5));
+  ASSERT_EQ(r.status, "ok") << r.detail;
+  std::vector<int> frames;
+  for (const auto& f : r.frames) {
+    frames.push_back(f.frame);
+    EXPECT_EQ(f.time_s, -1);
+    char name[32];
+    std::snprintf(name, sizeof(name), "img_%02d.png", f.frame);
+    EXPECT_EQ(fs::path(f.source).filename(), name);
+  }
+  EXPECT_EQ(frames, (std::vector<int>{1, 3, 5, 7, 9}));
+}
+
+// An error that escapes a step (here the progress callback's) reaches RunExperiment's caller
+// after the other workers end, instead of ending the process.
+TEST_F(ExperimentTest, AnErrorOutsideAStepReachesTheCaller) {
+  const Manifest m = VideoSteps(3, 5.0, 30);
+  ExperimentOptions o = Options(5);
+  std::atomic<int> reported{0};
+  o.on_step = [&](const StepResult& r, int, int) {
+    ++reported;
+    if (r.spec.step == 2) throw std::runtime_error("progress display failed");
+  };
+  try {
+    RunExperiment(m, o);
+    ADD_FAILURE() << "the callback's error was lost";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), "progress display failed");
+  }
+  EXPECT_GE(reported, 1);
+  EXPECT_LE(reported, 3);
 }
 
 }  // namespace

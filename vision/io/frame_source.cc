@@ -3,34 +3,37 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <deque>
-#include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <vector>
 
 #include "common/atomic_file.h"
 #include "common/path_check.h"
+#include "vision/io/image_folder.h"
 #include "vision/io/video_decoder.h"
 #include "vision/io/video_io.h"
 
 namespace clogscope::vision {
 namespace {
 
-namespace fs = std::filesystem;
-
 class ImageListSource : public FrameSource {
  public:
   ImageListSource(std::string path, std::vector<std::string> files)
-      : FrameSource(std::move(path)), files_(std::move(files)) {}
-  bool Next(InputFrame* frame) override {
-    if (next_ >= files_.size()) return false;
+      : FrameSource(std::move(path), SourceKind::kImages), files_(std::move(files)) {}
+  FrameRead Read(InputFrame* frame, std::string* /*why*/) override {
+    if (next_ >= files_.size()) return FrameRead::kEnd;
     frame->source = files_[next_];
-    frame->index = static_cast<int>(next_);
+    frame->index = static_cast<int64_t>(next_);
     frame->time_s = -1;
     frame->error.clear();
     frame->image = ReadImage(files_[next_], &frame->error);
     ++next_;
+    return FrameRead::kFrame;
+  }
+  bool SeekToFrame(int64_t index) override {
+    next_ = static_cast<size_t>(std::max<int64_t>(0, index));
     return true;
   }
   int expected_frames() const override { return static_cast<int>(files_.size()); }
@@ -42,26 +45,39 @@ class ImageListSource : public FrameSource {
 
 class VideoSource : public FrameSource {
  public:
-  explicit VideoSource(std::string path) : FrameSource(std::move(path)), decoder_(path_) {
+  VideoSource(std::string path, const VideoReadOptions& options)
+      : FrameSource(std::move(path), SourceKind::kVideo),
+        options_(options),
+        decoder_(path_, options.decoder_threads) {}
+  // For Open(): a video must hold a frame.
+  void RequireAFrame() {
     if (!Fill()) throw std::invalid_argument(path_ + ": video has no frames");
   }
-  bool Next(InputFrame* frame) override {
-    if (pending_.empty() && !Fill()) return false;
+  FrameRead Read(InputFrame* frame, std::string* /*why*/) override {
+    if (pending_.empty() && !Fill()) return FrameRead::kEnd;
     *frame = std::move(pending_.front());
     pending_.pop_front();
-    return true;
+    return FrameRead::kFrame;
+  }
+  bool SeekToTime(double time_s) override {
+    pending_.clear();
+    seeked_ = true;  // the frame numbers jump: no gap
+    return decoder_.SeekToTime(time_s);
   }
   int expected_frames() const override { return decoder_.frame_count_estimate(); }
   double fps() const override { return decoder_.fps(); }
+  double duration_s() const override { return decoder_.duration_s(); }
 
  private:
-  // Queues the next decoded frame, preceded by an undecodable entry for each frame number the
-  // decoder skipped (damaged data leaves a gap in the timestamps).
+  // Queues the next decoded frame, preceded (with gap entries) by an undecodable entry for each
+  // frame number the decoder skipped (damaged data leaves a gap in the timestamps).
   bool Fill() {
     DecodedFrame d;
     if (!decoder_.Read(&d)) return false;
+    if (seeked_) next_index_ = d.index;
+    seeked_ = false;
     // One entry per gap, however long: a jump in the timestamps is not a million lost frames.
-    if (d.index > next_index_) {
+    if (options_.gap_entries && d.index > next_index_) {
       const int missing = d.index - next_index_;
       InputFrame bad;
       bad.source = path_;
@@ -86,48 +102,84 @@ class VideoSource : public FrameSource {
     return true;
   }
 
+  VideoReadOptions options_;
   VideoDecoder decoder_;
   int next_index_ = 0;
+  bool seeked_ = false;
   std::deque<InputFrame> pending_;
 };
 
+// The images of a directory, sorted; throws naming it when it cannot be listed or holds none.
+std::vector<std::string> ImagesOf(const std::string& dir) {
+  std::vector<ImageFileEntry> entries;
+  if (!ListImageFiles(dir, &entries)) throw std::invalid_argument(dir + ": cannot list directory");
+  if (entries.empty()) throw std::invalid_argument(dir + ": directory holds no images");
+  std::vector<std::string> files;
+  for (auto& e : entries) files.push_back(std::move(e.path));
+  return files;
+}
+
+std::unique_ptr<FrameSource> OneImage(const std::string& path) {
+  return std::make_unique<ImageListSource>(path, std::vector<std::string>{path});
+}
+
+std::unique_ptr<FrameSource> VideoWithAFrame(const std::string& path) {
+  auto v = std::make_unique<VideoSource>(path, VideoReadOptions{});
+  v->RequireAFrame();
+  return v;
+}
+
 }  // namespace
+
+const char* SourceKindName(SourceKind kind) {
+  switch (kind) {
+    case SourceKind::kImages:
+      return "images";
+    case SourceKind::kVideo:
+      return "file";
+    case SourceKind::kDevice:
+      return "device";
+    case SourceKind::kStream:
+      return "stream";
+    case SourceKind::kFolder:
+      return "folder";
+  }
+  return "?";
+}
 
 std::unique_ptr<FrameSource> FrameSource::Open(const std::string& path) {
   // No such file, a name too long, a loop of symbolic links: the one path check's line.
   RequireInputPath("", path, PathExpect::kFileOrDirectory);
-  if (InspectPath(path) == PathKind::kDirectory) {
-    std::error_code ec;
-    std::vector<std::string> files;
-    for (fs::directory_iterator it(path, ec), end; !ec && it != end; it.increment(ec)) {
-      // An entry that cannot be followed (a link to itself, a dangling link) is not an image.
-      std::error_code entry_ec;
-      if (it->is_regular_file(entry_ec) && !entry_ec && IsImagePath(it->path().string()))
-        files.push_back(it->path().string());
-    }
-    if (ec) throw std::invalid_argument(path + ": cannot list directory");
-    if (files.empty()) throw std::invalid_argument(path + ": directory holds no images");
-    std::sort(files.begin(), files.end());
-    return std::make_unique<ImageListSource>(path, std::move(files));
-  }
+  if (InspectPath(path) == PathKind::kDirectory)
+    return std::make_unique<ImageListSource>(path, ImagesOf(path));
   // A FIFO or device would block or never end (a camera is `watch`'s, not a file's).
   std::string why;
   if (!IsRegularFile(path, &why)) throw std::invalid_argument(path + ": " + why);
-  if (IsVideoPath(path)) return std::make_unique<VideoSource>(path);
+  if (IsVideoPath(path)) return VideoWithAFrame(path);
   if (IsImagePath(path)) {
     std::string error;
     if (ReadImage(path, &error).empty()) throw std::invalid_argument(path + ": " + error);
-    return std::make_unique<ImageListSource>(path, std::vector<std::string>{path});
+    return OneImage(path);
   }
   // Unknown extension: an image if it decodes as one, else a video.
   std::string error;
-  if (!ReadImage(path, &error).empty())
-    return std::make_unique<ImageListSource>(path, std::vector<std::string>{path});
+  if (!ReadImage(path, &error).empty()) return OneImage(path);
   try {
-    return std::make_unique<VideoSource>(path);
+    return VideoWithAFrame(path);
   } catch (const std::invalid_argument&) {
     throw std::invalid_argument(path + ": neither a readable image nor a video");
   }
+}
+
+std::unique_ptr<FrameSource> FrameSource::OpenVideo(const std::string& path,
+                                                    const VideoReadOptions& options) {
+  return std::make_unique<VideoSource>(path, options);
+}
+
+std::unique_ptr<FrameSource> FrameSource::OpenImageFolder(const std::string& path) {
+  if (InspectPath(path) != PathKind::kDirectory)
+    throw std::invalid_argument(path + ": no such directory");
+  return std::make_unique<ImageListSource>(path, ImagesOf(path));
 }
 
 }  // namespace clogscope::vision

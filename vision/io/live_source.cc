@@ -1,7 +1,6 @@
 #include "vision/io/live_source.h"
 
 #include <fmt/format.h>
-#include <sys/stat.h>
 
 #include <algorithm>
 #include <filesystem>
@@ -14,6 +13,7 @@
 #include <vector>
 
 #include "common/path_check.h"
+#include "vision/io/image_folder.h"
 #include "vision/io/video_decoder.h"
 #include "vision/io/video_io.h"
 
@@ -30,20 +30,20 @@ double SecondsSince(Clock::time_point t0) {
 bool Stopped(const std::atomic<bool>* stop) { return stop && stop->load(); }
 
 // Files and streams, decoded by FFmpeg to grey.
-class DecodedSource : public LiveSource {
+class DecodedSource : public FrameSource {
  public:
-  DecodedSource(const std::string& source, LiveSourceKind kind, const LiveSourceOptions& options,
+  DecodedSource(const std::string& source, SourceKind kind, const LiveSourceOptions& options,
                 const std::atomic<bool>* stop)
-      : LiveSource(source, kind), options_(options), stop_(stop), opened_(Clock::now()) {
+      : FrameSource(source, kind), options_(options), stop_(stop), opened_(Clock::now()) {
     VideoDecoderOptions d;
     d.stop = stop;
-    if (kind == LiveSourceKind::kStream) {
+    if (kind == SourceKind::kStream) {
       d.open_timeout_s = options.open_timeout_s;
       d.read_timeout_s = options.read_timeout_s;
       d.low_latency = true;
     }
     decoder_ = std::make_unique<VideoDecoder>(source, d);
-    if (kind == LiveSourceKind::kStream) {
+    if (kind == SourceKind::kStream) {
       // A stream may open and then send nothing: wait for the first frame here, so that a camera
       // that never delivers is refused like one that cannot be opened.
       DecodedFrame f;
@@ -57,35 +57,36 @@ class DecodedSource : public LiveSource {
     }
   }
 
-  bool live() const override { return kind_ == LiveSourceKind::kStream; }
+  bool live() const override { return kind_ == SourceKind::kStream; }
 
-  LiveRead Next(LiveFrame* out, std::string* why) override {
-    if (Stopped(stop_)) return LiveRead::kStopped;
+  FrameRead Read(InputFrame* out, std::string* why) override {
+    if (Stopped(stop_)) return FrameRead::kStopped;
     DecodedFrame f;
     if (pending_) {
       f = std::move(*pending_);
       pending_.reset();
     } else if (!decoder_->Read(&f)) {
-      if (Stopped(stop_)) return LiveRead::kStopped;
-      if (kind_ == LiveSourceKind::kFile) return LiveRead::kEnd;
-      *why = decoder_->interrupted() ? fmt::format("no data for {:g} s", options_.read_timeout_s)
-                                     : std::string("the stream ended");
-      return LiveRead::kDropped;
+      if (Stopped(stop_)) return FrameRead::kStopped;
+      if (kind_ == SourceKind::kVideo) return FrameRead::kEnd;
+      if (why)
+        *why = decoder_->interrupted() ? fmt::format("no data for {:g} s", options_.read_timeout_s)
+                                       : std::string("the stream ended");
+      return FrameRead::kDropped;
     }
-    if (kind_ == LiveSourceKind::kFile && options_.realtime) {
+    if (kind_ == SourceKind::kVideo && options_.realtime) {
       // Pace at the video's own timestamps from the first frame on.
       if (!first_time_s_) first_time_s_ = f.time_s;
       const auto due = opened_ + std::chrono::duration_cast<Clock::duration>(
                                      std::chrono::duration<double>(f.time_s - *first_time_s_));
-      if (!SleepUnlessStopped(due, stop_)) return LiveRead::kStopped;
+      if (!SleepUnlessStopped(due, stop_)) return FrameRead::kStopped;
     }
     out->arrival = Clock::now();
     out->image = std::move(f.grey);
     out->error = out->image.empty() ? "undecodable frame" : "";
-    out->time_s = kind_ == LiveSourceKind::kFile ? f.time_s : SecondsSince(opened_);
+    out->time_s = kind_ == SourceKind::kVideo ? f.time_s : SecondsSince(opened_);
     out->index = index_++;
-    out->name.clear();
-    return LiveRead::kFrame;
+    out->source = path_;
+    return FrameRead::kFrame;
   }
 
  private:
@@ -99,10 +100,10 @@ class DecodedSource : public LiveSource {
 };
 
 // A V4L2 camera through OpenCV (FFmpeg's v4l2 input would need libavdevice).
-class DeviceSource : public LiveSource {
+class DeviceSource : public FrameSource {
  public:
   DeviceSource(const std::string& source, const std::atomic<bool>* stop)
-      : LiveSource(source, LiveSourceKind::kDevice), stop_(stop), opened_(Clock::now()) {
+      : FrameSource(source, SourceKind::kDevice), stop_(stop), opened_(Clock::now()) {
     std::error_code ec;
     if (!fs::exists(source, ec)) throw std::invalid_argument(source + ": no such device");
     if (!capture_.open(source, cv::CAP_V4L2) || !capture_.isOpened())
@@ -111,15 +112,15 @@ class DeviceSource : public LiveSource {
       throw std::invalid_argument(source + ": opened, but the camera delivered no frame");
   }
 
-  LiveRead Next(LiveFrame* out, std::string* why) override {
-    if (Stopped(stop_)) return LiveRead::kStopped;
+  FrameRead Read(InputFrame* out, std::string* why) override {
+    if (Stopped(stop_)) return FrameRead::kStopped;
     cv::Mat frame;
     if (!first_.empty()) {
       frame = first_;
       first_.release();
     } else if (!capture_.read(frame) || frame.empty()) {
-      *why = "the camera stopped delivering frames";
-      return LiveRead::kDropped;
+      if (why) *why = "the camera stopped delivering frames";
+      return FrameRead::kDropped;
     }
     out->arrival = Clock::now();
     if (frame.channels() == 3)
@@ -129,8 +130,11 @@ class DeviceSource : public LiveSource {
     out->error.clear();
     out->time_s = SecondsSince(opened_);
     out->index = index_++;
-    return LiveRead::kFrame;
+    out->source = path_;
+    return FrameRead::kFrame;
   }
+
+  bool live() const override { return true; }
 
  private:
   const std::atomic<bool>* stop_;
@@ -146,11 +150,11 @@ class DeviceSource : public LiveSource {
 // its name — never by its modification time, which a camera whose clock is off puts anywhere. An
 // image is taken once its size and time have held for one poll, so a half-written one is not read.
 // What is remembered is one entry per image in the folder: names that vanish are forgotten.
-class FolderSource : public LiveSource {
+class FolderSource : public FrameSource {
  public:
   FolderSource(const std::string& source, const LiveSourceOptions& options,
                const std::atomic<bool>* stop)
-      : LiveSource(source, LiveSourceKind::kFolder),
+      : FrameSource(source, SourceKind::kFolder),
         options_(options),
         stop_(stop),
         opened_(Clock::now()) {
@@ -159,12 +163,14 @@ class FolderSource : public LiveSource {
     for (const auto& [name, stamp] : List()) seen_[name] = {stamp, 0, /*taken=*/true, true};
   }
 
-  LiveRead Next(LiveFrame* out, std::string* why) override {
+  bool live() const override { return true; }
+
+  FrameRead Read(InputFrame* out, std::string* why) override {
     while (!Stopped(stop_)) {
       std::error_code ec;
-      if (!fs::is_directory(source_, ec)) {
-        *why = "the folder is gone";
-        return LiveRead::kDropped;
+      if (!fs::is_directory(path_, ec)) {
+        if (why) *why = "the folder is gone";
+        return FrameRead::kDropped;
       }
       Update(List());
       // The earliest arrival not taken yet (names in order within one poll); it waits until it
@@ -176,13 +182,12 @@ class FolderSource : public LiveSource {
       }
       if (next != seen_.end() && next->second.held) {
         next->second.taken = true;
-        const std::string path = (fs::path(source_) / next->first).string();
         out->arrival = Clock::now();
-        out->image = ReadImage(path, &out->error);
+        out->source = (fs::path(path_) / next->first).string();
+        out->image = ReadImage(out->source, &out->error);
         out->time_s = SecondsSince(opened_);
         out->index = index_++;
-        out->name = next->first;
-        return LiveRead::kFrame;
+        return FrameRead::kFrame;
       }
       if (!SleepUnlessStopped(
               Clock::now() + std::chrono::duration_cast<Clock::duration>(
@@ -190,7 +195,7 @@ class FolderSource : public LiveSource {
               stop_))
         break;
     }
-    return LiveRead::kStopped;
+    return FrameRead::kStopped;
   }
 
  private:
@@ -210,19 +215,12 @@ class FolderSource : public LiveSource {
   };
 
   // The folder's regular image files by name (a looping or dangling link, a file that vanished
-  // between listing and looking: skipped).
+  // between listing and looking: skipped; a folder that cannot be listed: what was listed).
   std::map<std::string, Stamp> List() const {
+    std::vector<ImageFileEntry> files;
+    ListImageFiles(path_, &files);
     std::map<std::string, Stamp> out;
-    std::error_code ec;
-    for (fs::directory_iterator it(source_, ec), end; !ec && it != end; it.increment(ec)) {
-      const std::string path = it->path().string();
-      if (!IsImagePath(path)) continue;
-      struct stat st;
-      if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) continue;
-      out[it->path().filename().string()] = {
-          static_cast<uintmax_t>(st.st_ino), static_cast<uintmax_t>(st.st_size),
-          static_cast<int64_t>(st.st_mtim.tv_sec) * 1'000'000'000 + st.st_mtim.tv_nsec};
-    }
+    for (const auto& f : files) out[f.name] = {f.inode, f.size, f.mtime_ns};
     return out;
   }
 
@@ -263,20 +261,6 @@ bool SleepUnlessStopped(Clock::time_point until, const std::atomic<bool>* stop) 
   return !Stopped(stop);
 }
 
-const char* LiveSourceKindName(LiveSourceKind kind) {
-  switch (kind) {
-    case LiveSourceKind::kDevice:
-      return "device";
-    case LiveSourceKind::kStream:
-      return "stream";
-    case LiveSourceKind::kFile:
-      return "file";
-    case LiveSourceKind::kFolder:
-      return "folder";
-  }
-  return "?";
-}
-
 bool LiveSourceOptions::Validate(std::string* why) const {
   if (!(open_timeout_s > 0 && open_timeout_s <= 3600))
     *why = fmt::format("--open-timeout-s {:g}: must be in (0, 3600] s", open_timeout_s);
@@ -289,30 +273,31 @@ bool LiveSourceOptions::Validate(std::string* why) const {
   return false;
 }
 
-LiveSourceKind LiveSource::KindOf(const std::string& source) {
-  if (source.rfind("/dev/", 0) == 0) return LiveSourceKind::kDevice;
-  if (source.find("://") != std::string::npos) return LiveSourceKind::kStream;
+SourceKind LiveSourceKindOf(const std::string& source) {
+  if (source.rfind("/dev/", 0) == 0) return SourceKind::kDevice;
+  if (source.find("://") != std::string::npos) return SourceKind::kStream;
   std::error_code ec;
-  if (fs::is_directory(source, ec)) return LiveSourceKind::kFolder;
-  return LiveSourceKind::kFile;
+  if (fs::is_directory(source, ec)) return SourceKind::kFolder;
+  return SourceKind::kVideo;
 }
 
-std::unique_ptr<LiveSource> LiveSource::Open(const std::string& source,
-                                             const LiveSourceOptions& options,
-                                             const std::atomic<bool>* stop) {
+std::unique_ptr<FrameSource> OpenLiveSource(const std::string& source,
+                                            const LiveSourceOptions& options,
+                                            const std::atomic<bool>* stop) {
   std::string why;
   if (!options.Validate(&why)) throw std::invalid_argument(why);
   if (source.empty()) throw std::invalid_argument("no source given");
-  switch (KindOf(source)) {
-    case LiveSourceKind::kDevice:
+  switch (LiveSourceKindOf(source)) {
+    case SourceKind::kDevice:
       return std::make_unique<DeviceSource>(source, stop);
-    case LiveSourceKind::kStream:
-      return std::make_unique<DecodedSource>(source, LiveSourceKind::kStream, options, stop);
-    case LiveSourceKind::kFolder:
+    case SourceKind::kStream:
+      return std::make_unique<DecodedSource>(source, SourceKind::kStream, options, stop);
+    case SourceKind::kFolder:
       return std::make_unique<FolderSource>(source, options, stop);
-    case LiveSourceKind::kFile:
+    case SourceKind::kVideo:
+    case SourceKind::kImages:
       RequireInputPath("", source, PathExpect::kFile);
-      return std::make_unique<DecodedSource>(source, LiveSourceKind::kFile, options, stop);
+      return std::make_unique<DecodedSource>(source, SourceKind::kVideo, options, stop);
   }
   throw std::invalid_argument(source + ": unknown kind of source");
 }

@@ -2,21 +2,12 @@
 
 #include <atomic>
 #include <chrono>
-#include <cstdint>
 #include <memory>
-#include <opencv2/core.hpp>
 #include <string>
 
-namespace clogscope::vision {
+#include "vision/io/frame_source.h"
 
-// Where `watch` reads frames from.
-enum class LiveSourceKind {
-  kDevice,  // a V4L2 camera: /dev/videoN (read through OpenCV's V4L2 backend)
-  kStream,  // a URL FFmpeg reads: http://…/?action=stream (MJPEG), rtsp://, tcp://, udp://
-  kFile,    // a video file, read as fast as it decodes or paced at its frame rate (realtime)
-  kFolder,  // a directory a camera writes images into: new files are picked up as they appear
-};
-const char* LiveSourceKindName(LiveSourceKind kind);
+namespace clogscope::vision {
 
 struct LiveSourceOptions {
   bool realtime = false;       // file: deliver each frame at its timestamp (replays, tests)
@@ -26,47 +17,18 @@ struct LiveSourceOptions {
   bool Validate(std::string* why) const;
 };
 
-struct LiveFrame {
-  cv::Mat image;      // grey (8- or 16-bit) or as stored (folder images); empty when unreadable
-  double time_s = 0;  // file: the video's timestamp; live sources: seconds since Open()
-  int64_t index = 0;  // frames delivered since Open()
-  std::string name;   // folder: the image file
-  std::string error;  // why image is empty
-  std::chrono::steady_clock::time_point arrival;  // when the frame was in hand (decoded)
-};
+// Which kind SOURCE names for `watch`: /dev/… a device, "scheme://…" a stream, a directory a
+// folder a camera writes into, else a video file.
+SourceKind LiveSourceKindOf(const std::string& source);
 
-enum class LiveRead {
-  kFrame,    // *frame holds the next frame (its image may be empty: see error)
-  kEnd,      // a file has no more frames
-  kDropped,  // a live source stopped delivering (stream closed, timed out, device gone): reopen
-  kStopped,  // the stop flag was raised
-};
-
-// A camera, stream, file or folder, read frame by frame. Blocking reads return within the read
-// timeout (or the folder poll) and as soon as the stop flag turns true.
-class LiveSource {
- public:
-  // Which kind SOURCE names: /dev/… a device, "scheme://…" a stream, a directory a folder, else a
-  // file.
-  static LiveSourceKind KindOf(const std::string& source);
-  // Opens SOURCE and waits for its first frame (streams and devices, within open_timeout_s).
-  // Throws std::invalid_argument with one line naming SOURCE and why when it cannot be opened.
-  static std::unique_ptr<LiveSource> Open(const std::string& source,
-                                          const LiveSourceOptions& options,
-                                          const std::atomic<bool>* stop);
-  virtual ~LiveSource() = default;
-  // The next frame; `why` says what happened on kDropped.
-  virtual LiveRead Next(LiveFrame* frame, std::string* why) = 0;
-  // True when frame times are wall-clock (devices, streams, folders), false for a file's own.
-  virtual bool live() const { return true; }
-  LiveSourceKind kind() const { return kind_; }
-  const std::string& source() const { return source_; }
-
- protected:
-  LiveSource(std::string source, LiveSourceKind kind) : source_(std::move(source)), kind_(kind) {}
-  std::string source_;
-  LiveSourceKind kind_;
-};
+// Opens SOURCE for watching and waits for its first frame (streams and devices, within
+// open_timeout_s). Blocking reads return within the read timeout (or the folder poll) and as soon
+// as the stop flag turns true; a live source that stops delivering reads kDropped (reopen it), a
+// video file kEnd. Frames are grey (8- or 16-bit), or as stored for a folder's images. Throws
+// std::invalid_argument with one line naming SOURCE and why when it cannot be opened.
+std::unique_ptr<FrameSource> OpenLiveSource(const std::string& source,
+                                            const LiveSourceOptions& options,
+                                            const std::atomic<bool>* stop);
 
 // Sleeps until `until` in slices of at most 20 ms, so that a raised stop flag is seen soon.
 // Returns false when stopped.

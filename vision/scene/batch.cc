@@ -1,11 +1,6 @@
 #include "vision/scene/batch.h"
 
-#include <condition_variable>
-#include <deque>
-#include <exception>
-#include <mutex>
-#include <thread>
-
+#include "common/work_queue.h"
 #include "vision/scene/track.h"
 
 namespace clogscope::vision {
@@ -14,46 +9,23 @@ int MeasureFrames(FrameSource& source, const StrandMeasureOptions& options,
                   const std::function<void(InputFrame&, StrandMeasurement&)>& on_frame,
                   const std::function<bool()>& stop) {
   constexpr size_t kQueueDepth = 8;
-  std::mutex mu;
-  std::condition_variable cv;
-  std::deque<InputFrame> queue;
-  bool done = false, cancelled = false;
-  std::exception_ptr reader_error;
-
-  std::thread reader([&] {
-    try {
-      while (true) {
-        InputFrame f;
-        if (!source.Next(&f)) break;
-        std::unique_lock<std::mutex> lock(mu);
-        cv.wait(lock, [&] { return queue.size() < kQueueDepth || cancelled; });
-        if (cancelled) break;
-        queue.push_back(std::move(f));
-        cv.notify_all();
-      }
-    } catch (...) {
-      std::lock_guard<std::mutex> lock(mu);
-      reader_error = std::current_exception();
+  BoundedQueue<InputFrame> queue(kQueueDepth);
+  // The reader decodes ahead; the queue closes however it ends, so measuring never waits for
+  // frames that will not come.
+  Workers reader(1, [&](int) {
+    CloseOnExit<InputFrame> close(&queue);
+    InputFrame f;
+    while (source.Next(&f)) {
+      if (!queue.Push(std::move(f))) return;  // measuring stopped
+      f = InputFrame{};
     }
-    std::lock_guard<std::mutex> lock(mu);
-    done = true;
-    cv.notify_all();
   });
 
   int count = 0;
-  std::exception_ptr consumer_error;
   StrandTracker tracker(options);
   try {
-    while (true) {
-      InputFrame f;
-      {
-        std::unique_lock<std::mutex> lock(mu);
-        cv.wait(lock, [&] { return !queue.empty() || done; });
-        if (queue.empty()) break;
-        f = std::move(queue.front());
-        queue.pop_front();
-        cv.notify_all();
-      }
+    InputFrame f;
+    while (queue.Pop(&f)) {
       StrandMeasurement m;
       if (f.image.empty()) {
         m.status = FrameStatus::kUnreadable;
@@ -67,16 +39,13 @@ int MeasureFrames(FrameSource& source, const StrandMeasureOptions& options,
       if (stop && stop()) break;
     }
   } catch (...) {
-    consumer_error = std::current_exception();
+    // Measuring's own error wins: the reader, woken, is waited for as `reader` goes and its
+    // error, if any, dropped.
+    queue.Cancel();
+    throw;
   }
-  {
-    std::lock_guard<std::mutex> lock(mu);
-    cancelled = true;
-    cv.notify_all();
-  }
-  reader.join();
-  if (consumer_error) std::rethrow_exception(consumer_error);
-  if (reader_error) std::rethrow_exception(reader_error);
+  queue.Cancel();  // a reader still reading (stopped early) ends at its next push
+  reader.Join();   // the reader's error, after the frames it read were measured
   return count;
 }
 

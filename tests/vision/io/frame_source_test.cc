@@ -167,5 +167,139 @@ TEST(FrameSourceTest, DamagedVideoKeepsGoingInOrder) {
   EXPECT_GE(valid, 10);
 }
 
+// A step of `run` made of images: read by index, seeking forward and back.
+TEST(FrameSourceTest, AnImageFolderSeeksByIndexAndNamesItsProblems) {
+  const fs::path dir = FreshDir("folder_seek");
+  const SceneParams p = SmallScene();
+  for (int i : {0, 1, 2}) {
+    cv::imwrite((dir / ("f" + std::to_string(i) + ".png")).string(), RenderFrame(p, i, nullptr));
+  }
+  auto src = FrameSource::OpenImageFolder(dir.string());
+  EXPECT_EQ(src->kind(), SourceKind::kImages);
+  EXPECT_EQ(src->expected_frames(), 3);
+  InputFrame f;
+  ASSERT_TRUE(src->SeekToFrame(2));
+  ASSERT_TRUE(src->Next(&f));
+  EXPECT_EQ(fs::path(f.source).filename(), "f2.png");
+  EXPECT_EQ(f.index, 2);
+  EXPECT_EQ(f.time_s, -1);
+  EXPECT_FALSE(src->Next(&f));
+  ASSERT_TRUE(src->SeekToFrame(0));
+  ASSERT_TRUE(src->Next(&f));
+  EXPECT_EQ(fs::path(f.source).filename(), "f0.png");
+  EXPECT_FALSE(f.image.empty());
+  ASSERT_TRUE(src->SeekToFrame(7));
+  EXPECT_EQ(src->Read(&f), FrameRead::kEnd);
+
+  auto message = [](const std::string& path) {
+    try {
+      FrameSource::OpenImageFolder(path);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const fs::path empty = FreshDir("folder_empty");
+  EXPECT_EQ(message((dir / "none").string()), (dir / "none").string() + ": no such directory");
+  EXPECT_EQ(message((dir / "f0.png").string()), (dir / "f0.png").string() + ": no such directory");
+  EXPECT_EQ(message(empty.string()), empty.string() + ": directory holds no images");
+}
+
+// A video read for sampling: its frames at their times (k/25 s as rendered), after a seek too,
+// and no entries for gaps when asked for none.
+TEST(FrameSourceTest, AVideoSeeksToATimeAndCanLeaveOutGaps) {
+  const fs::path dir = FreshDir("video_seek");
+  const std::string path = (dir / "v.avi").string();
+  RenderSequence(SmallScene(), 50, 25.0, path, "");
+  VideoReadOptions o;
+  o.decoder_threads = 1;
+  auto src = FrameSource::OpenVideo(path, o);
+  EXPECT_EQ(src->kind(), SourceKind::kVideo);
+  EXPECT_NEAR(src->fps(), 25.0, 1e-9);
+  EXPECT_NEAR(src->duration_s(), 2.0, 0.05);
+  InputFrame f;
+  ASSERT_TRUE(src->Next(&f));
+  EXPECT_EQ(f.index, 0);
+  EXPECT_NEAR(f.time_s, 0.0, 1e-9);
+  ASSERT_TRUE(src->SeekToTime(1.2));
+  ASSERT_TRUE(src->Next(&f));
+  EXPECT_EQ(f.index, 30);
+  EXPECT_NEAR(f.time_s, 1.2, 1e-9);
+  EXPECT_FALSE(f.image.empty());
+  int rest = 0;
+  while (src->Next(&f)) ++rest;
+  EXPECT_EQ(rest, 19);  // frames 31 … 49
+
+  // The video with one jump of 10⁷ s in its timestamps: six frames decoded, no gap entry.
+  o.gap_entries = false;
+  auto jump =
+      FrameSource::OpenVideo(std::string(CLOGSCOPE_TESTDATA_DIR) + "/video/timestamp_jump.mkv", o);
+  int entries = 0, decoded = 0;
+  while (jump->Next(&f) && entries < 100) {
+    ++entries;
+    decoded += !f.image.empty();
+  }
+  EXPECT_EQ(entries, 6);
+  EXPECT_EQ(decoded, 6);
+  // A file that is no video: the decoder's own line.
+  WriteFileAtomically((dir / "notes.mp4").string(), "hello");
+  try {
+    FrameSource::OpenVideo((dir / "notes.mp4").string(), o);
+    ADD_FAILURE() << "opened a text file as video";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()).rfind((dir / "notes.mp4").string() + ": ", 0), 0u) << e.what();
+  }
+}
+
+// Frames numbered 0, 1, 2, … without pixels; the read after `fail_at` frames throws (-1: never,
+// and the frames never end).
+class CountingSource : public FrameSource {
+ public:
+  explicit CountingSource(int fail_at)
+      : FrameSource("counting", SourceKind::kImages), fail_at_(fail_at) {}
+  FrameRead Read(InputFrame* frame, std::string*) override {
+    if (next_ == fail_at_) throw std::runtime_error("reader failed at frame 3");
+    frame->index = next_++;
+    frame->error = "nothing to measure";  // an empty image: no measuring time spent
+    return FrameRead::kFrame;
+  }
+
+ private:
+  int fail_at_;
+  int next_ = 0;
+};
+
+TEST(MeasureFramesTest, AReaderErrorReachesTheCallerAfterTheFramesReadBeforeIt) {
+  CountingSource source(3);
+  std::vector<int64_t> seen;
+  try {
+    MeasureFrames(source, StrandMeasureOptions{},
+                  [&](InputFrame& f, StrandMeasurement&) { seen.push_back(f.index); });
+    ADD_FAILURE() << "the reader's error was lost";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), "reader failed at frame 3");
+  }
+  EXPECT_EQ(seen, (std::vector<int64_t>{0, 1, 2}));
+}
+
+TEST(MeasureFramesTest, AMeasuringErrorStopsAReaderThatWouldNeverEnd) {
+  CountingSource endless(-1);
+  int calls = 0;
+  EXPECT_THROW(MeasureFrames(endless, StrandMeasureOptions{},
+                             [&](InputFrame& f, StrandMeasurement&) {
+                               ++calls;
+                               if (f.index == 4) throw std::invalid_argument("stop here");
+                             }),
+               std::invalid_argument);
+  EXPECT_EQ(calls, 5);
+  // And a stop request ends it too, after the frame that asked.
+  calls = 0;
+  CountingSource endless2(-1);
+  const int n = MeasureFrames(
+      endless2, StrandMeasureOptions{}, [&](InputFrame&, StrandMeasurement&) { ++calls; },
+      [&] { return calls == 7; });
+  EXPECT_EQ(n, 7);
+}
+
 }  // namespace
 }  // namespace clogscope::vision

@@ -28,21 +28,20 @@ fs::path Fresh(const std::string& name) {
 cv::Mat Grey(int level) { return cv::Mat(48, 64, CV_8UC1, cv::Scalar(level)); }
 
 // A fresh folder holding one image already (not to be delivered), watched every 20 ms.
-std::unique_ptr<LiveSource> OpenFolderWithAnOldImage(const fs::path& d, std::atomic<bool>* stop) {
+std::unique_ptr<FrameSource> OpenFolderWithAnOldImage(const fs::path& d, std::atomic<bool>* stop) {
   cv::imwrite((d / "old.png").string(), Grey(10));
   LiveSourceOptions o;
   o.folder_poll_s = 0.02;
-  return LiveSource::Open(d.string(), o, stop);
+  return OpenLiveSource(d.string(), o, stop);
 }
 
 TEST(LiveSourceTest, KindFromTheSourceName) {
   const fs::path d = Fresh("clogscope_live_kind");
-  EXPECT_EQ(LiveSource::KindOf("/dev/video0"), LiveSourceKind::kDevice);
-  EXPECT_EQ(LiveSource::KindOf("http://printer.local/webcam/?action=stream"),
-            LiveSourceKind::kStream);
-  EXPECT_EQ(LiveSource::KindOf("rtsp://cam/1"), LiveSourceKind::kStream);
-  EXPECT_EQ(LiveSource::KindOf(d.string()), LiveSourceKind::kFolder);
-  EXPECT_EQ(LiveSource::KindOf("replay.mp4"), LiveSourceKind::kFile);
+  EXPECT_EQ(LiveSourceKindOf("/dev/video0"), SourceKind::kDevice);
+  EXPECT_EQ(LiveSourceKindOf("http://printer.local/webcam/?action=stream"), SourceKind::kStream);
+  EXPECT_EQ(LiveSourceKindOf("rtsp://cam/1"), SourceKind::kStream);
+  EXPECT_EQ(LiveSourceKindOf(d.string()), SourceKind::kFolder);
+  EXPECT_EQ(LiveSourceKindOf("replay.mp4"), SourceKind::kVideo);
   fs::remove_all(d);
 }
 
@@ -61,10 +60,10 @@ TEST(LiveSourceTest, AFolderDeliversNewImagesInOrderAndIgnoresThoseAlreadyThere)
     std::ofstream((d / "notes.txt").string()) << "not an image";
   });
   std::vector<int> levels;
-  LiveFrame f;
+  InputFrame f;
   std::string why;
   for (int k = 0; k < 3; ++k) {
-    ASSERT_EQ(source->Next(&f, &why), LiveRead::kFrame);
+    ASSERT_EQ(source->Read(&f, &why), FrameRead::kFrame);
     ASSERT_FALSE(f.image.empty()) << f.error;
     levels.push_back(f.image.at<uchar>(0, 0));
     EXPECT_EQ(f.index, k);
@@ -76,7 +75,7 @@ TEST(LiveSourceTest, AFolderDeliversNewImagesInOrderAndIgnoresThoseAlreadyThere)
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
     stop = true;
   });
-  EXPECT_EQ(source->Next(&f, &why), LiveRead::kStopped);
+  EXPECT_EQ(source->Read(&f, &why), FrameRead::kStopped);
   stopper.join();
   fs::remove_all(d);
 }
@@ -123,15 +122,15 @@ TEST(LiveSourceTest, AnImageStampedInTheFutureDoesNotHideTheNextOnes) {
   const Shot shots[] = {{"c.png", 40, now + std::chrono::hours(24)},
                         {"b.png", 80, now - std::chrono::hours(1)},
                         {"a.png", 120, now - std::chrono::hours(2)}};
-  LiveFrame f;
+  InputFrame f;
   std::string why;
   for (size_t k = 0; k < std::size(shots); ++k) {
     const std::string path = (d / shots[k].name).string();
     WriteImageAtomically(path, Grey(shots[k].level));
     fs::last_write_time(path, shots[k].mtime);
-    ASSERT_EQ(source->Next(&f, &why), LiveRead::kFrame) << shots[k].name << ": " << why;
+    ASSERT_EQ(source->Read(&f, &why), FrameRead::kFrame) << shots[k].name << ": " << why;
     ASSERT_FALSE(f.image.empty()) << f.error;
-    EXPECT_EQ(f.name, shots[k].name);
+    EXPECT_EQ(fs::path(f.source).filename().string(), shots[k].name);
     EXPECT_EQ(f.image.at<uchar>(0, 0), shots[k].level);
     EXPECT_EQ(f.index, static_cast<int64_t>(k));
   }
@@ -151,14 +150,14 @@ TEST(LiveSourceTest, AFileEndsAndARealtimeFileIsPacedAtItsFrameRate) {
   std::atomic<bool> stop{false};
   LiveSourceOptions o;
   o.realtime = true;
-  auto source = LiveSource::Open(video, o, &stop);
+  auto source = OpenLiveSource(video, o, &stop);
   EXPECT_FALSE(source->live());
-  LiveFrame f;
+  InputFrame f;
   std::string why;
   int n = 0;
   double last_t = -1;
   const auto t0 = std::chrono::steady_clock::now();
-  while (source->Next(&f, &why) == LiveRead::kFrame) {
+  while (source->Read(&f, &why) == FrameRead::kFrame) {
     EXPECT_GT(f.time_s, last_t);
     last_t = f.time_s;
     ++n;
@@ -167,7 +166,7 @@ TEST(LiveSourceTest, AFileEndsAndARealtimeFileIsPacedAtItsFrameRate) {
   EXPECT_EQ(n, 10);
   EXPECT_NEAR(last_t, 9 / 20.0, 1e-6);
   EXPECT_GE(took, 0.4);  // ten frames at 20 frames/s span 0.45 s; pacing can only add
-  EXPECT_THROW(LiveSource::Open((d / "missing.avi").string(), o, &stop), std::invalid_argument);
+  EXPECT_THROW(OpenLiveSource((d / "missing.avi").string(), o, &stop), std::invalid_argument);
   fs::remove_all(d);
 }
 
