@@ -76,9 +76,14 @@ class DecodedSource : public FrameSource {
     if (kind_ == SourceKind::kVideo && options_.realtime) {
       // Pace at the video's own timestamps from the first frame on.
       if (!first_time_s_) first_time_s_ = f.time_s;
-      const auto due = opened_ + std::chrono::duration_cast<Clock::duration>(
-                                     std::chrono::duration<double>(f.time_s - *first_time_s_));
-      if (!SleepUnlessStopped(due, stop_)) return FrameRead::kStopped;
+      const double due_s = f.time_s - *first_time_s_;
+      const bool waited =
+          options_.wait_until
+              ? options_.wait_until(due_s)
+              : SleepUnlessStopped(opened_ + std::chrono::duration_cast<Clock::duration>(
+                                                 std::chrono::duration<double>(due_s)),
+                                   stop_);
+      if (!waited || Stopped(stop_)) return FrameRead::kStopped;
     }
     out->arrival = Clock::now();
     out->image = std::move(f.grey);

@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -10,7 +11,10 @@
 namespace clogscope::vision {
 
 struct LiveSourceOptions {
-  bool realtime = false;       // file: deliver each frame at its timestamp (replays, tests)
+  bool realtime = false;  // file: deliver each frame at its timestamp (replays, tests)
+  // How realtime waits for a frame's time, `due_s` after the source opened; false: stopped.
+  // Empty: the steady clock (SleepUnlessStopped). Tests pass simulated time.
+  std::function<bool(double due_s)> wait_until;
   double open_timeout_s = 10;  // a stream that yields no frame within this is refused
   double read_timeout_s = 5;   // a stream silent this long has dropped
   double folder_poll_s = 0.1;  // how often a folder is listed

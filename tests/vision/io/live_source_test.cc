@@ -50,31 +50,25 @@ TEST(LiveSourceTest, AFolderDeliversNewImagesInOrderAndIgnoresThoseAlreadyThere)
   std::atomic<bool> stop{false};
   auto source = OpenFolderWithAnOldImage(d, &stop);
   EXPECT_TRUE(source->live());
-  // A camera writes three frames, one after the other (names out of order on purpose: the
-  // modification time decides), and a text file that is not an image.
-  std::thread camera([&] {
-    for (int i : {3, 1, 2}) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(60));
-      WriteImageAtomically((d / ("shot" + std::to_string(i) + ".png")).string(), Grey(40 * i));
-    }
-    std::ofstream((d / "notes.txt").string()) << "not an image";
-  });
+  // A camera writes three frames, one after the other (names out of order on purpose: arrival
+  // decides), and a text file that is not an image. Each read returns the frame written before
+  // it: the folder is listed when the read comes, so no clock is involved.
   std::vector<int> levels;
   InputFrame f;
   std::string why;
-  for (int k = 0; k < 3; ++k) {
+  int k = 0;
+  for (int i : {3, 1, 2}) {
+    WriteImageAtomically((d / ("shot" + std::to_string(i) + ".png")).string(), Grey(40 * i));
+    if (i == 2) std::ofstream((d / "notes.txt").string()) << "not an image";
     ASSERT_EQ(source->Read(&f, &why), FrameRead::kFrame);
     ASSERT_FALSE(f.image.empty()) << f.error;
     levels.push_back(f.image.at<uchar>(0, 0));
-    EXPECT_EQ(f.index, k);
+    EXPECT_EQ(f.index, k++);
   }
-  camera.join();
   EXPECT_EQ(levels, (std::vector<int>{120, 40, 80}));
-  // Nothing new: the read waits; a raised stop flag ends it.
-  std::thread stopper([&] {
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    stop = true;
-  });
+  // Nothing new (the text file is no frame): the read waits until the stop flag rises, whether
+  // it rises before the read begins or while it waits.
+  std::thread stopper([&] { stop = true; });
   EXPECT_EQ(source->Read(&f, &why), FrameRead::kStopped);
   stopper.join();
   fs::remove_all(d);
@@ -150,22 +144,32 @@ TEST(LiveSourceTest, AFileEndsAndARealtimeFileIsPacedAtItsFrameRate) {
   std::atomic<bool> stop{false};
   LiveSourceOptions o;
   o.realtime = true;
+  // Simulated time: the source says when each frame is due; nothing waits.
+  std::vector<double> due_s;
+  o.wait_until = [&](double due) {
+    due_s.push_back(due);
+    return true;
+  };
   auto source = OpenLiveSource(video, o, &stop);
   EXPECT_FALSE(source->live());
   InputFrame f;
   std::string why;
   int n = 0;
   double last_t = -1;
-  const auto t0 = std::chrono::steady_clock::now();
   while (source->Read(&f, &why) == FrameRead::kFrame) {
     EXPECT_GT(f.time_s, last_t);
     last_t = f.time_s;
     ++n;
   }
-  const double took = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_EQ(n, 10);
   EXPECT_NEAR(last_t, 9 / 20.0, 1e-6);
-  EXPECT_GE(took, 0.4);  // ten frames at 20 frames/s span 0.45 s; pacing can only add
+  // Each frame waited for its own timestamp from the first: 0, 0.05, …, 0.45 s at 20 frames/s.
+  ASSERT_EQ(due_s.size(), 10u);
+  for (int i = 0; i < 10; ++i) EXPECT_NEAR(due_s[i], i / 20.0, 1e-6) << i;
+  // A wait cut short by the stop flag ends the read.
+  o.wait_until = [&](double) { return false; };
+  auto stopped = OpenLiveSource(video, o, &stop);
+  EXPECT_EQ(stopped->Read(&f, &why), FrameRead::kStopped);
   EXPECT_THROW(OpenLiveSource((d / "missing.avi").string(), o, &stop), std::invalid_argument);
   fs::remove_all(d);
 }
