@@ -2,12 +2,9 @@
 
 // `clogscope calibrate`: the pixel scale from pin gauges or a stage micrometer.
 
-#include <optional>
 #include <string>
-#include <vector>
 
-#include "calib/pixel_scale.h"
-#include "vision/scene/strand_measure.h"
+#include "pipeline/calibrate_targets.h"
 
 namespace clogscope::apps {
 
@@ -16,26 +13,10 @@ namespace clogscope::apps {
 int RunCalibrate(int argc, char** argv);
 
 struct CalibrateCommandOptions {
-  std::string pins_csv;                        // pin gauges: image,diameter_um[,tolerance_um]
-  std::vector<std::string> micrometer_images;  // or stage micrometer images
-  double pitch_um = 0;                         // micrometer line pitch
-  bool fit_distortion = false;                 // micrometer: second-order term
-  std::optional<double>
-      expect_scale_um_per_px;                // micrometer: refuse a pitch that gives far from this
-  std::string out;                           // calibration YAML
-  std::string plot;                          // residual plot PNG; empty: next to out
-  vision::StrandMeasureOptions pin_measure;  // roi, polarity for the pins
+  pipeline::TargetCalibrationOptions targets;  // the reference images and how to read them
+  std::string out;                             // calibration YAML
+  std::string plot;                            // residual plot PNG; empty: next to out
   bool Validate(std::string* why) const;
 };
-
-struct CalibrateResult {
-  calib::ScaleCalibration calibration;
-  std::vector<std::string> inputs;  // files read
-};
-
-// Measures the reference images and fits the scale; writes nothing. Throws std::invalid_argument
-// naming the image or CSV row for bad input (unreadable image, pin or lines not found, missing
-// diameter, too few targets, a pitch that does not fit).
-CalibrateResult ComputeCalibration(const CalibrateCommandOptions& options);
 
 }  // namespace clogscope::apps

@@ -30,26 +30,6 @@ bool ParseSize(const std::string& text, int* width, int* height) {
   return true;
 }
 
-cv::Rect ParseRoi(const std::string& text) {
-  std::vector<int> v;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    try {
-      size_t used = 0;
-      v.push_back(std::stoi(item, &used));
-      if (used != item.size()) throw std::invalid_argument(item);
-    } catch (const std::exception&) {
-      throw std::invalid_argument("--roi '" + text + "': expected x,y,w,h in whole px");
-    }
-  }
-  if (v.size() != 4)
-    throw std::invalid_argument("--roi '" + text + "': expected x,y,w,h in whole px");
-  if (v[0] < 0 || v[1] < 0 || v[2] <= 0 || v[3] <= 0)
-    throw std::invalid_argument("--roi '" + text + "': x and y must be >= 0, w and h > 0");
-  return cv::Rect(v[0], v[1], v[2], v[3]);
-}
-
 void SetUpLogging(const std::string& level) {
   // To the tool's own copy of stderr: library text diverted around a decoder never takes a
   // message of the tool's with it (common/library_text.h).
@@ -88,13 +68,6 @@ void CheckNumbers(const CLI::App& app) {
       }
     }
   }
-}
-
-void CreateOutputDirectory(const std::string& dir) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec || !std::filesystem::is_directory(dir))
-    throw std::invalid_argument(dir + ": cannot create output directory");
 }
 
 }  // namespace clogscope::apps

@@ -9,9 +9,6 @@ namespace clogscope::apps {
 // "WxH" -> width, height (positive). Returns false on a malformed value (CLI11 callback form).
 bool ParseSize(const std::string& text, int* width, int* height);
 
-// "x,y,w,h" -> rectangle; throws std::invalid_argument naming --roi on a malformed value.
-cv::Rect ParseRoi(const std::string& text);
-
 // Parses the command line into `app`'s options, then CheckNumbers. Returns false when --help was
 // asked for (and printed). A usage error (unknown option, missing or unconvertible value) throws
 // std::invalid_argument with CLI11's one-line reason, so it reads like every other error.
@@ -21,10 +18,6 @@ bool ParseCommandLine(CLI::App& app, int argc, char** argv);
 // ("inf", "nan", 1e309 or 4.9e-324 reach no physical quantity). Throws std::invalid_argument
 // naming the option. Each quantity's own range is checked where its options are validated.
 void CheckNumbers(const CLI::App& app);
-
-// Creates `dir` (and its parents) for outputs; throws std::invalid_argument "DIR: cannot create
-// output directory" when it cannot.
-void CreateOutputDirectory(const std::string& dir);
 
 // Writes spdlog output to stderr at the given level name ("info", "warn", "debug", …).
 void SetUpLogging(const std::string& level);

@@ -92,7 +92,7 @@ bool DriveCommandOptions::Validate(std::string* why) const {
 model::DrivePrediction ComputeDrive(const DriveCommandOptions& o) {
   std::string why;
   if (!o.Validate(&why)) throw std::invalid_argument(why);
-  const model::ExtruderParams params = LoadExtruderWithOverrides(o.extruder, o.set);
+  const model::ExtruderParams params = model::LoadExtruderWithOverrides(o.extruder, o.set);
   const auto steps =
       model::ReadDiameterTable(o.diameters, params.Get(model::Param::kReferenceTemperatureC));
   return model::PredictDrive(params, steps, o.drive,

@@ -9,9 +9,9 @@
 #include <optional>
 #include <stdexcept>
 
-#include "apps/band.h"
 #include "apps/cli_util.h"
 #include "common/path_check.h"
+#include "pipeline/band.h"
 #include "vision/io/frame_source.h"
 #include "vision/io/video_io.h"
 #include "vision/overlay/overlay.h"
@@ -38,10 +38,10 @@ vision::InputFrame ReadFrame(const std::string& input, int index) {
       fmt::format("--frame {}: {} has only {} frame(s)", index, input, read));
 }
 
-// The band in px as asked for, the target's default (apps/band.h, no scale) for the rest. A band
-// that cannot be used is left to the strand options' Validate to name.
-void SetBandPx(const BandRequest& asked, vision::StrandMeasureOptions* o) {
-  const vision::BandPx band = ResolveBandPx(asked, o->target, std::nullopt).band;
+// The band in px as asked for, the target's default (pipeline/band.h, no scale) for the rest. A
+// band that cannot be used is left to the strand options' Validate to name.
+void SetBandPx(const pipeline::BandRequest& asked, vision::StrandMeasureOptions* o) {
+  const vision::BandPx band = pipeline::ResolveBandPx(asked, o->target, std::nullopt).band;
   o->band_start_px = band.start_px;
   o->band_height_px = band.height_px;
 }
@@ -215,7 +215,7 @@ int RunInspect(int argc, char** argv) {
   app.add_option("--roi", roi, "Search only inside x,y,w,h (px)");
   app.add_option("--polarity", polarity, "auto, bright or dark")->capture_default_str();
   app.add_option("--target", target, "strand or filament (default: strand if a tip is in view)");
-  BandRequest band;
+  pipeline::BandRequest band;
   app.add_option("--band-start-px", band.start_px,
                  "Band start below the tip or the top of the stretch (default: as measure)");
   app.add_option("--band-height-px", band.height_px, "Band height (default: as measure)");
@@ -227,7 +227,7 @@ int RunInspect(int argc, char** argv) {
       "ruled out), with the band, calipers and tip of the measurement and the suggested ROI "
       "(white).");
   if (!ParseCommandLine(app, argc, argv)) return 0;  // --help printed
-  if (!roi.empty()) o.strand.roi = ParseRoi(roi);
+  if (!roi.empty()) o.strand.roi = pipeline::ParseRoi(roi);
   o.strand.polarity = vision::ParsePolarity(polarity);
   if (!target.empty()) {
     o.strand.target = vision::ParseMeasureTarget(target);

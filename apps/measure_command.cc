@@ -22,6 +22,7 @@
 #include "common/atomic_file.h"
 #include "common/csv.h"
 #include "common/provenance.h"
+#include "pipeline/band.h"
 #include "pipeline/statistics.h"
 #include "vision/io/video_io.h"
 #include "vision/scene/batch.h"
@@ -127,7 +128,7 @@ void MeasureCommandOptions::ResolveBand() {
   if (scale_um_per_px && calibration) {
     throw std::invalid_argument("give either --scale-um-per-px or --calib, not both");
   }
-  ApplyBandPx(band, Conversion(), &strand);
+  pipeline::ApplyBandPx(band, Conversion(), &strand);
 }
 
 std::optional<calib::ScaleCalibration> MeasureCommandOptions::Conversion() const {
@@ -370,7 +371,7 @@ int RunMeasure(int argc, char** argv) {
   // The gear's options are refused with --manifest above: these two read the inputs mode's.
   if (!gear_roi.empty()) {
     try {
-      o.gear_roi = ParseRoi(gear_roi);
+      o.gear_roi = pipeline::ParseRoi(gear_roi);
     } catch (const std::invalid_argument&) {
       throw std::invalid_argument("--gear-roi '" + gear_roi + "': expected x,y,w,h");
     }
@@ -378,7 +379,7 @@ int RunMeasure(int argc, char** argv) {
   if (!gear_centre.empty()) {
     cv::Rect c;
     try {  // "x,y": read as a rectangle with a dummy size
-      c = ParseRoi(gear_centre + ",1,1");
+      c = pipeline::ParseRoi(gear_centre + ",1,1");
     } catch (const std::invalid_argument&) {
       throw std::invalid_argument("--gear-centre '" + gear_centre + "': expected x,y");
     }

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "apps/band.h"
 #include "calib/pixel_scale.h"
+#include "pipeline/band.h"
 #include "vision/motion/feed_speed.h"
 #include "vision/scene/strand_measure.h"
 
@@ -23,7 +23,7 @@ struct MeasureCommandOptions {
   std::vector<std::string> inputs;                     // images, directories of images, videos
   std::optional<double> scale_um_per_px;               // converts widths to µm when given
   std::optional<calib::ScaleCalibration> calibration;  // or a calibration (--calib): scale and bias
-  BandRequest band;                     // in µm (needs a scale) or px; default: DefaultBand
+  pipeline::BandRequest band;           // in µm (needs a scale) or px; default: DefaultBand
   vision::StrandMeasureOptions strand;  // band fields are filled from the above
   std::string out_frames;               // per-frame CSV; empty or "-": standard output
   std::string overlay_dir;              // empty: no overlays

@@ -3,6 +3,7 @@
 #include "apps/cli_util.h"
 #include "calib/calibration_file.h"
 #include "common/path_check.h"
+#include "pipeline/band.h"
 
 namespace clogscope::apps {
 
@@ -41,7 +42,7 @@ void AddMeasurementOptions(CLI::App& app, MeasureCommandOptions* o, MeasureCliTe
 
 void ApplyMeasurementOptions(const CLI::App& app, const MeasureCliText& text,
                              MeasureCommandOptions* o) {
-  if (!text.roi.empty()) o->strand.roi = ParseRoi(text.roi);
+  if (!text.roi.empty()) o->strand.roi = pipeline::ParseRoi(text.roi);
   if (!text.calib_path.empty()) {
     RequireInputPath("--calib", text.calib_path, PathExpect::kFile);
     o->calibration = calib::ReadCalibrationFile(text.calib_path);

@@ -10,11 +10,9 @@
 #include <stdexcept>
 
 #include "apps/cli_util.h"
-#include "common/atomic_file.h"
 #include "common/path_check.h"
-#include "common/plot.h"
-#include "common/provenance.h"
 #include "model/io.h"
+#include "model/prediction_run.h"
 
 namespace clogscope::apps {
 namespace {
@@ -87,140 +85,13 @@ bool PredictCommandOptions::Validate(std::string* why) const {
   return false;
 }
 
-model::ExtruderParams LoadExtruderWithOverrides(const std::string& extruder,
-                                                const std::vector<std::string>& set) {
-  RequireInputPath("--extruder", extruder, PathExpect::kPresetOrFile);
-  model::ExtruderParams params = model::LoadExtruder(extruder);
-  for (const std::string& kv : set) {
-    const size_t eq = kv.find('=');
-    if (eq == std::string::npos || eq == 0) {
-      throw std::invalid_argument("--set '" + kv + "': expected name=value");
-    }
-    try {
-      params.SetByName(kv.substr(0, eq), kv.substr(eq + 1));
-    } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument(std::string("--set: ") + e.what());
-    }
-  }
-  std::string why;
-  if (!params.Validate(&why)) throw std::invalid_argument("extruder parameters: " + why);
-  return params;
-}
-
 PredictResult ComputePrediction(const PredictCommandOptions& o) {
   std::string why;
   if (!o.Validate(&why)) throw std::invalid_argument(why);
-  PredictResult r;
-  r.params = LoadExtruderWithOverrides(o.extruder, o.set);
-  r.steps = model::ReadDiameterTable(o.diameters, r.params.Get(Param::kReferenceTemperatureC));
-  model::CheckSteps(r.params, r.steps);
-  model::ExtruderParams use = r.params;
-  if (!o.fit_measured.empty()) {
-    const auto measured = model::ReadMeasurements(o.fit_measured, r.steps);
-    model::FitOptions fo;
-    for (const auto& name : o.fit_params) {
-      try {
-        fo.params.push_back(model::ParamByName(name));
-      } catch (const std::invalid_argument& e) {
-        throw std::invalid_argument(std::string("--fit-params: ") + e.what());
-      }
-    }
-    r.fit = model::FitParameters(r.params, r.steps, measured, fo);
-    if (!r.fit->usable) return r;
-    use = r.fit->fitted;
-  }
-  r.prediction = model::Predict(use, r.steps);
-  return r;
-}
-
-std::vector<std::string> WritePredictionOutputs(const PredictResult& r, const std::string& out_dir,
-                                                bool plots, std::vector<std::string>* warnings) {
-  CreateOutputDirectory(out_dir);
-  const Provenance prov = CurrentProvenance();
-  const auto& pr = r.prediction;
-  const model::FitSummary* fit = r.fit ? &*r.fit : nullptr;
-  const model::ExtruderParams& used = fit ? fit->fitted : r.params;
-  std::vector<std::string> written;
-  auto path = [&](const char* name) { return (fs::path(out_dir) / name).string(); };
-  WriteFileAtomically(path("predictions.csv"), model::PredictionsCsv(pr, prov));
-  written.push_back(path("predictions.csv"));
-  WriteFileAtomically(path("predictions.json"), model::PredictionsJson(pr, used, prov, fit));
-  written.push_back(path("predictions.json"));
-  if (fit) {
-    WriteFileAtomically(path("fitted_params.yaml"),
-                        model::ExtruderToYaml(fit->fitted, prov, fit->values));
-    written.push_back(path("fitted_params.yaml"));
-  }
-  if (!plots) return written;
-
-  auto plot = [&](const PlotSpec& spec, const char* name) {
-    std::string why;
-    if (PlotToPng(spec, path(name), &why)) {
-      written.push_back(path(name));
-    } else {
-      warnings->push_back(fmt::format("{}: not drawn: {}", name, why));
-    }
-  };
-  const bool absolute = pr.gain_m_s2_per_n.has_value();
-  PlotSpec amp;
-  amp.title = fmt::format("Bar-mount vibration at {:.1f} Hz against effective nozzle diameter ({})",
-                          used.Get(Param::kNaturalFrequencyHz), used.origin);
-  amp.x_label = "effective diameter (µm)";
-  amp.y_label = absolute ? "amplitude (m/s²)" : "relative amplitude A/A_0";
-  PlotSeries model_series{"model", {}, {}, {}, "linespoints"};
-  for (const auto& s : pr.steps) {
-    model_series.x.push_back(s.diameter_um);
-    model_series.y.push_back(absolute ? *s.amplitude_m_s2 : s.relative_amplitude);
-  }
-  amp.series.push_back(model_series);
-  if (fit) {
-    PlotSeries measured{"measured", {}, {}, {}, "points pt 7 ps 1.5"};
-    for (const auto& res : fit->residuals) {
-      if (res.quantity != "amplitude_m_s2" || !absolute) continue;
-      for (const auto& s : pr.steps) {
-        if (s.step == res.step) {
-          measured.x.push_back(s.diameter_um);
-          measured.y.push_back(res.measured);
-        }
-      }
-    }
-    if (!measured.x.empty()) amp.series.push_back(measured);
-  }
-  plot(amp, "amplitude_vs_diameter.png");
-
-  PlotSpec spec;
-  spec.title = fmt::format("Spectra near the natural frequency (damping ratio {:g})",
-                           used.Get(Param::kDampingRatio));
-  spec.x_label = "frequency (Hz)";
-  spec.y_label = pr.spectrum_absolute ? "acceleration (m/s²)" : "relative amplitude";
-  for (size_t i = 0; i < pr.steps.size(); ++i) {
-    spec.series.push_back({fmt::format("step {}: {:.0f} °C, {:.1f} µm", pr.steps[i].step,
-                                       pr.steps[i].temperature_c, pr.steps[i].diameter_um),
-                           pr.spectrum_frequency_hz,
-                           pr.spectra[i],
-                           {},
-                           "lines lw 2"});
-  }
-  plot(spec, "spectra.png");
-
-  if (fit) {
-    PlotSpec res;
-    res.title = fmt::format("Fit residuals: RMS {:.2f} %", 100 * fit->rms_relative);
-    res.x_label = "step";
-    res.y_label = "(model − measured) / measured (%)";
-    res.zero_line = true;
-    for (const char* q : {"amplitude_m_s2", "current_ma"}) {
-      PlotSeries s{q, {}, {}, {}, "points pt 7 ps 1.5"};
-      for (const auto& rr : fit->residuals) {
-        if (rr.quantity != q) continue;
-        s.x.push_back(rr.step);
-        s.y.push_back(100 * rr.relative);
-      }
-      if (!s.x.empty()) res.series.push_back(s);
-    }
-    plot(res, "fit_residuals.png");
-  }
-  return written;
+  const model::ExtruderParams params = model::LoadExtruderWithOverrides(o.extruder, o.set);
+  return model::PredictSteps(
+      params, model::ReadDiameterTable(o.diameters, params.Get(Param::kReferenceTemperatureC)),
+      {o.fit_measured, o.fit_params});
 }
 
 int RunPredict(int argc, char** argv) {
@@ -272,7 +143,7 @@ int RunPredict(int argc, char** argv) {
   }
   PrintTable(r);
   std::vector<std::string> warnings;
-  const auto written = WritePredictionOutputs(r, o.out_dir, o.plots, &warnings);
+  const auto written = model::WritePredictionOutputs(r, o.out_dir, o.plots, &warnings);
   for (const auto& w : warnings) spdlog::warn("{}", w);
   spdlog::info("wrote {}", fmt::join(written, ", "));
   return 0;

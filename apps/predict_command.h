@@ -6,9 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "model/fit.h"
-#include "model/parameters.h"
-#include "model/predictor.h"
+#include "model/prediction_run.h"
 
 namespace clogscope::apps {
 
@@ -27,27 +25,12 @@ struct PredictCommandOptions {
   bool Validate(std::string* why) const;
 };
 
-struct PredictResult {
-  model::ExtruderParams params;  // as loaded and overridden (the fit's start)
-  std::vector<model::StepInput> steps;
-  std::optional<model::FitSummary> fit;
-  model::Prediction prediction;  // with the fitted parameters when a fit was asked for and usable
-};
+// The extruder, steps, fit and prediction (model/prediction_run.h).
+using PredictResult = model::PredictionRun;
 
-// Reads the inputs, fits when asked and predicts; writes nothing. Throws std::invalid_argument
-// naming the file, row or parameter for bad input. A fit that is not usable comes back with
-// fit->usable false and no prediction.
+// Reads the diameter table and predicts from it (model::PredictSteps); writes nothing. Throws
+// std::invalid_argument naming the file, row or parameter for bad input. A fit that is not usable
+// comes back with fit->usable false and no prediction.
 PredictResult ComputePrediction(const PredictCommandOptions& options);
-
-// Writes predictions.csv/.json, plots, and with a fit fitted_params.yaml and fit_residuals.png into
-// out_dir, each atomically. Returns the files written; plot problems go to `warnings`.
-std::vector<std::string> WritePredictionOutputs(const PredictResult& result,
-                                                const std::string& out_dir, bool plots,
-                                                std::vector<std::string>* warnings);
-
-// The extruder preset or YAML file with "name=value" overrides applied in order, validated. Throws
-// std::invalid_argument naming --set or the parameter.
-model::ExtruderParams LoadExtruderWithOverrides(const std::string& extruder,
-                                                const std::vector<std::string>& set);
 
 }  // namespace clogscope::apps

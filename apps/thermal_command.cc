@@ -88,7 +88,7 @@ ThermalReport ComputeThermal(const ThermalCommandOptions& o) {
     }
   }
   if (o.diameters.empty()) return r;
-  const model::ExtruderParams params = LoadExtruderWithOverrides(o.extruder, o.set);
+  const model::ExtruderParams params = model::LoadExtruderWithOverrides(o.extruder, o.set);
   model::SofteningOptions so;
   if (o.filament_modulus_pa) {
     so.modulus_pa = *o.filament_modulus_pa;

@@ -33,7 +33,7 @@ WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* s
   live.strand = m.strand;
   live.conversion = m.Conversion();
   if (!options.extruder.empty()) {
-    live.extruder = LoadExtruderWithOverrides(options.extruder, options.set);
+    live.extruder = model::LoadExtruderWithOverrides(options.extruder, options.set);
     live.temperature_c =
         options.temperature_c.value_or(live.extruder->Get(model::Param::kReferenceTemperatureC));
   } else if (options.temperature_c || !options.set.empty()) {

@@ -154,4 +154,11 @@ std::string ReadFile(const std::string& path) {
   return content;
 }
 
+void CreateOutputDirectory(const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec || !std::filesystem::is_directory(dir))
+    throw std::invalid_argument(dir + ": cannot create output directory");
+}
+
 }  // namespace clogscope

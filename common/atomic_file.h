@@ -72,4 +72,8 @@ std::string ReadFile(const std::string& path);
 // false with the reason ("no such file", "is a directory", "not a regular file (FIFO, device …)").
 bool IsRegularFile(const std::string& path, std::string* why);
 
+// Creates `dir` (and its parents) for outputs; throws std::invalid_argument "DIR: cannot create
+// output directory" when it cannot.
+void CreateOutputDirectory(const std::string& dir);
+
 }  // namespace clogscope

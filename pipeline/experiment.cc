@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -397,13 +398,13 @@ std::vector<std::string> WriteExperimentTables(const Manifest& m,
     const bool have = r.n_used > 0;
     auto um = [&](double v, int d) { return have && r.has_um ? CsvNumber(v, d) : std::string(); };
     std::vector<std::string> cells = {std::to_string(r.spec.step),
-                                      CsvNumber(r.spec.temperature_c, 2),
+                                      CsvNumber(r.spec.temperature_c, kTableTemperatureDecimals),
                                       std::to_string(r.n_used),
-                                      um(r.mean_um, 3),
-                                      um(r.std_um, 3),
-                                      um(r.sem_um, 3),
-                                      um(r.ci95_um, 3),
-                                      um(r.cal_sigma_um, 3),
+                                      um(r.mean_um, kTableUmDecimals),
+                                      um(r.std_um, kTableUmDecimals),
+                                      um(r.sem_um, kTableUmDecimals),
+                                      um(r.ci95_um, kTableUmDecimals),
+                                      um(r.cal_sigma_um, kTableUmDecimals),
                                       have ? CsvNumber(r.mean_px, 4) : "",
                                       have ? CsvNumber(r.std_px, 4) : "",
                                       std::to_string(r.n_rejected),
@@ -484,6 +485,10 @@ std::vector<std::string> WriteExperimentTables(const Manifest& m,
     }
   }
   return written;
+}
+
+double TableValue(double value, int decimals) {
+  return std::strtod(CsvNumber(value, decimals).c_str(), nullptr);
 }
 
 }  // namespace clogscope::pipeline

@@ -92,6 +92,13 @@ std::vector<std::string> FrameFields(const std::string& source, int frame, doubl
 // quadrature; that share goes to *cal_sigma_um. NaN with fewer than two widths.
 double MeanCi95Um(const SampleStats& st, const calib::ScaleCalibration& c, double* cal_sigma_um);
 
+// The diameter table's precision: µm to 3 decimals, temperatures to 2. The predictor is given the
+// values as the table holds them (TableValue), so `run` and `predict --diameters` agree to the
+// byte.
+constexpr int kTableUmDecimals = 3, kTableTemperatureDecimals = 2;
+// `value` as the table writes it (CsvNumber with `decimals`), read back as a number.
+double TableValue(double value, int decimals);
+
 // A plain scale as a calibration with no bias and no uncertainty.
 calib::ScaleCalibration PlainScale(double scale_um_per_px);
 

@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "common/csv.h"
+#include "pipeline/experiment.h"
 
 namespace clogscope::pipeline {
 namespace {
@@ -38,7 +39,7 @@ const std::vector<std::string>& FeedstockColumns() {
 
 std::vector<std::string> FeedstockFields(const FeedstockResult& r) {
   const bool have = r.n_diameter > 0;
-  return {have && r.has_um ? CsvNumber(r.diameter_um, 3) : "",
+  return {have && r.has_um ? CsvNumber(r.diameter_um, kTableUmDecimals) : "",
           have && r.has_um ? CsvNumber(r.diameter_ci95_um, 3) : "",
           have ? CsvNumber(r.diameter_px, 4) : "",
           std::to_string(r.n_diameter),

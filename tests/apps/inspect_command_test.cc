@@ -6,7 +6,7 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
-#include "apps/band.h"
+#include "pipeline/band.h"
 #include "synthetic/synthetic.h"
 #include "tests/apps/cli_test_util.h"
 #include "vision/scene/strand_measure.h"
@@ -80,7 +80,7 @@ TEST(InspectCommandTest, ExplainsTheFrameAndSuggestsOptions) {
   ASSERT_TRUE(fa.measurement.valid()) << fa.text;
   vision::StrandMeasureOptions mo;
   mo.target = vision::MeasureTarget::kFilament;
-  ApplyBandPx({}, std::nullopt, &mo);  // measure's band without a scale (apps/band.h)
+  pipeline::ApplyBandPx({}, std::nullopt, &mo);  // measure's band without a scale (pipeline/band.h)
   const vision::StrandMeasurement direct = vision::MeasureStrand(cv::imread(o.input), mo);
   EXPECT_EQ(fa.measurement.calipers_total, direct.calipers_total);
   EXPECT_DOUBLE_EQ(fa.measurement.width_px, direct.width_px);

@@ -1,10 +1,32 @@
-#include "apps/band.h"
+#include "pipeline/band.h"
 
 #include <fmt/format.h>
 
+#include <sstream>
 #include <stdexcept>
+#include <vector>
 
-namespace clogscope::apps {
+namespace clogscope::pipeline {
+
+cv::Rect ParseRoi(const std::string& text) {
+  std::vector<int> v;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    try {
+      size_t used = 0;
+      v.push_back(std::stoi(item, &used));
+      if (used != item.size()) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      throw std::invalid_argument("--roi '" + text + "': expected x,y,w,h in whole px");
+    }
+  }
+  if (v.size() != 4)
+    throw std::invalid_argument("--roi '" + text + "': expected x,y,w,h in whole px");
+  if (v[0] < 0 || v[1] < 0 || v[2] <= 0 || v[3] <= 0)
+    throw std::invalid_argument("--roi '" + text + "': x and y must be >= 0, w and h > 0");
+  return cv::Rect(v[0], v[1], v[2], v[3]);
+}
 
 BandRequest BandOver(const BandRequest& base, const BandRequest& top) {
   BandRequest out = base;
@@ -83,4 +105,4 @@ void ApplyBandPx(const BandRequest& request,
   strand->band_height_px = r.band.height_px;
 }
 
-}  // namespace clogscope::apps
+}  // namespace clogscope::pipeline

@@ -6,7 +6,11 @@
 #include "calib/pixel_scale.h"
 #include "vision/scene/strand_measure.h"
 
-namespace clogscope::apps {
+namespace clogscope::pipeline {
+
+// "x,y,w,h" (a --roi, or a manifest's roi:) -> rectangle; throws std::invalid_argument naming
+// --roi on a malformed value.
+cv::Rect ParseRoi(const std::string& text);
 
 // The reference band as asked for: its start (below the tip) and its height, each in µm or in px
 // or not at all, with the names to give them in messages (options, or manifest keys).
@@ -43,4 +47,4 @@ void ApplyBandPx(const BandRequest& request,
                  const std::optional<calib::ScaleCalibration>& conversion,
                  vision::StrandMeasureOptions* strand);
 
-}  // namespace clogscope::apps
+}  // namespace clogscope::pipeline
