@@ -40,4 +40,15 @@ struct AxisFrame {
   double U(double x, double y) const { return (x - ox) * dy - (y - oy) * dx; }
 };
 
+// An edge's contrast across the line u at s: sign·(I(u + offset) − I(u − offset)), positive when
+// the edge is there with its sign; false when either point leaves the image.
+inline bool ContrastAcross(const GreyImage& img, const AxisFrame& a, double s, double u, int sign,
+                           double offset_px, double* contrast) {
+  const double xa = a.ImageX(s, u - offset_px), ya = a.ImageY(s, u - offset_px);
+  const double xb = a.ImageX(s, u + offset_px), yb = a.ImageY(s, u + offset_px);
+  if (!img.InsideForBilinear(xa, ya) || !img.InsideForBilinear(xb, yb)) return false;
+  *contrast = sign * (img.Bilinear(xb, yb) - img.Bilinear(xa, ya));
+  return true;
+}
+
 }  // namespace clogscope::vision

@@ -20,19 +20,20 @@ namespace clogscope::vision {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
-// Whether a side's calipers show shading: each caliper's F statistic for the shading term is about
-// χ²(1) without shading (mean 1, σ √2), so their mean over n calipers stays near 1 ± √(2/n).
-// Shading is taken when the mean (each F capped, so that one odd caliper cannot decide) is 6σ
-// above that, plus a margin for structured noise such as compression artefacts.
+// A side is shaded only when its edge also moves out by more than this under the shading model.
 constexpr double kMinShadingShiftPx = 0.1;
-constexpr int kReferenceCalipers = 5;
+constexpr int kReferenceCalipers = 5;  // outside the band, for the occlusion check
 // How far the tip may lie from where it was placed along the axis: set by the nozzle's face on
 // both sides of the strand, or inferred from the outline (tip.h).
 constexpr double kTipSigmaBothFacesPx = 0.25, kTipSigmaWidths = 0.25;
 // Curvature of the width along the band: more than 1 px of sag, bending like a disc (|w''|/2 above
 // 0.25/w, i.e. a chord of a circle less than 4 widths in radius).
-constexpr double kMaxSagPx = 1.0, kMaxBend = 0.25;  // outside the band, for the occlusion check
-// The mean capped F statistic in its own σ units above 1.
+constexpr double kMaxSagPx = 1.0, kMaxBend = 0.25;
+// Whether a side's calipers show shading: each caliper's F statistic for the shading term is about
+// χ²(1) without shading (mean 1, σ √2), so their mean over n calipers stays near 1 ± √(2/n).
+// Shading is taken when the mean (each F capped, so that one odd caliper cannot decide) is 6σ
+// above that, plus a margin for structured noise such as compression artefacts. The mean capped F
+// statistic in its own σ units above 1:
 double ShadingEvidenceSigmas(const std::vector<double>& f) {
   if (f.empty()) return 0;
   double sum = 0;
@@ -396,12 +397,13 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       // that, one of them is wrong (a stripe the cylinder traded its blur against), and which
       // one the frame cannot tell: half the excess counts as one σ, as the shading's does.
       const double sc = 0.5 * (band_s0 + band_s1);
-      cylinder_doubt_px = 0.5 * (std::max(0.0, std::abs(lines.left_u0 + lines.slope * sc -
-                                                        (left_guess + slope_guess * sc)) -
-                                                   sigma_guess) +
-                                 std::max(0.0, std::abs(lines.right_u0 + lines.slope * sc -
-                                                        (right_guess + slope_guess * sc)) -
-                                                   sigma_guess));
+      const auto excess = [&](double cylinder_u0, double per_edge_u0) {
+        const double apart =
+            std::abs((cylinder_u0 + lines.slope * sc) - (per_edge_u0 + slope_guess * sc));
+        return std::max(0.0, apart - sigma_guess);
+      };
+      cylinder_doubt_px =
+          0.5 * (excess(lines.left_u0, left_guess) + excess(lines.right_u0, right_guess));
       left_guess = lines.left_u0;
       right_guess = lines.right_u0;
       slope_guess = lines.slope;

@@ -284,8 +284,8 @@ void SuppressNested(MeasureTarget target, std::vector<PairCandidate>* cands) {
            (c[i].polarity == Polarity::kDarkOnBright && c[j].polarity == Polarity::kBrightOnDark));
       const bool same_kind = c[i].polarity == c[j].polarity;
       if (c[i].score >= (same_kind || opposite ? 0.3 : 0.8) * c[j].score) {
-        c[j].verdict = PairVerdict::kInsideWider;
-        c[j].why = fmt::format("inside a wider pair ({:.1f} px)", c[i].width_px);
+        c[j].Judge(PairVerdict::kInsideWider,
+                   fmt::format("inside a wider pair ({:.1f} px)", c[i].width_px));
         c[j].suppressed_by = static_cast<int>(i);
       }
     }
@@ -352,13 +352,9 @@ bool InsideIsOneObject(const Detection& d, const PairCandidate& c) {
   return at_background < 0.2 * inside;
 }
 
-// Edge contrast across the line u(s) at s: positive when the edge is there with its sign.
+// Edge contrast across the line u(s) at s, read kFollowOffsetPx either side.
 bool ContrastAt(const GreyImage& img, const AxisFrame& a, double s, double u, int sign, double* c) {
-  const double xa = a.ImageX(s, u - kFollowOffsetPx), ya = a.ImageY(s, u - kFollowOffsetPx);
-  const double xb = a.ImageX(s, u + kFollowOffsetPx), yb = a.ImageY(s, u + kFollowOffsetPx);
-  if (!img.InsideForBilinear(xa, ya) || !img.InsideForBilinear(xb, yb)) return false;
-  *c = sign * (img.Bilinear(xb, yb) - img.Bilinear(xa, ya));
-  return true;
+  return ContrastAcross(img, a, s, u, sign, kFollowOffsetPx, c);
 }
 
 struct EdgeEnd {
@@ -543,6 +539,27 @@ bool FollowPair(const GreyImage& img, const SceneOptions& o, const PairCandidate
   return true;
 }
 
+void PairCandidate::Judge(PairVerdict v, std::string words) {
+  verdict = v;
+  if (!words.empty()) {
+    why = std::move(words);
+    return;
+  }
+  switch (v) {
+    case PairVerdict::kChosen:
+      why = "chosen";
+      return;
+    case PairVerdict::kSpansObjects:
+      why = "spans separate objects: the background shows between its edges";
+      return;
+    case PairVerdict::kNotAtFace:
+      why = "its top is not at the nozzle's face";
+      return;
+    default:
+      why.clear();
+  }
+}
+
 bool RulesOut(PairVerdict v) {
   return v == PairVerdict::kSpansObjects || v == PairVerdict::kInsideWider ||
          v == PairVerdict::kNoTip || v == PairVerdict::kNotAtFace;
@@ -596,8 +613,7 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
     PairCandidate& c = r.candidates[i];
     if (c.verdict != PairVerdict::kNotExamined) continue;
     if (c.score < o.min_score) {
-      c.verdict = PairVerdict::kScoreBelow;
-      c.why = fmt::format("score below {:.0f}", o.min_score);
+      c.Judge(PairVerdict::kScoreBelow, fmt::format("score below {:.0f}", o.min_score));
       continue;
     }
     ++examined;
@@ -613,8 +629,7 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
       for (auto& inner : r.candidates) {
         if (inner.suppressed_by != i) continue;
         inner.suppressed_by = -1;
-        inner.verdict = PairVerdict::kNotExamined;
-        inner.why.clear();
+        inner.Judge(PairVerdict::kNotExamined);
         reinstated = true;
       }
       if (reinstated) i = -1;
@@ -623,37 +638,32 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
     if (r.chosen < 0) {
       r.chosen = i;
       r.geometry = g;
-      c.verdict = PairVerdict::kChosen;
-      c.why = "chosen";
+      c.Judge(PairVerdict::kChosen);
       continue;
     }
     // A second pair that holds up: ambiguous when it is a separate object of similar score.
     const PairCandidate& b = r.candidates[r.chosen];
     const PairContest contest = ContestPairs(b, r.geometry, c, g, o);
     if (contest == PairContest::kSecondAtFace) {
-      r.candidates[r.chosen].verdict = PairVerdict::kNotAtFace;
-      r.candidates[r.chosen].why = kNotAtFaceWhy;
+      r.candidates[r.chosen].Judge(PairVerdict::kNotAtFace);
       r.runners_up.clear();
       r.chosen = i;
       r.geometry = g;
-      c.verdict = PairVerdict::kChosen;
-      c.why = "chosen";
+      c.Judge(PairVerdict::kChosen);
       continue;
     }
     if (contest == PairContest::kFirstAtFace) {
-      c.verdict = PairVerdict::kNotAtFace;
-      c.why = kNotAtFaceWhy;
+      c.Judge(PairVerdict::kNotAtFace);
       continue;
     }
     if (Ambiguous(contest)) {
-      c.verdict = PairVerdict::kAsLikely;
-      c.why = "as likely as the chosen pair";
+      c.Judge(PairVerdict::kAsLikely, "as likely as the chosen pair");
       r.status = FrameStatus::kAmbiguous;
       r.detail = AmbiguityDetail(contest, b, c);
       return;
     }
-    c.verdict = PairVerdict::kOutscored;
-    c.why = fmt::format("scores {:.0f} % of the chosen pair", 100 * c.score / b.score);
+    c.Judge(PairVerdict::kOutscored,
+            fmt::format("scores {:.0f} % of the chosen pair", 100 * c.score / b.score));
     r.runners_up.emplace_back(i, g);
   }
   if (r.chosen >= 0) {
@@ -707,8 +717,7 @@ SceneResult FindScene(const std::vector<cv::Mat>& channels, const SceneOptions& 
     r.candidates = PairSegments(d, r.edges, r.gradient_noise, channels[ch].cols, o);
     for (auto& c : r.candidates) {
       if (!InsideIsOneObject(d, c)) {
-        c.verdict = PairVerdict::kSpansObjects;
-        c.why = "spans separate objects: the background shows between its edges";
+        c.Judge(PairVerdict::kSpansObjects);
       }
     }
     SuppressNested(o.target, &r.candidates);

@@ -63,7 +63,9 @@ struct PairCandidate {
   double snr = 0;        // weaker edge's gradient over the gradient noise
   double score = 0;
   PairVerdict verdict = PairVerdict::kNotExamined;
-  std::string why;         // the verdict in words
+  std::string why;  // the verdict in words
+  // Sets the verdict and its words: `words`, or the verdict's own when it carries no numbers.
+  void Judge(PairVerdict v, std::string words = {});
   int suppressed_by = -1;  // the wider pair it lies inside (index into the candidates), if any
 };
 
@@ -123,8 +125,6 @@ PairContest ContestPairs(const PairCandidate& b, const StrandGeometry& bg, const
 inline bool Ambiguous(PairContest c) {
   return c == PairContest::kSideBySide || c == PairContest::kSimilarScore;
 }
-// The words of a kNotAtFace verdict.
-inline constexpr const char* kNotAtFaceWhy = "its top is not at the nozzle's face";
 // The `ambiguous` detail for a kSideBySide or kSimilarScore contest.
 std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const PairCandidate& c);
 

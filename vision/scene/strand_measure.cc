@@ -142,48 +142,46 @@ StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOption
   // gets its turn, as long as it scored near the chosen one.
   if (scene.chosen >= 0 && RejectsPair(m.status)) {
     PairCandidate& first = scene.candidates[scene.chosen];
-    first.verdict = PairVerdict::kMeasuredRefused;
-    first.why = fmt::format("measured {}: {}", FrameStatusName(m.status), m.detail);
+    first.Judge(PairVerdict::kMeasuredRefused,
+                fmt::format("measured {}: {}", FrameStatusName(m.status), m.detail));
     for (size_t k = 0; k < scene.runners_up.size() && k < kMaxFallbacks; ++k) {
       const auto& [index, g] = scene.runners_up[k];
       PairCandidate& next = scene.candidates[index];
       if (next.score < std::max(kMinFallbackScoreRatio * first.score,
                                 kMinFallbackScoreFactor * scene_options.min_score))
         break;
-      // The pairs the first one outranked were weighed against it, not against each other.
+      // The pairs the first one outranked were weighed against it, not against each other: the
+      // first other pair that hangs from the face where this one does not, or rivals it.
       PairContest contest = PairContest::kNotRivals;
-      size_t rival = 0;
-      for (size_t j = 0; j < scene.runners_up.size(); ++j) {
+      const PairCandidate* rival = nullptr;
+      for (size_t j = 0; j < scene.runners_up.size() && !rival; ++j) {
         if (j == k) continue;
         const auto& [other, other_g] = scene.runners_up[j];
-        contest = ContestPairs(next, g, scene.candidates[other], other_g, scene_options);
-        rival = j;
-        if (contest == PairContest::kFirstAtFace || contest == PairContest::kNotRivals ||
-            contest == PairContest::kOutscored)
-          continue;
-        break;
+        const PairContest c =
+            ContestPairs(next, g, scene.candidates[other], other_g, scene_options);
+        if (c == PairContest::kSecondAtFace || Ambiguous(c)) {
+          contest = c;
+          rival = &scene.candidates[other];
+        }
       }
       if (contest == PairContest::kSecondAtFace) {
-        next.verdict = PairVerdict::kNotAtFace;
-        next.why = kNotAtFaceWhy;
+        next.Judge(PairVerdict::kNotAtFace);
         continue;
       }
       if (Ambiguous(contest)) {
-        next.verdict = PairVerdict::kAsLikely;
-        next.why = "as likely as another pair";
+        next.Judge(PairVerdict::kAsLikely, "as likely as another pair");
         m.status = FrameStatus::kAmbiguous;
-        m.detail = AmbiguityDetail(contest, next, scene.candidates[scene.runners_up[rival].first]);
+        m.detail = AmbiguityDetail(contest, next, *rival);
         break;
       }
       StrandMeasurement alt =
           MeasureInScene(channel, data_max, FrameStatus::kValid, "", g, roi, opt);
       if (!alt.valid()) {
-        next.verdict = PairVerdict::kMeasuredRefused;
-        next.why = fmt::format("measured {}: {}", FrameStatusName(alt.status), alt.detail);
+        next.Judge(PairVerdict::kMeasuredRefused,
+                   fmt::format("measured {}: {}", FrameStatusName(alt.status), alt.detail));
         continue;
       }
-      next.verdict = PairVerdict::kChosen;
-      next.why = "chosen";
+      next.Judge(PairVerdict::kChosen);
       scene.chosen = index;
       scene.geometry = g;
       m = std::move(alt);

@@ -15,15 +15,6 @@ constexpr double kSearchStepPx = 0.25;
 constexpr int kWeakSteps = 3;      // an edge ends after this many weak px in a row
 constexpr double kInsidePx = 4.0;  // the object's level is read this far inside its edge
 
-// sign·(I(u + d) − I(u − d)) across the axis at s; false outside the image.
-bool Contrast(const GreyImage& img, const AxisFrame& a, double s, double u, int sign, double* c) {
-  const double xa = a.ImageX(s, u - kOffsetPx), ya = a.ImageY(s, u - kOffsetPx);
-  const double xb = a.ImageX(s, u + kOffsetPx), yb = a.ImageY(s, u + kOffsetPx);
-  if (!img.InsideForBilinear(xa, ya) || !img.InsideForBilinear(xb, yb)) return false;
-  *c = sign * (img.Bilinear(xb, yb) - img.Bilinear(xa, ya));
-  return true;
-}
-
 struct Curve {
   double s_end = 0;       // the last strong s
   std::vector<double> u;  // u at s_from − i
@@ -57,7 +48,7 @@ Curve Follow(const GreyImage& img, const AxisFrame& a, double u_start, double sl
     double best_u = heading, best_c = -1e30;
     for (double du = -kSearchPx; du <= kSearchPx + 1e-9; du += kSearchStepPx) {
       double c;
-      if (!Contrast(img, a, s, heading + du, sign, &c)) return out;
+      if (!ContrastAcross(img, a, s, heading + du, sign, kOffsetPx, &c)) return out;
       if (c > best_c) {
         best_c = c;
         best_u = heading + du;
