@@ -42,17 +42,12 @@ void ParallelFor(size_t count, int threads, const std::function<void(size_t)>& b
   if (threads < 1) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   threads = static_cast<int>(std::min<size_t>(threads, count));
   std::atomic<size_t> next{0};
-  std::atomic<bool> failed{false};
+  // A body's exception ends its thread and raises workers.failed(): the others take no new item.
   Workers workers(threads, [&](int) {
-    while (!failed && !(cancel && cancel->load())) {
+    while (!workers.failed() && !(cancel && cancel->load())) {
       const size_t i = next++;
       if (i >= count) return;
-      try {
-        body(i);
-      } catch (...) {
-        failed = true;
-        throw;
-      }
+      body(i);
     }
   });
   workers.Join();

@@ -3,13 +3,10 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cmath>
 #include <deque>
-#include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <vector>
 
-#include "common/atomic_file.h"
 #include "common/path_check.h"
 #include "vision/io/image_folder.h"
 #include "vision/io/video_decoder.h"
@@ -148,13 +145,11 @@ const char* SourceKindName(SourceKind kind) {
 }
 
 std::unique_ptr<FrameSource> FrameSource::Open(const std::string& path) {
-  // No such file, a name too long, a loop of symbolic links: the one path check's line.
+  // No such file, a name too long, a loop of symbolic links, a FIFO or device (it would block or
+  // never end; a camera is `watch`'s, not a file's): the one path check's line.
   RequireInputPath("", path, PathExpect::kFileOrDirectory);
   if (InspectPath(path) == PathKind::kDirectory)
     return std::make_unique<ImageListSource>(path, ImagesOf(path));
-  // A FIFO or device would block or never end (a camera is `watch`'s, not a file's).
-  std::string why;
-  if (!IsRegularFile(path, &why)) throw std::invalid_argument(path + ": " + why);
   if (IsVideoPath(path)) return VideoWithAFrame(path);
   if (IsImagePath(path)) {
     std::string error;

@@ -165,7 +165,7 @@ class FolderSource : public FrameSource {
         opened_(Clock::now()) {
     std::error_code ec;
     if (!fs::is_directory(source, ec)) throw std::invalid_argument(source + ": not a directory");
-    for (const auto& [name, stamp] : List()) seen_[name] = {stamp, 0, /*taken=*/true, true};
+    for (const ImageFileEntry& f : List()) seen_[f.name] = {f, 0, /*taken=*/true, true};
   }
 
   bool live() const override { return true; }
@@ -188,7 +188,7 @@ class FolderSource : public FrameSource {
       if (next != seen_.end() && next->second.held) {
         next->second.taken = true;
         out->arrival = Clock::now();
-        out->source = (fs::path(path_) / next->first).string();
+        out->source = next->second.file.path;
         out->image = ReadImage(out->source, &out->error);
         out->time_s = SecondsSince(opened_);
         out->index = index_++;
@@ -204,44 +204,38 @@ class FolderSource : public FrameSource {
   }
 
  private:
-  // What tells one file under a name from another: not a clock to order by.
-  struct Stamp {
-    uintmax_t inode = 0, size = 0;
-    int64_t mtime_ns = 0;
-    bool operator==(const Stamp& o) const {
-      return inode == o.inode && size == o.size && mtime_ns == o.mtime_ns;
-    }
-  };
   struct Seen {
-    Stamp stamp;
+    ImageFileEntry file;  // as last listed
     int64_t arrival = 0;  // the poll that first saw this file
     bool taken = false;
     bool held = false;  // unchanged since the poll before
   };
 
-  // The folder's regular image files by name (a looping or dangling link, a file that vanished
-  // between listing and looking: skipped; a folder that cannot be listed: what was listed).
-  std::map<std::string, Stamp> List() const {
-    std::vector<ImageFileEntry> files;
-    ListImageFiles(path_, &files);
-    std::map<std::string, Stamp> out;
-    for (const auto& f : files) out[f.name] = {f.inode, f.size, f.mtime_ns};
-    return out;
+  // The same file, unchanged: inode, size and modification time alike.
+  static bool Unchanged(const ImageFileEntry& a, const ImageFileEntry& b) {
+    return a.inode == b.inode && a.size == b.size && a.mtime_ns == b.mtime_ns;
   }
 
-  void Update(const std::map<std::string, Stamp>& listing) {
+  // The folder's image files (a folder that cannot be listed: what was listed).
+  std::vector<ImageFileEntry> List() const {
+    std::vector<ImageFileEntry> files;
+    ListImageFiles(path_, &files);
+    return files;
+  }
+
+  void Update(std::vector<ImageFileEntry> listing) {
     ++polls_;
     std::map<std::string, Seen> updated;
-    for (const auto& [name, stamp] : listing) {
-      const auto it = seen_.find(name);
-      if (it == seen_.end() || it->second.stamp.inode != stamp.inode ||
-          (it->second.taken && !(it->second.stamp == stamp))) {
-        updated[name] = {stamp, polls_, false, false};  // arrived (or arrived anew)
+    for (ImageFileEntry& f : listing) {
+      const auto it = seen_.find(f.name);
+      Seen& s = updated[f.name];
+      if (it == seen_.end() || it->second.file.inode != f.inode ||
+          (it->second.taken && !Unchanged(it->second.file, f))) {
+        s = {std::move(f), polls_, false, false};  // arrived (or arrived anew)
       } else {
-        Seen s = it->second;
-        if (!s.taken) s.held = s.stamp == stamp;
-        s.stamp = stamp;
-        updated[name] = s;
+        s = std::move(it->second);
+        if (!s.taken) s.held = Unchanged(s.file, f);
+        s.file = std::move(f);
       }
     }
     seen_.swap(updated);
