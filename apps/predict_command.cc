@@ -5,7 +5,6 @@
 
 #include <CLI/CLI.hpp>
 #include <cmath>
-#include <filesystem>
 #include <sstream>
 #include <stdexcept>
 
@@ -17,7 +16,6 @@
 namespace clogscope::apps {
 namespace {
 
-namespace fs = std::filesystem;
 using model::InfoOf;
 using model::Param;
 
