@@ -57,7 +57,8 @@ class Progress {
 
 }  // namespace
 
-ExperimentReport RunExperimentCommand(ExperimentCommandOptions o, std::atomic<bool>* cancel) {
+pipeline::ManifestRunReport RunExperimentCommand(pipeline::ManifestRunOptions o,
+                                                 std::atomic<bool>* cancel) {
   Progress progress(0);
   o.cancel = cancel;
   o.on_step = [&](const pipeline::StepResult& r, int done, int total) {
@@ -68,11 +69,11 @@ ExperimentReport RunExperimentCommand(ExperimentCommandOptions o, std::atomic<bo
 }
 
 // Shared by `run` and `measure --manifest`: Ctrl-C stops after the running steps, keeping them.
-int RunExperimentCli(const ExperimentCommandOptions& o) {
+int RunExperimentCli(const pipeline::ManifestRunOptions& o) {
   g_cancel.store(false);
   std::signal(SIGINT, OnSigint);
   std::signal(SIGTERM, OnSigint);
-  ExperimentReport rep = RunExperimentCommand(o, &g_cancel);
+  pipeline::ManifestRunReport rep = RunExperimentCommand(o, &g_cancel);
   // A Ctrl-C during the prediction or the summary counts too.
   rep.cancelled = rep.cancelled || g_cancel.load();
   std::signal(SIGINT, SIG_DFL);
@@ -113,7 +114,7 @@ int RunRun(int argc, char** argv) {
       "images), "
       "measure every step, predict (when it names an extruder), and summarise.",
       "clogscope run"};
-  ExperimentCommandOptions o;
+  pipeline::ManifestRunOptions o;
   o.full_pipeline = true;
   int samples = 0;
   app.add_option("manifest", o.manifest, "Experiment manifest (YAML, or CSV step list)")
