@@ -8,11 +8,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <filesystem>
 #include <memory>
-#include <sstream>
 #include <stdexcept>
-#include <vector>
 
 #include "common/library_text.h"
 

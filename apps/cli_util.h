@@ -1,7 +1,6 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
-#include <opencv2/core.hpp>
 #include <string>
 
 namespace clogscope::apps {

@@ -8,12 +8,12 @@
 #include <stdexcept>
 
 #include "apps/cli_util.h"
-#include "apps/predict_command.h"
 #include "common/atomic_file.h"
 #include "common/path_check.h"
 #include "common/provenance.h"
 #include "model/clog_physics_io.h"
 #include "model/io.h"
+#include "model/prediction_run.h"
 
 namespace clogscope::apps {
 namespace {

@@ -225,7 +225,7 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
       std::vector<vision::StrandMeasurement> ms;
       ms.reserve(rows.size());
       for (auto& r : rows) ms.push_back(std::move(r.m));
-      vision::FlagWidthOutliers(ms, kOutlierHalfWindow);
+      vision::FlagWidthOutliers(ms, vision::kWidthOutlierHalfWindow);
       for (size_t i = 0; i < rows.size(); ++i) rows[i].m = std::move(ms[i]);
     }
     // The rows' speeds are summarised before they are written, so each row can say whether the
@@ -312,7 +312,7 @@ int RunMeasure(int argc, char** argv) {
                "clogscope measure"};
   MeasureCommandOptions o;
   bool no_outliers = false;
-  ExperimentCommandOptions exp;
+  pipeline::ManifestRunOptions exp;
   int samples = 0;
   app.add_option("inputs", o.inputs, "Images, directories of images, or video files");
   app.add_option("--manifest", exp.manifest,

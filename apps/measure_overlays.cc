@@ -31,13 +31,14 @@ void OverlayWriter::WriteReady(const std::vector<Row>& rows, bool all) {
       Write(rows[row], rows[row].m, held_[done].second);
       continue;
     }
-    // The verdict needs the rows up to kOutlierHalfWindow ahead; it is the one the whole input
-    // will give, as it looks no further.
-    if (rows.size() <= row + kOutlierHalfWindow) break;
-    const size_t first = row >= kOutlierHalfWindow ? row - kOutlierHalfWindow : 0;
+    // The verdict needs the rows up to `half` ahead (the outlier window of measure); it is the one
+    // the whole input will give, as it looks no further.
+    const size_t half = vision::kWidthOutlierHalfWindow;
+    if (rows.size() <= row + half) break;
+    const size_t first = row >= half ? row - half : 0;
     std::vector<vision::StrandMeasurement> window;
-    for (size_t i = first; i <= row + kOutlierHalfWindow; ++i) window.push_back(rows[i].m);
-    vision::FlagWidthOutliers(window, kOutlierHalfWindow);
+    for (size_t i = first; i <= row + half; ++i) window.push_back(rows[i].m);
+    vision::FlagWidthOutliers(window, vision::kWidthOutlierHalfWindow);
     Write(rows[row], window[row - first], held_[done].second);
   }
   held_.erase(held_.begin(), held_.begin() + static_cast<std::ptrdiff_t>(done));

@@ -13,13 +13,9 @@
 
 namespace clogscope::apps {
 
-// The width-outlier window of `measure` (vision::FlagWidthOutliers): a frame's verdict depends on
-// the frames up to this many rows either side.
-inline constexpr int kOutlierHalfWindow = vision::kWidthOutlierHalfWindow;
-
 // `measure --overlay` for one input: each frame is drawn and written as soon as its row is final,
 // at once without outlier flags, else once the frames its outlier verdict depends on are in. So
-// at most kOutlierHalfWindow + 1 frames wait, however long the video.
+// at most vision::kWidthOutlierHalfWindow + 1 frames wait, however long the video.
 class OverlayWriter {
  public:
   OverlayWriter(std::string dir, bool from_video, bool flag_outliers,

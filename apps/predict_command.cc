@@ -5,7 +5,6 @@
 
 #include <CLI/CLI.hpp>
 #include <cmath>
-#include <filesystem>
 #include <sstream>
 #include <stdexcept>
 
@@ -17,11 +16,10 @@
 namespace clogscope::apps {
 namespace {
 
-namespace fs = std::filesystem;
 using model::InfoOf;
 using model::Param;
 
-void PrintTable(const PredictResult& r) {
+void PrintTable(const model::PredictionRun& r) {
   const auto& pr = r.prediction;
   int measured_feedstock = 0;
   for (const auto& s : pr.steps) measured_feedstock += s.filament_diameter_um.has_value();
@@ -85,7 +83,7 @@ bool PredictCommandOptions::Validate(std::string* why) const {
   return false;
 }
 
-PredictResult ComputePrediction(const PredictCommandOptions& o) {
+model::PredictionRun ComputePrediction(const PredictCommandOptions& o) {
   std::string why;
   if (!o.Validate(&why)) throw std::invalid_argument(why);
   const model::ExtruderParams params = model::LoadExtruderWithOverrides(o.extruder, o.set);
@@ -135,7 +133,7 @@ int RunPredict(int argc, char** argv) {
     }
   }
   o.plots = !no_plots;
-  const PredictResult r = ComputePrediction(o);
+  const model::PredictionRun r = ComputePrediction(o);
   if (r.fit) PrintFit(*r.fit);
   if (r.fit && !r.fit->usable) {
     spdlog::error("fit not usable: {}; nothing written", r.fit->message);

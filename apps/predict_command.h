@@ -25,12 +25,9 @@ struct PredictCommandOptions {
   bool Validate(std::string* why) const;
 };
 
-// The extruder, steps, fit and prediction (model/prediction_run.h).
-using PredictResult = model::PredictionRun;
-
-// Reads the diameter table and predicts from it (model::PredictSteps); writes nothing. Throws
-// std::invalid_argument naming the file, row or parameter for bad input. A fit that is not usable
-// comes back with fit->usable false and no prediction.
-PredictResult ComputePrediction(const PredictCommandOptions& options);
+// Reads the diameter table and predicts from it (model::PredictSteps): the extruder, steps, fit
+// and prediction; writes nothing. Throws std::invalid_argument naming the file, row or parameter
+// for bad input. A fit that is not usable comes back with fit->usable false and no prediction.
+model::PredictionRun ComputePrediction(const PredictCommandOptions& options);
 
 }  // namespace clogscope::apps

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <mutex>
@@ -26,22 +27,20 @@ extern "C" void OnSigint(int) {
 // Progress on stderr: a bar redrawn in place on a terminal, one log line per step otherwise.
 class Progress {
  public:
-  explicit Progress(int total) : tty_(isatty(STDERR_FILENO) != 0), total_(total) {}
   void Step(const pipeline::StepResult& r, int done, int total) {
     std::lock_guard<std::mutex> lock(mu_);
-    total_ = total;
     const std::string what = fmt::format(
         "step {} ({:g} °C): {}, {} valid of {} examined{}", r.spec.step, r.spec.temperature_c,
         r.status, r.n_valid, r.n_examined, r.resumed ? " (kept from the earlier run)" : "");
     if (tty_) {
-      const int width = 30, filled = total_ ? width * done / total_ : width;
+      const int width = 30, filled = total ? width * done / total : width;
       std::fprintf(clogscope::ToolStderr(), "\r[%s%s] %d/%d  %-60.60s",
                    std::string(filled, '#').c_str(), std::string(width - filled, '.').c_str(), done,
-                   total_, what.c_str());
-      if (done == total_) std::fprintf(clogscope::ToolStderr(), "\n");
+                   total, what.c_str());
+      if (done == total) std::fprintf(clogscope::ToolStderr(), "\n");
       std::fflush(clogscope::ToolStderr());
     } else {
-      spdlog::info("[{}/{}] {}", done, total_, what);
+      spdlog::info("[{}/{}] {}", done, total, what);
     }
     if (r.status != "ok" && !r.detail.empty()) {
       if (tty_) std::fprintf(clogscope::ToolStderr(), "\n");
@@ -51,28 +50,23 @@ class Progress {
 
  private:
   std::mutex mu_;
-  bool tty_;
-  int total_;
+  const bool tty_ = isatty(STDERR_FILENO) != 0;
 };
 
 }  // namespace
 
-ExperimentReport RunExperimentCommand(ExperimentCommandOptions o, std::atomic<bool>* cancel) {
-  Progress progress(0);
-  o.cancel = cancel;
+// Shared by `run` and `measure --manifest`: Ctrl-C stops after the running steps, keeping them.
+int RunExperimentCli(pipeline::ManifestRunOptions o) {
+  Progress progress;
+  o.cancel = &g_cancel;
   o.on_step = [&](const pipeline::StepResult& r, int done, int total) {
     progress.Step(r, done, total);
   };
   o.on_note = [](const std::string& line) { spdlog::info("{}", line); };
-  return pipeline::RunManifest(o);
-}
-
-// Shared by `run` and `measure --manifest`: Ctrl-C stops after the running steps, keeping them.
-int RunExperimentCli(const ExperimentCommandOptions& o) {
   g_cancel.store(false);
   std::signal(SIGINT, OnSigint);
   std::signal(SIGTERM, OnSigint);
-  ExperimentReport rep = RunExperimentCommand(o, &g_cancel);
+  pipeline::ManifestRunReport rep = pipeline::RunManifest(o);
   // A Ctrl-C during the prediction or the summary counts too.
   rep.cancelled = rep.cancelled || g_cancel.load();
   std::signal(SIGINT, SIG_DFL);
@@ -113,7 +107,7 @@ int RunRun(int argc, char** argv) {
       "images), "
       "measure every step, predict (when it names an extruder), and summarise.",
       "clogscope run"};
-  ExperimentCommandOptions o;
+  pipeline::ManifestRunOptions o;
   o.full_pipeline = true;
   int samples = 0;
   app.add_option("manifest", o.manifest, "Experiment manifest (YAML, or CSV step list)")

@@ -9,8 +9,8 @@
 
 #include "apps/cli_util.h"
 #include "apps/measure_options.h"
-#include "apps/predict_command.h"
 #include "apps/watch_outputs.h"
+#include "model/prediction_run.h"
 #include "pipeline/experiment.h"
 
 namespace clogscope::apps {

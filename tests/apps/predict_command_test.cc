@@ -144,7 +144,7 @@ TEST(PredictCommandTest, UnusableFitWritesNothing) {
   o.fit_measured = (d / "a.csv").string();
   o.fit_params = {"gain", "motor_torque_nm", "drive_roller_radius_m"};  // only T/R matters: flat
   o.out_dir = (d / "out").string();
-  const PredictResult r = ComputePrediction(o);
+  const model::PredictionRun r = ComputePrediction(o);
   ASSERT_TRUE(r.fit.has_value());
   EXPECT_FALSE(r.fit->usable);
   const RunResult cli =
