@@ -32,8 +32,6 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-// Seek instead of decoding forward when the next sample is further ahead than this.
-constexpr double kSeekAheadS = 2.0;
 // Floor on the MAD of a step's widths: identical widths must not make 0.01 px an outlier.
 constexpr double kMinMadPx = 0.02;
 
@@ -198,7 +196,7 @@ StepResult MeasureStep(const StepSpec& spec, const ExperimentOptions& o, int dec
   const double slot = (b - a) / n;
   std::vector<bool> filled(n, false);
   const std::vector<int> overlay_slots = {0, n / 2, n - 1};
-  if (a > kSeekAheadS) seek_to(a);
+  if (a > vision::kSeekAheadS) seek_to(a);
   vision::InputFrame in;
   // The step's frames show one scene: follow the strand from sample to sample.
   vision::StrandTracker tracker(o.strand);
@@ -236,7 +234,7 @@ StepResult MeasureStep(const StepSpec& spec, const ExperimentOptions& o, int dec
     while (next < n && filled[next]) ++next;
     if (next >= n) break;
     const double target = a + (next + 0.5) * slot;
-    if (target - t > kSeekAheadS) seek_to(target);
+    if (target - t > vision::kSeekAheadS) seek_to(target);
   }
   Summarise(&r, o);
   return r;

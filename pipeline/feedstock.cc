@@ -15,8 +15,6 @@
 namespace clogscope::pipeline {
 namespace {
 
-constexpr double kSeekAheadS = 2.0;  // seek rather than decode further ahead than this
-
 // Mean and 95 % half-width of values after robust outlier rejection.
 void MeanAndCi(const std::vector<double>& v, std::optional<double>* mean,
                std::optional<double>* ci95) {
@@ -76,7 +74,7 @@ FeedstockResult MeasureFeedstock(const std::string& video, double start_s, doubl
   const double mm_per_px = conversion ? conversion->scale_um_per_px * 1e-3 : 0.0;
   vision::StrandTracker strand(o.strand);
   std::vector<double> widths, speeds, gears, slips;
-  if (a > kSeekAheadS) dec->SeekToTime(a);
+  if (a > vision::kSeekAheadS) dec->SeekToTime(a);
   vision::InputFrame f;
   f.time_s = 0;  // before the first frame: the stream's start
   for (int k = 0; k < o.pairs; ++k) {
@@ -88,7 +86,7 @@ FeedstockResult MeasureFeedstock(const std::string& video, double start_s, doubl
     bool have_target = false;
     int in_pair = 0;
     while (in_pair < 2) {
-      if (!have_target && target - f.time_s > kSeekAheadS) dec->SeekToTime(target);
+      if (!have_target && target - f.time_s > vision::kSeekAheadS) dec->SeekToTime(target);
       have_target = true;
       if (!dec->Next(&f)) break;
       if (f.time_s < target - 1e-9 && in_pair == 0) continue;

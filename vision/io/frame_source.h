@@ -16,6 +16,10 @@
 
 namespace clogscope::vision {
 
+// Sampling a video: seek rather than decode forward when the next frame wanted is further ahead
+// than this.
+inline constexpr double kSeekAheadS = 2.0;
+
 // What a source reads.
 enum class SourceKind {
   kImages,  // an image file, or a folder's images sorted by name (read once)
