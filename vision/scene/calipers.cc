@@ -25,7 +25,7 @@ constexpr double kMinShadingShiftPx = 0.1;
 constexpr int kReferenceCalipers = 5;  // outside the band, for the occlusion check
 // How far the tip may lie from where it was placed along the axis: set by the nozzle's face on
 // both sides of the strand, or inferred from the outline (tip.h).
-constexpr double kTipSigmaBothFacesPx = 0.25, kTipSigmaWidths = 0.25;
+constexpr double kTipSigmaWidths = 0.25;  // an unconfirmed tip's doubt, in widths
 // Curvature of the width along the band: more than 1 px of sag, bending like a disc (|w''|/2 above
 // 0.25/w, i.e. a chord of a circle less than 4 widths in radius).
 constexpr double kMaxSagPx = 1.0, kMaxBend = 0.25;
@@ -588,10 +588,10 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       structure_doubt_px[side] = BandEdgeDoubtPx(img, f, clip, edges, -w.u0, w.u1);
     }
     // And where the band starts, when the width changes along it (die swell relaxing): a tip set
-    // by the nozzle's face on both sides is good to a fraction of a px; one inferred from where
-    // the outline leaves the nozzle's may be off by a good part of the strand's width.
-    const double tip_sigma_px =
-        g.tip_face_sides == 2 ? kTipSigmaBothFacesPx : kTipSigmaWidths * width0;
+    // by the nozzle's face or the object's own end is good to a fraction of a px (tip.h); one
+    // inferred from where the outline leaves the nozzle's may be off by a good part of the
+    // strand's width.
+    const double tip_sigma_px = g.tip_sigma_px >= 0 ? g.tip_sigma_px : kTipSigmaWidths * width0;
     m->model_sigma_px = std::hypot(
         std::hypot(m->model_sigma_px + cylinder_doubt_px, std::abs(width_slope) * tip_sigma_px),
         std::hypot(structure_doubt_px[0], structure_doubt_px[1]));

@@ -511,9 +511,13 @@ bool FollowPair(const GreyImage& img, const SceneOptions& o, const PairCandidate
       return false;
     }
     s_origin = 0.5 * (up_l.s + up_r.s);
-    if (trace.found && trace.s_tip_px < s_origin) s_origin = trace.s_tip_px;
+    // The traced end where it lies above the walks' (which stop where a swell's edges curve), or
+    // wherever the nozzle's face or the object's own end confirmed it.
+    const bool tip_traced = trace.found && (trace.s_tip_px < s_origin || trace.tip_sigma_px >= 0);
+    if (tip_traced) s_origin = trace.s_tip_px;
     g->tip_width_px = trace.found ? trace.widest_px : c.width_px;
     g->tip_face_sides = trace.found ? trace.face_sides : 0;
+    g->tip_sigma_px = tip_traced ? trace.tip_sigma_px : -1;
   } else {
     // Where both edges are still there; but when one edge's walk stops at an object while the
     // other runs on to the border, where the other ends: an object beside the filament (a gear's

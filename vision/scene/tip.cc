@@ -78,46 +78,96 @@ Curve Follow(const GreyImage& img, const AxisFrame& a, double u_start, double sl
   return out;
 }
 
-// The nozzle's face beside the strand: just outside the outline on each side, the profile along
-// the axis steps from the nozzle to the background at the face. A blurred step fitted there puts
-// the tip to a fraction of a px, where the end of a followed edge is only good to the blur.
-// Returns on how many sides (0–2) the face was found; with two, they agree within 3 px.
-int FaceBesideStrand(const GreyImage& img, const AxisFrame& a, double s_guess, double half_px,
-                     double min_contrast, double* s_face) {
-  constexpr double kReachPx = 10.0, kColumnsPx = 4.0, kAgreePx = 3.0;
-  // Columns from just outside the outline outward: near the face a swollen strand may still
-  // be wider than the outline followed, and the profile there crosses it too.
-  constexpr double kOffsetsPx[] = {3.0, 9.0, 15.0, 21.0};
-  std::vector<double> found;
+// One reading of where the strand meets the nozzle, along the axis.
+struct TipEstimate {
+  bool found = false;
+  double s_px = 0;
+  double doubt_px = 0;  // half the disagreement of its readings, or its fit's σ
+};
+
+constexpr double kReachPx = 10.0;     // the face is looked for this far either side of the guess
+constexpr double kNearGuessPx = 6.0;  // a face further than this from the guess is another line
+constexpr double kAgreePx = 3.0;      // two readings of one line further apart are two lines
+// The least doubt about a tip: read on two lines that agree (the face and the object's end), or
+// on one alone (either, with nothing to confirm it).
+constexpr double kTipSigmaConfirmedPx = 0.25, kTipSigmaAlonePx = 0.5;
+// The object's end is read in the columns between these fractions of its width either side of
+// the axis: clear of the edges' blur, and inside where a swell's curved sides begin.
+constexpr double kEndColumns[2] = {0.05, 0.3};
+
+// A blurred step along the axis in the columns u0..u1 (step 1 px) near s_guess.
+bool AxialStep(const GreyImage& img, const AxisFrame& a, double s_guess, double u0, double u1,
+               double min_contrast, EdgeFit* fit) {
   std::vector<EdgeSample> samples;
-  for (int side : {-1, 1}) {
-    for (double offset : kOffsetsPx) {
-      samples.clear();
-      for (double du = 0; du <= kColumnsPx; du += 1.0) {
-        const double u = side * (half_px + offset + du);
-        for (double s = s_guess - kReachPx; s <= s_guess + kReachPx; s += 0.5) {
-          const double x = a.ImageX(s, u), y = a.ImageY(s, u);
-          if (!img.InsideForBilinear(x, y)) continue;
-          samples.push_back({static_cast<float>(s), static_cast<float>(img.Bilinear(x, y))});
-        }
-      }
-      if (samples.size() < 60) break;
-      const EdgeFit fit = FitBlurredStep(samples, s_guess, 1.5, s_guess);
-      if (!fit.converged || std::abs(fit.step) < min_contrast ||
-          std::abs(fit.edge_px - s_guess) > kReachPx - 2.0 || fit.sigma_px > 6.0)
-        continue;
-      found.push_back(fit.edge_px);
-      break;
+  for (double u = u0; u <= u1 + 1e-9; u += 1.0) {
+    for (double s = s_guess - kReachPx; s <= s_guess + kReachPx; s += 0.5) {
+      const double x = a.ImageX(s, u), y = a.ImageY(s, u);
+      if (!img.InsideForBilinear(x, y)) continue;
+      samples.push_back({static_cast<float>(s), static_cast<float>(img.Bilinear(x, y))});
     }
   }
-  if (found.empty()) return 0;
-  if (found.size() == 2 && std::abs(found[0] - found[1]) > kAgreePx) {
-    // Not one face across the strand (a flank on one side): the end nearer the guess.
-    *s_face = std::abs(found[0] - s_guess) < std::abs(found[1] - s_guess) ? found[0] : found[1];
-    return 1;
+  if (samples.size() < 60) return false;
+  *fit = FitBlurredStep(samples, s_guess, 1.5, s_guess);
+  return fit->converged && std::abs(fit->step) >= min_contrast &&
+         std::abs(fit->edge_px - s_guess) <= kReachPx - 2.0 && fit->sigma_px <= 6.0;
+}
+
+// The nozzle's face beside the strand: just outside the outline on one side, the profile along
+// the axis steps from the nozzle to the background at the face. A blurred step fitted there puts
+// the tip to a fraction of a px, where the end of a followed edge is only good to the blur.
+// Columns from just outside the outline outward: near the face a swollen strand may still be
+// wider than the outline followed, and the profile there crosses it too; so the side is read
+// at the first two offsets where the face shows, and their disagreement is its doubt.
+TipEstimate FaceOnSide(const GreyImage& img, const AxisFrame& a, double s_guess, double half_px,
+                       double min_contrast, int side) {
+  constexpr double kColumnsPx = 4.0;
+  constexpr double kOffsetsPx[] = {3.0, 9.0, 15.0, 21.0, 30.0};
+  TipEstimate e;
+  std::vector<double> found;
+  for (double offset : kOffsetsPx) {
+    const double u_in = side * (half_px + offset), u_out = side * (half_px + offset + kColumnsPx);
+    EdgeFit fit;
+    if (!AxialStep(img, a, s_guess, std::min(u_in, u_out), std::max(u_in, u_out), min_contrast,
+                   &fit)) {
+      if (found.empty()) continue;
+      break;
+    }
+    found.push_back(fit.edge_px);
+    if (found.size() == 1) e.doubt_px = fit.edge_sigma_px;
+    if (found.size() == 2) break;
   }
-  *s_face = found.size() == 2 ? 0.5 * (found[0] + found[1]) : found[0];
-  return static_cast<int>(found.size());
+  if (found.empty()) return e;
+  e.found = true;
+  e.s_px = found[0];
+  if (found.size() == 2) {
+    e.s_px = 0.5 * (found[0] + found[1]);
+    e.doubt_px = std::max(e.doubt_px, 0.5 * std::abs(found[0] - found[1]));
+  }
+  return e;
+}
+
+// The object's own end along the axis in columns u0..u1: where the strand gives way to the
+// nozzle above it.
+TipEstimate ObjectEnd(const GreyImage& img, const AxisFrame& a, double s_guess, double u0,
+                      double u1, double min_contrast) {
+  TipEstimate e;
+  EdgeFit fit;
+  if (!AxialStep(img, a, s_guess, u0, u1, min_contrast, &fit)) return e;
+  e.found = true;
+  e.s_px = fit.edge_px;
+  e.doubt_px = fit.edge_sigma_px;
+  return e;
+}
+
+// Two readings of one line (the face on either side, the end in either half): their mean when
+// both were found and agree, doubtful by half their disagreement; otherwise nothing.
+TipEstimate Agreeing(const TipEstimate& p, const TipEstimate& q) {
+  TipEstimate e;
+  if (!p.found || !q.found || std::abs(p.s_px - q.s_px) > kAgreePx) return e;
+  e.found = true;
+  e.s_px = 0.5 * (p.s_px + q.s_px);
+  e.doubt_px = std::max({p.doubt_px, q.doubt_px, 0.5 * std::abs(p.s_px - q.s_px)});
+  return e;
 }
 
 }  // namespace
@@ -139,21 +189,52 @@ TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0,
   t.widest_px = width;
   const size_t n = std::min(l.u.size(), r.u.size());
   for (size_t i = 0; i < n; ++i) t.widest_px = std::max(t.widest_px, r.u[i] - l.u[i]);
-  // The followed edges end within the blur of the face; the face itself, where the nozzle shows
-  // beside the strand, is sharper.
-  double s_face = 0;
+  // The followed edges end within the blur of the face. Sharper are the face itself where the
+  // nozzle shows beside the strand, and the object's own end where the nozzle's level differs
+  // from the strand's (read along the axis in each half of the strand: a face slanted across it
+  // shows as their disagreement).
   const double axis_u = 0.5 * (left_u0 + right_u0) + slope * t.s_tip_px;
   AxisFrame centred = a;
   centred.ox = a.ImageX(0, axis_u);
   centred.oy = a.ImageY(0, axis_u);
+  const double half = 0.5 * t.widest_px;
   // Looked for from the edge that got furthest, then from both ends' middle: an edge that
   // stopped short in noise leaves the other's end nearer the face.
   for (double s_guess : {std::min(l.s_end, r.s_end), t.s_tip_px}) {
-    const int sides =
-        FaceBesideStrand(img, centred, s_guess, 0.5 * t.widest_px, min_face_step, &s_face);
-    if (sides > 0 && std::abs(s_face - s_guess) <= 6.0) {
-      t.s_tip_px = s_face;
-      t.face_sides = sides;
+    const auto near = [&](const TipEstimate& e) {
+      return e.found && std::abs(e.s_px - s_guess) <= kNearGuessPx;
+    };
+    TipEstimate faces[2] = {FaceOnSide(img, centred, s_guess, half, min_face_step, -1),
+                            FaceOnSide(img, centred, s_guess, half, min_face_step, +1)};
+    const TipEstimate face = Agreeing(near(faces[0]) ? faces[0] : TipEstimate{},
+                                      near(faces[1]) ? faces[1] : TipEstimate{});
+    TipEstimate end = Agreeing(ObjectEnd(img, centred, s_guess, -kEndColumns[1] * width,
+                                         -kEndColumns[0] * width, min_face_step),
+                               ObjectEnd(img, centred, s_guess, kEndColumns[0] * width,
+                                         kEndColumns[1] * width, min_face_step));
+    if (!near(end)) end = {};
+    // One face that the other side does not confirm (a flank, a hair's end): the nearer one.
+    const TipEstimate* one = nullptr;
+    if (!face.found)
+      for (const TipEstimate& f : faces)
+        if (near(f) && (!one || std::abs(f.s_px - s_guess) < std::abs(one->s_px - s_guess)))
+          one = &f;
+    t.face_sides = face.found ? 2 : one ? 1 : 0;
+    if (end.found) {
+      // Confirmed by the face beside it, or alone (the nozzle at the background's level).
+      const TipEstimate* other = face.found ? &face : one;
+      t.s_tip_px = end.s_px;
+      t.tip_sigma_px = std::max({other ? kTipSigmaConfirmedPx : kTipSigmaAlonePx, end.doubt_px,
+                                 other ? 0.5 * std::abs(end.s_px - other->s_px) : 0.0});
+      break;
+    }
+    if (face.found) {
+      t.s_tip_px = face.s_px;
+      t.tip_sigma_px = std::max(kTipSigmaAlonePx, face.doubt_px);
+      break;
+    }
+    if (one) {
+      t.s_tip_px = one->s_px;  // its doubt is the caller's: unconfirmed
       break;
     }
   }

@@ -15,13 +15,17 @@ struct TipTrace {
   // On how many sides of the strand the nozzle's face shows (0–2): a strand hangs from the face,
   // with the nozzle on both sides; a hair behind a nozzle's flank ends at it on one side at most.
   int face_sides = 0;
+  // The doubt about s_tip_px where the nozzle's face on both sides or the object's own end (where
+  // the nozzle's level differs from the strand's) fixed it; < 0 where only the followed edges or
+  // a face on one side did.
+  double tip_sigma_px = -1;
 };
 
 // Follows the edges u = left_u0 + slope·s and right_u0 + slope·s of axis frame `a` upward (−s)
 // from s_from, each re-found every px within ±3 px of where its curve is heading, until its
 // contrast (sign·step, `ref_*` the edge's usual contrast) stays below half for three px, or the
-// level inside it changes; then refines the end on the nozzle's face beside the strand where
-// that face steps by at least min_face_step.
+// level inside it changes; then refines the end on the nozzle's face beside the strand, and on
+// the object's own end along its axis, where either steps by at least min_face_step.
 TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0, double right_u0,
                        double slope, int left_sign, int right_sign, double ref_l, double ref_r,
                        double s_from, double min_face_step);
