@@ -87,7 +87,9 @@ struct TipEstimate {
 
 constexpr double kReachPx = 10.0;     // the face is looked for this far either side of the guess
 constexpr double kNearGuessPx = 6.0;  // a face further than this from the guess is another line
-constexpr double kAgreePx = 3.0;      // two readings of one line further apart are two lines
+// A line across the axis sloping more than this (ds/du) is not the nozzle's face: a strand
+// hangs up to ~20° off the nozzle's axis, a flank slopes at 50° and more.
+constexpr double kMaxSlant = 0.5;
 // The least doubt about a tip: read on two lines that agree (the face and the object's end), or
 // on one alone (either, with nothing to confirm it).
 constexpr double kTipSigmaConfirmedPx = 0.25, kTipSigmaAlonePx = 0.5;
@@ -112,18 +114,23 @@ bool AxialStep(const GreyImage& img, const AxisFrame& a, double s_guess, double 
          std::abs(fit->edge_px - s_guess) <= kReachPx - 2.0 && fit->sigma_px <= 6.0;
 }
 
+// One reading of a line across the axis (the nozzle's face, the object's end): where it crosses
+// the columns about u_px.
+struct LineReading {
+  double u_px = 0, s_px = 0, sigma_px = 0;
+};
+
 // The nozzle's face beside the strand: just outside the outline on one side, the profile along
 // the axis steps from the nozzle to the background at the face. A blurred step fitted there puts
 // the tip to a fraction of a px, where the end of a followed edge is only good to the blur.
 // Columns from just outside the outline outward: near the face a swollen strand may still be
-// wider than the outline followed, and the profile there crosses it too; so the side is read
-// at the first two offsets where the face shows, and their disagreement is its doubt.
-TipEstimate FaceOnSide(const GreyImage& img, const AxisFrame& a, double s_guess, double half_px,
-                       double min_contrast, int side) {
+// wider than the outline followed, and the profile there crosses it too; so the side is read at
+// the first two offsets where the face shows.
+std::vector<LineReading> FaceOnSide(const GreyImage& img, const AxisFrame& a, double s_guess,
+                                    double half_px, double min_contrast, int side) {
   constexpr double kColumnsPx = 4.0;
   constexpr double kOffsetsPx[] = {3.0, 9.0, 15.0, 21.0, 30.0};
-  TipEstimate e;
-  std::vector<double> found;
+  std::vector<LineReading> found;
   for (double offset : kOffsetsPx) {
     const double u_in = side * (half_px + offset), u_out = side * (half_px + offset + kColumnsPx);
     EdgeFit fit;
@@ -132,42 +139,53 @@ TipEstimate FaceOnSide(const GreyImage& img, const AxisFrame& a, double s_guess,
       if (found.empty()) continue;
       break;
     }
-    found.push_back(fit.edge_px);
-    if (found.size() == 1) e.doubt_px = fit.edge_sigma_px;
+    if (std::abs(fit.edge_px - s_guess) > kNearGuessPx) break;
+    found.push_back({0.5 * (u_in + u_out), fit.edge_px, fit.edge_sigma_px});
     if (found.size() == 2) break;
   }
-  if (found.empty()) return e;
+  return found;
+}
+
+// The line through readings on both sides of the axis, where it crosses the axis (u = 0): the
+// nozzle's face or the object's end need not be square to a strand that hangs at an angle, but a
+// slope steeper than kMaxSlant is two lines (a flank on one side). Doubtful by the readings' own
+// σ and, with more readings than the line needs, by their scatter about it.
+TipEstimate LineAcross(const std::vector<LineReading>& left,
+                       const std::vector<LineReading>& right) {
+  TipEstimate e;
+  if (left.empty() || right.empty()) return e;
+  double n = 0, su = 0, ss = 0, suu = 0, sus = 0, sigma = 0;
+  for (const auto* side : {&left, &right})
+    for (const LineReading& r : *side) {
+      n += 1;
+      su += r.u_px;
+      ss += r.s_px;
+      suu += r.u_px * r.u_px;
+      sus += r.u_px * r.s_px;
+      sigma = std::max(sigma, r.sigma_px);
+    }
+  const double det = n * suu - su * su;
+  if (det <= 0) return e;
+  const double slope = (n * sus - su * ss) / det, at_axis = (ss - slope * su) / n;
+  if (std::abs(slope) > kMaxSlant) return e;
+  double ssr = 0;
+  for (const auto* side : {&left, &right})
+    for (const LineReading& r : *side) ssr += std::pow(r.s_px - at_axis - slope * r.u_px, 2);
   e.found = true;
-  e.s_px = found[0];
-  if (found.size() == 2) {
-    e.s_px = 0.5 * (found[0] + found[1]);
-    e.doubt_px = std::max(e.doubt_px, 0.5 * std::abs(found[0] - found[1]));
-  }
+  e.s_px = at_axis;
+  e.doubt_px = n > 2 ? std::max(sigma, std::sqrt(ssr / (n - 2))) : sigma;
   return e;
 }
 
 // The object's own end along the axis in columns u0..u1: where the strand gives way to the
 // nozzle above it.
-TipEstimate ObjectEnd(const GreyImage& img, const AxisFrame& a, double s_guess, double u0,
-                      double u1, double min_contrast) {
-  TipEstimate e;
+std::vector<LineReading> ObjectEnd(const GreyImage& img, const AxisFrame& a, double s_guess,
+                                   double u0, double u1, double min_contrast) {
   EdgeFit fit;
-  if (!AxialStep(img, a, s_guess, u0, u1, min_contrast, &fit)) return e;
-  e.found = true;
-  e.s_px = fit.edge_px;
-  e.doubt_px = fit.edge_sigma_px;
-  return e;
-}
-
-// Two readings of one line (the face on either side, the end in either half): their mean when
-// both were found and agree, doubtful by half their disagreement; otherwise nothing.
-TipEstimate Agreeing(const TipEstimate& p, const TipEstimate& q) {
-  TipEstimate e;
-  if (!p.found || !q.found || std::abs(p.s_px - q.s_px) > kAgreePx) return e;
-  e.found = true;
-  e.s_px = 0.5 * (p.s_px + q.s_px);
-  e.doubt_px = std::max({p.doubt_px, q.doubt_px, 0.5 * std::abs(p.s_px - q.s_px)});
-  return e;
+  if (!AxialStep(img, a, s_guess, u0, u1, min_contrast, &fit) ||
+      std::abs(fit.edge_px - s_guess) > kNearGuessPx)
+    return {};
+  return {{0.5 * (u0 + u1), fit.edge_px, fit.edge_sigma_px}};
 }
 
 }  // namespace
@@ -201,31 +219,29 @@ TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0,
   // Looked for from the edge that got furthest, then from both ends' middle: an edge that
   // stopped short in noise leaves the other's end nearer the face.
   for (double s_guess : {std::min(l.s_end, r.s_end), t.s_tip_px}) {
-    const auto near = [&](const TipEstimate& e) {
-      return e.found && std::abs(e.s_px - s_guess) <= kNearGuessPx;
-    };
-    TipEstimate faces[2] = {FaceOnSide(img, centred, s_guess, half, min_face_step, -1),
-                            FaceOnSide(img, centred, s_guess, half, min_face_step, +1)};
-    const TipEstimate face = Agreeing(near(faces[0]) ? faces[0] : TipEstimate{},
-                                      near(faces[1]) ? faces[1] : TipEstimate{});
-    TipEstimate end = Agreeing(ObjectEnd(img, centred, s_guess, -kEndColumns[1] * width,
-                                         -kEndColumns[0] * width, min_face_step),
-                               ObjectEnd(img, centred, s_guess, kEndColumns[0] * width,
-                                         kEndColumns[1] * width, min_face_step));
-    if (!near(end)) end = {};
-    // One face that the other side does not confirm (a flank, a hair's end): the nearer one.
-    const TipEstimate* one = nullptr;
+    const std::vector<LineReading> faces[2] = {
+        FaceOnSide(img, centred, s_guess, half, min_face_step, -1),
+        FaceOnSide(img, centred, s_guess, half, min_face_step, +1)};
+    const TipEstimate face = LineAcross(faces[0], faces[1]);
+    const TipEstimate end = LineAcross(ObjectEnd(img, centred, s_guess, -kEndColumns[1] * width,
+                                                 -kEndColumns[0] * width, min_face_step),
+                                       ObjectEnd(img, centred, s_guess, kEndColumns[0] * width,
+                                                 kEndColumns[1] * width, min_face_step));
+    // A face on one side only, or two that are not one line (a flank, a hair's end): the reading
+    // nearest the guess.
+    const LineReading* one = nullptr;
     if (!face.found)
-      for (const TipEstimate& f : faces)
-        if (near(f) && (!one || std::abs(f.s_px - s_guess) < std::abs(one->s_px - s_guess)))
-          one = &f;
+      for (const auto& side : faces)
+        for (const LineReading& r : side)
+          if (!one || std::abs(r.s_px - s_guess) < std::abs(one->s_px - s_guess)) one = &r;
     t.face_sides = face.found ? 2 : one ? 1 : 0;
     if (end.found) {
       // Confirmed by the face beside it, or alone (the nozzle at the background's level).
-      const TipEstimate* other = face.found ? &face : one;
+      const bool confirmed = face.found || one;
+      const double other_s = face.found ? face.s_px : one ? one->s_px : end.s_px;
       t.s_tip_px = end.s_px;
-      t.tip_sigma_px = std::max({other ? kTipSigmaConfirmedPx : kTipSigmaAlonePx, end.doubt_px,
-                                 other ? 0.5 * std::abs(end.s_px - other->s_px) : 0.0});
+      t.tip_sigma_px = std::max({confirmed ? kTipSigmaConfirmedPx : kTipSigmaAlonePx, end.doubt_px,
+                                 0.5 * std::abs(end.s_px - other_s)});
       break;
     }
     if (face.found) {
