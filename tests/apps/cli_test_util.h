@@ -8,6 +8,7 @@
 #include <string>
 
 #include "common/atomic_file.h"
+#include "tests/scratch_dir.h"
 
 namespace clogscope::apps::testing {
 
@@ -24,12 +25,7 @@ inline RunResult RunCli(const std::string& args, const std::filesystem::path& di
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, ReadFile(o), ReadFile(e)};
 }
 
-// An empty folder under the system's temporary directory.
-inline std::filesystem::path FreshDir(const std::string& name) {
-  const auto d = std::filesystem::temp_directory_path() / name;
-  std::filesystem::remove_all(d);
-  std::filesystem::create_directories(d);
-  return d;
-}
+// An empty folder of the test's own under the system's temporary directory.
+inline std::filesystem::path FreshDir(const std::string& name) { return testutil::FreshDir(name); }
 
 }  // namespace clogscope::apps::testing

@@ -25,7 +25,7 @@ class FeedstockManifestTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     // One folder per process: ctest runs this suite's tests as parallel processes.
-    dir_ = testing::FreshDir("clogscope_feedstock_manifest_" + std::to_string(getpid()));
+    dir_ = testing::FreshDir("clogscope_feedstock_manifest");
     const double widths[] = {400, 390}, filaments[] = {1750, 1760}, feeds[] = {4.5, 4.0};
     for (int i = 0; i < 2; ++i) {
       const std::string n = std::to_string(i + 1);

@@ -28,9 +28,7 @@ class RunCommandTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     // One folder per process: ctest runs this suite's tests as parallel processes.
-    dir_ = fs::temp_directory_path() / ("clogscope_run_e2e_" + std::to_string(getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = testing::FreshDir("clogscope_run_e2e");
     const std::string small = " --size 640x360 --tip-x-px 320 ";
     std::string pins = "image,diameter_um\n";
     for (int d : {300, 400, 500}) {

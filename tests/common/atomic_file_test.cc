@@ -6,19 +6,16 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "tests/scratch_dir.h"
+
 namespace clogscope {
 namespace {
 
 namespace fs = std::filesystem;
 
 fs::path TempDir() {
-  fs::path d =
-      fs::temp_directory_path() /
-      ("clogscope_atomic_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-       ::testing::UnitTest::GetInstance()->current_test_info()->name());
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
+  return testutil::FreshDir(std::string("clogscope_atomic_") +
+                            ::testing::UnitTest::GetInstance()->current_test_info()->name());
 }
 
 TEST(AtomicFileTest, AppearsOnlyOnCommit) {

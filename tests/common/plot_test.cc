@@ -6,19 +6,14 @@
 #include <filesystem>
 
 #include "common/spawn.h"
+#include "tests/scratch_dir.h"
 
 namespace clogscope {
 namespace {
 
 namespace fs = std::filesystem;
 
-// An empty folder under the system's temporary directory.
-fs::path FreshDir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+using testutil::FreshDir;
 
 PlotSpec Spec() {
   PlotSpec spec;

@@ -6,6 +6,7 @@
 #include <functional>
 
 #include "common/atomic_file.h"
+#include "tests/scratch_dir.h"
 
 namespace clogscope::model {
 namespace {
@@ -13,8 +14,7 @@ namespace {
 namespace fs = std::filesystem;
 
 std::string Write(const std::string& name, const std::string& text) {
-  const fs::path dir = fs::temp_directory_path() / "clogscope_model_io";
-  fs::create_directories(dir);
+  static const testutil::ScratchDir dir("clogscope_model_io");
   const std::string path = (dir / name).string();
   WriteFileAtomically(path, text);
   return path;

@@ -13,6 +13,7 @@
 #include "common/atomic_file.h"
 #include "common/csv.h"
 #include "synthetic/synthetic.h"
+#include "tests/scratch_dir.h"
 
 namespace clogscope::pipeline {
 namespace {
@@ -33,13 +34,6 @@ vision::SceneParams SmallScene(double width_um, uint64_t seed) {
 
 class ExperimentTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("clogscope_experiment_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
   std::string Render(const std::string& name, double width_um, int frames, uint64_t seed) {
     const std::string path = (dir_ / name).string();
     truths_[path] = vision::RenderSequence(SmallScene(width_um, seed), frames, 25.0, path, "");
@@ -67,7 +61,8 @@ class ExperimentTest : public ::testing::Test {
     }
     return m;
   }
-  fs::path dir_;
+  testutil::ScratchDir scratch_{"clogscope_experiment"};
+  const fs::path dir_ = scratch_.path();
   std::map<std::string, std::vector<vision::FrameTruth>> truths_;
 };
 

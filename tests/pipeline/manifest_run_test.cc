@@ -9,6 +9,7 @@
 #include "model/io.h"
 #include "model/prediction_run.h"
 #include "synthetic/synthetic.h"
+#include "tests/scratch_dir.h"
 
 namespace clogscope::pipeline {
 namespace {
@@ -17,14 +18,6 @@ namespace fs = std::filesystem;
 
 class ManifestRunTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("clogscope_manifest_run_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
   // Two steps (220 and 210 °C) of 400 and 390 µm rendered at 3 µm/px; the manifest names the
   // scale and the direct-PLA extruder.
   std::string WriteManifest() {
@@ -47,7 +40,8 @@ class ManifestRunTest : public ::testing::Test {
     WriteFileAtomically(path, yaml);
     return path;
   }
-  fs::path dir_;
+  testutil::ScratchDir scratch_{"clogscope_manifest_run"};
+  const fs::path dir_ = scratch_.path();
 };
 
 // The whole manifest from the library: the tables, the prediction from the steps held in memory,

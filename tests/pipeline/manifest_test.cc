@@ -6,14 +6,21 @@
 #include <functional>
 
 #include "common/atomic_file.h"
+#include "tests/scratch_dir.h"
 
 namespace clogscope::pipeline {
 namespace {
 
 namespace fs = std::filesystem;
 
+// The manifests' folder, one for the run.
+const fs::path& Dir() {
+  static const testutil::ScratchDir dir("clogscope_manifest_test");
+  return dir.path();
+}
+
 std::string Write(const std::string& name, const std::string& text) {
-  const fs::path dir = fs::temp_directory_path() / "clogscope_manifest_test";
+  const fs::path& dir = Dir();
   fs::create_directories(dir / "frames");
   const std::string path = (dir / name).string();
   WriteFileAtomically(path, text);
@@ -40,8 +47,7 @@ TEST(ManifestTest, ReadsYamlWithPathsRelativeToTheManifest) {
   ASSERT_EQ(m.steps.size(), 2u);
   EXPECT_EQ(m.samples, 30);
   EXPECT_EQ(m.name, "demo");
-  EXPECT_EQ(m.steps[0].video,
-            (fs::temp_directory_path() / "clogscope_manifest_test/v/step1.mp4").string());
+  EXPECT_EQ(m.steps[0].video, (Dir() / "v/step1.mp4").string());
   EXPECT_DOUBLE_EQ(m.steps[0].settle_s, 1.5);
   EXPECT_DOUBLE_EQ(m.steps[1].settle_s, 0);
   EXPECT_DOUBLE_EQ(m.steps[0].end_s, 8);

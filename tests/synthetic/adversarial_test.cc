@@ -8,14 +8,22 @@
 #include <filesystem>
 
 #include "synthetic/adversarial_matrix.h"
+#include "tests/scratch_dir.h"
 #include "vision/scene/strand_measure.h"
 
 namespace clogscope::synthetic {
 namespace {
 
+// Where H.264 round trips go: a folder of this run's own (the renderer names its files after the
+// scene, and another run may render the same scene at the same time).
+const std::filesystem::path& Scratch() {
+  static const testutil::ScratchDir dir("clogscope_adversarial_test");
+  return dir.path();
+}
+
 // Renders the scene's first frame and measures it as the matrix does.
 vision::StrandMeasurement RenderAndMeasure(const AdversarialScene& p, AdversarialTruth* t) {
-  const cv::Mat f = RenderAdversarial(p, 1, std::filesystem::temp_directory_path().string(), t)[0];
+  const cv::Mat f = RenderAdversarial(p, 1, Scratch().string(), t)[0];
   return MeasureAdversarialFrame(f, p);
 }
 
@@ -140,7 +148,7 @@ TEST(AdversarialTest, AHairBesideTheStrandIsNeverMeasuredAsIt) {
 
 // The matrix's four frames of a scene (an H.264 clip encodes its frames together).
 std::vector<cv::Mat> MatrixFrames(const AdversarialScene& p, AdversarialTruth* t) {
-  return RenderAdversarial(p, 4, std::filesystem::temp_directory_path().string(), t);
+  return RenderAdversarial(p, 4, Scratch().string(), t);
 }
 
 TEST(AdversarialTest, AStripeAtTheBackgroundsLevelSplitsTheStrandIntoAmbiguity) {

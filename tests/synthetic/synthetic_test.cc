@@ -9,6 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "tests/scratch_dir.h"
 #include "vision/io/frame_source.h"
 
 namespace clogscope::vision {
@@ -216,8 +217,8 @@ TEST(SyntheticTest, ValidateNamesTheProblem) {
 }
 
 TEST(SyntheticTest, SequencesAsPngAviAndMp4WithTruth) {
-  const fs::path dir = fs::temp_directory_path() / "clogscope_synthetic_seq";
-  fs::remove_all(dir);
+  const testutil::ScratchDir scratch("clogscope_synthetic_seq");
+  const fs::path& dir = scratch.path();
   SceneParams p = SmallScene();
   p.width_jitter_um = 1;
   for (const char* out : {"png", "v.avi", "v.mp4"}) {

@@ -8,6 +8,7 @@
 
 #include "common/atomic_file.h"
 #include "synthetic/synthetic.h"
+#include "tests/scratch_dir.h"
 #include "vision/io/video_io.h"
 #include "vision/scene/batch.h"
 
@@ -16,12 +17,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path FreshDir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("clogscope_fs_" + name);
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+fs::path FreshDir(const std::string& name) { return testutil::FreshDir("clogscope_fs_" + name); }
 
 SceneParams SmallScene() {
   SceneParams p;

@@ -6,6 +6,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "common/atomic_file.h"
+#include "tests/scratch_dir.h"
 
 namespace clogscope::vision {
 namespace {
@@ -15,8 +16,8 @@ namespace fs = std::filesystem;
 // Every format the tool reads, as OpenCV writes it (TIFF: libtiff puts the directory after the
 // pixels), 8- and 16-bit, grey and colour: the header gives the encoded size.
 TEST(ImageHeaderTest, SizesOfEveryFormatTheToolReads) {
-  const fs::path dir = fs::temp_directory_path() / "clogscope_image_header";
-  fs::create_directories(dir);
+  const testutil::ScratchDir scratch("clogscope_image_header");
+  const fs::path& dir = scratch.path();
   struct Case {
     const char* ext;
     int type;

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "synthetic/synthetic.h"
+#include "tests/scratch_dir.h"
 #include "vision/io/video_io.h"
 
 namespace clogscope::vision {
@@ -18,12 +19,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path Fresh(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / (name + "_" + std::to_string(getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+fs::path Fresh(const std::string& name) { return testutil::FreshDir(name); }
 
 cv::Mat Grey(int level) { return cv::Mat(48, 64, CV_8UC1, cv::Scalar(level)); }
 

@@ -11,6 +11,7 @@
 
 #include "pipeline/speed_summary.h"
 #include "synthetic/synthetic.h"
+#include "tests/scratch_dir.h"
 #include "vision/io/frame_source.h"
 #include "vision/motion/feed_speed.h"
 #include "vision/scene/batch.h"
@@ -24,10 +25,7 @@ const double kMmPerPx = FeedstockScene(0).scale_um_per_px / 1e3;
 constexpr int kFrames = 61;
 
 fs::path FreshDir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / "clogscope_feed_codec_test" / name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
+  return testutil::FreshDir("clogscope_feed_codec_" + name);
 }
 
 // The frames' truth: the texture's speed along the axis, from the first and last frames.
