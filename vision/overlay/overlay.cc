@@ -6,6 +6,8 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "vision/io/data_range.h"
+
 namespace clogscope::vision {
 namespace {
 

@@ -10,7 +10,7 @@
 
 #include "common/robust.h"
 #include "vision/edges/edge_fit.h"
-#include "vision/scene/strand_measure.h"
+#include "vision/io/data_range.h"
 
 namespace clogscope::vision {
 namespace {

@@ -6,6 +6,7 @@
 
 #include "vision/edges/caliper.h"
 #include "vision/edges/polarity.h"
+#include "vision/io/data_range.h"
 #include "vision/scene/frame_status.h"
 
 namespace clogscope::vision {
@@ -120,10 +121,6 @@ cv::Rect ResolveRoi(const cv::Mat& frame, const StrandMeasureOptions& options);
 
 // Scene-finding options from the measurement options and the data's range.
 SceneOptions SceneOptionsFor(const StrandMeasureOptions& options, double data_max);
-
-// The largest value the frame's data can hold: 255 for 8 bit; for 16 bit, 2^b − 1 for the smallest
-// b (8…16) that holds its largest pixel (12-bit cameras write 16-bit files).
-double DataMax(const cv::Mat& image);
 
 // Marks valid frames whose width is far from the median of the valid frames within ±half_window
 // frames (robust: more than k·1.4826·MAD and more than min_deviation_px away) as kWidthOutlier.
