@@ -23,6 +23,7 @@ packages=(
   python3-numpy          # the Python module: frames in and out as NumPy arrays
   python3-pandas         # the Python module: per-frame and diameter tables as DataFrames
   python3-pytest         # the Python module's tests (python/tests, run by ctest)
+  jupyter-nbconvert python3-ipykernel  # a test executes examples/measure_folder.ipynb (~30 MB)
 )
 if [ "${1:-}" = "--fuzz" ]; then
   packages+=(clang-14 libclang-rt-14-dev)  # libFuzzer with ASan/UBSan

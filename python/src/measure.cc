@@ -4,6 +4,7 @@
 #include <pybind11/stl.h>
 
 #include <atomic>
+#include <chrono>
 #include <mutex>
 
 #include "arrays.h"
@@ -269,6 +270,20 @@ Raises ValueError for an array of another type or layout, or options that do not
       py::arg("reset") = true,
       "The most measurements seen inside the library at once (GIL released) since the last "
       "reset: evidence for tests that threads measure concurrently.");
+
+  m.def(
+      "_time_measure_strand",
+      [](const py::array& frame, std::optional<StrandMeasureOptions> options, int repeats) {
+        const cv::Mat view = MatView(frame);
+        const StrandMeasureOptions o = options ? *options : StrandMeasureOptions{};
+        py::gil_scoped_release release;
+        const auto t0 = std::chrono::steady_clock::now();
+        for (int i = 0; i < repeats; ++i) vision::MeasureStrand(view, o);
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      },
+      py::arg("frame"), py::arg("options") = py::none(), py::arg("repeats") = 1,
+      "Seconds for `repeats` calls of vision::MeasureStrand on the frame, timed in C++: the "
+      "benchmark's reference for measure_frame's overhead (bench/python_overhead.py).");
 
   py::class_<Tracker>(m, "Tracker",
                       R"(Measures a strand frame after frame (vision::StrandTracker): after the
