@@ -36,15 +36,9 @@ def read_frames_table(path_or_text):
 
 
 def _fields(obj):
-    names = []
-    for name in dir(type(obj)):
-        if name.startswith("_"):
-            continue
-        value = getattr(obj, name)
-        if callable(value) or isinstance(value, (list, tuple)) and name in ("calipers", "residuals"):
-            continue
-        names.append(name)
-    return names
+    """The public data attributes of a result object (its methods left out)."""
+    return [name for name in dir(type(obj))
+            if not name.startswith("_") and not callable(getattr(obj, name))]
 
 
 def to_frame(objects, columns=None):
