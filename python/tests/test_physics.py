@@ -109,3 +109,39 @@ def test_predict_table_raises_the_command_lines_message(run_cli, tmp_path):
         clogscope.predict_table(missing)
     proc = run_cli("predict", "--diameters", missing, "--out", tmp_path / "p", check=False)
     assert proc.stderr.strip() == f"clogscope predict: error: {e.value}"
+
+
+def test_critical_lengths_buckle_under_the_predicted_back_pressure():
+    p = clogscope.load_extruder("direct-pla")
+    steps = [clogscope.StepInput(1, 220.0, diameter_um=400), clogscope.StepInput(2, 190.0,
+                                                                                 diameter_um=360)]
+    E, mu = 3.0e6, 100.0
+    lengths = clogscope.critical_lengths(p, steps, modulus_pa=E, viscosity_pa_s=mu)
+    pred = clogscope.predict(p, steps)
+    R = p.get("filament_diameter_m") / 2
+    Q = p.get("print_speed_m_s") * p.get("layer_height_m") * p.get("nozzle_diameter_m")
+    for step, sp, lc in zip(steps, pred.steps, lengths):
+        assert lc.dp_power_law_pa == pytest.approx(sp.dp_total_pa, rel=1e-12)
+        # Euler buckling, pin-ended: L = √(π² E R² / (4 ΔP)).
+        assert lc.l_crt_power_law_mm == pytest.approx(
+            1e3 * math.sqrt(math.pi**2 * E * R**2 / (4 * sp.dp_total_pa)), rel=1e-12)
+        r = step.diameter_m / 2
+        assert lc.dp_hagen_poiseuille_pa == pytest.approx(
+            8 * mu * Q * p.get("zone3_length_m") / (math.pi * r**4), rel=1e-12)
+    assert lengths[1].l_crt_power_law_mm < lengths[0].l_crt_power_law_mm  # clogged: shorter
+
+
+def test_drive_slip_at_each_step_is_the_formula_at_its_feed_force():
+    p = clogscope.load_extruder("direct-pla")
+    steps = [clogscope.StepInput(1, 220.0, diameter_um=400), clogscope.StepInput(2, 200.0,
+                                                                                 diameter_um=350)]
+    drive = clogscope.predict_drive(p, steps, pinch_force_n=70, friction_n=2.0)
+    pred = clogscope.predict(p, steps)
+    roller = drive.roller
+    for ds, sp in zip(drive.steps, pred.steps):
+        assert ds.f_bp_n == pytest.approx(sp.f_bp_n, rel=1e-12)
+        assert ds.feed_force_n == pytest.approx(sp.f_bp_n + 2.0, rel=1e-12)
+        assert ds.slip_pinch.pct == pytest.approx(
+            (roller.k_s_pct_n / 70**2 + roller.k_pct_per_n) * ds.feed_force_n, rel=1e-12)
+        assert ds.delivered_flow_mm3_s == pytest.approx(
+            (1 - ds.slip_pinch.pct / 100) * ds.commanded_flow_mm3_s, rel=1e-12)
