@@ -219,24 +219,34 @@ void BindMeasure(py::module_& m) {
                     "Nozzle tip on the axis (strand) or top of the stretch (filament), x px.")
       .def_readonly("tip_y_px", &StrandMeasurement::tip_y_px, "The same, y px.")
       .def_readonly("polarity", &StrandMeasurement::polarity, "The polarity measured.")
-      .def_readonly("calipers_used", &StrandMeasurement::calipers_used)
-      .def_readonly("calipers_total", &StrandMeasurement::calipers_total)
+      .def_readonly("calipers_used", &StrandMeasurement::calipers_used,
+                    "Calipers whose widths make the frame's width.")
+      .def_readonly("calipers_total", &StrandMeasurement::calipers_total,
+                    "Calipers placed across the band.")
       .def_readonly("has_geometry", &StrandMeasurement::has_geometry,
                     "The axis, band and edge lines below are set.")
-      .def_readonly("shading_left", &StrandMeasurement::shading_left)
-      .def_readonly("shading_right", &StrandMeasurement::shading_right)
+      .def_readonly("shading_left", &StrandMeasurement::shading_left,
+                    "The left edge was fitted with the shading model.")
+      .def_readonly("shading_right", &StrandMeasurement::shading_right,
+                    "The right edge was fitted with the shading model.")
       .def_readonly("axis_dx", &StrandMeasurement::axis_dx, "Axis direction down the strand, x.")
       .def_readonly("axis_dy", &StrandMeasurement::axis_dy, "Axis direction down the strand, y.")
       .def_readonly("band_start_px", &StrandMeasurement::band_start_px,
                     "Along the axis from the tip.")
-      .def_readonly("band_end_px", &StrandMeasurement::band_end_px)
+      .def_readonly("band_end_px", &StrandMeasurement::band_end_px,
+                    "Band end along the axis from the tip, px.")
       .def_readonly("left_u0_px", &StrandMeasurement::left_u0_px,
                     "Left edge line u = left_u0_px + edge_slope·s across the axis.")
-      .def_readonly("right_u0_px", &StrandMeasurement::right_u0_px)
-      .def_readonly("edge_slope", &StrandMeasurement::edge_slope)
-      .def_readonly("straight_start_px", &StrandMeasurement::straight_start_px)
+      .def_readonly("right_u0_px", &StrandMeasurement::right_u0_px,
+                    "Right edge line u = right_u0_px + edge_slope·s across the axis.")
+      .def_readonly("edge_slope", &StrandMeasurement::edge_slope,
+                    "Both edge lines' slope across the axis per px along it.")
+      .def_readonly("straight_start_px", &StrandMeasurement::straight_start_px,
+                    "Where along the band the width comes from (a rough filament: its straight "
+                    "part), px.")
       .def_readonly("straight_end_px", &StrandMeasurement::straight_end_px)
-      .def_readonly("rough_calipers", &StrandMeasurement::rough_calipers)
+      .def_readonly("rough_calipers", &StrandMeasurement::rough_calipers,
+                    "Filament: calipers whose edges are not straight (knurl marks).")
       .def_readonly("swell_ratio", &StrandMeasurement::swell_ratio,
                     "Widest width between the tip and the band over width_px (die swell).")
       .def_readonly("calipers", &StrandMeasurement::calipers, "The Caliper list across the band.")
