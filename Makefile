@@ -50,6 +50,7 @@ demo: build
 
 bench: build
 	@$(BUILD_DIR)/bin/clogscope_bench
+	@PYTHONPATH=$(BUILD_DIR)/python /usr/bin/python3 bench/python_overhead.py
 
 format:
 	@clang-format -i $$(git ls-files '*.h' '*.cc')

@@ -137,7 +137,7 @@ std::optional<calib::ScaleCalibration> MeasureCommandOptions::Conversion() const
   return std::nullopt;
 }
 
-MeasureSummary MeasureInputs(MeasureCommandOptions o) {
+MeasureSummary MeasureInputs(MeasureCommandOptions o, std::ostream* table_out) {
   o.ResolveBand();
   std::string why;
   if (!o.Validate(&why)) throw std::invalid_argument(why);
@@ -153,8 +153,8 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
   // Rows go to "<out>.partial" as each input completes, so an interrupted run keeps what it did;
   // without a file, to standard output (the log goes to standard error).
   std::optional<AtomicTextFile> file;
-  if (!WritesToStdout(o)) file.emplace(o.out_frames, /*keep_partial=*/true);
-  std::ostream& table = file ? file->stream() : std::cout;
+  if (!table_out && !WritesToStdout(o)) file.emplace(o.out_frames, /*keep_partial=*/true);
+  std::ostream& table = table_out ? *table_out : file ? file->stream() : std::cout;
   const std::optional<calib::ScaleCalibration> conv = o.Conversion();
   table << ProvenanceCsvComment(CurrentProvenance());
   if (o.calibration) {

@@ -5,6 +5,7 @@
 
 #include <opencv2/core.hpp>
 #include <optional>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -53,8 +54,9 @@ struct MeasureSummary {
 };
 
 // Measures every frame of every input and writes the per-frame CSV (atomically) and overlays.
-// An input that cannot be opened is reported in the summary and skipped.
-MeasureSummary MeasureInputs(MeasureCommandOptions options);
+// An input that cannot be opened is reported in the summary and skipped. With `table`, the CSV
+// goes there instead of to out_frames (the Python module's measure reads it back).
+MeasureSummary MeasureInputs(MeasureCommandOptions options, std::ostream* table = nullptr);
 
 // The per-frame CSV's columns, in order (without the feed-speed columns).
 const std::vector<std::string>& FrameCsvColumns();

@@ -18,6 +18,12 @@ packages=(
   ffmpeg                 # codec libraries for OpenCV's FFmpeg backend; ffmpeg CLI for decode benchmarks
   gnuplot-nox            # plots (optional at run time)
   libcpp-httplib-dev     # `watch --http`: /status, /metrics, /frame.jpg
+  python3-dev            # the Python module (python/): Debian's Python 3.11 headers
+  pybind11-dev           # the Python module's bindings (headers and CMake config)
+  python3-numpy          # the Python module: frames in and out as NumPy arrays
+  python3-pandas         # the Python module: per-frame and diameter tables as DataFrames
+  python3-pytest         # the Python module's tests (python/tests, run by ctest)
+  jupyter-nbconvert python3-ipykernel  # a test executes examples/measure_folder.ipynb (~30 MB)
 )
 if [ "${1:-}" = "--fuzz" ]; then
   packages+=(clang-14 libclang-rt-14-dev)  # libFuzzer with ASan/UBSan

@@ -1,0 +1,94 @@
+// clogscope.open_frames and read_image: the frames of an image, a folder of images or a video as
+// NumPy arrays, read by the command line's own frame source (vision::FrameSource: video frames
+// decoded straight to their luma plane), for Tracker and measure_frame.
+#include <pybind11/stl.h>
+
+#include "arrays.h"
+#include "bindings.h"
+#include "vision/io/frame_source.h"
+
+namespace clogscope::python {
+namespace {
+
+struct Frame {
+  py::array image;  // empty (0×0) when the frame could not be decoded
+  std::string source;
+  int64_t index = 0;
+  double time_s = -1;
+  std::string error;
+};
+
+class FrameReader {
+ public:
+  explicit FrameReader(const Path& path) : source_(vision::FrameSource::Open(path.string())) {}
+  Frame Next() {
+    vision::InputFrame f;
+    bool got = false;
+    {
+      py::gil_scoped_release release;
+      got = source_ && source_->Next(&f);
+    }
+    if (!got) {
+      source_.reset();
+      throw py::stop_iteration();
+    }
+    return {ArrayFromMat(std::move(f.image)), f.source, f.index, f.time_s, f.error};
+  }
+  int expected_frames() const { return source_ ? source_->expected_frames() : 0; }
+  double fps() const { return source_ ? source_->fps() : 0; }
+
+ private:
+  std::unique_ptr<vision::FrameSource> source_;
+};
+
+}  // namespace
+
+void BindFrames(py::module_& m) {
+  py::class_<Frame>(m, "Frame", "One frame read from a file, folder or video.")
+      .def_readonly("image", &Frame::image,
+                    "H×W (video frames: their luma) or H×W×3 BGR, uint8 or uint16; 0×0 when the "
+                    "frame could not be decoded (see error).")
+      .def_readonly("source", &Frame::source, "The file it came from.")
+      .def_readonly("index", &Frame::index, "Frame number within the input, from 0.")
+      .def_readonly("time_s", &Frame::time_s, "Position in a video, s; -1 for still images.")
+      .def_readonly("error", &Frame::error, "Why image is empty, or a warning.")
+      .def("__repr__", [](const py::object& self) {
+        return ReprOf(self, "Frame", {"source", "index", "time_s", "error"});
+      });
+  py::class_<FrameReader>(m, "FrameReader",
+                          "Iterates over the frames of an image, a folder of images (in name "
+                          "order) or a video, as `clogscope measure` reads them.")
+      .def("__iter__", [](FrameReader& r) -> FrameReader& { return r; })
+      .def("__next__", &FrameReader::Next)
+      .def_property_readonly("expected_frames", &FrameReader::expected_frames,
+                             "Frames expected (-1: unknown).")
+      .def_property_readonly("fps", &FrameReader::fps, "Video frame rate (0: unknown).");
+  m.def(
+      "open_frames", [](const Path& path) { return std::make_unique<FrameReader>(path); },
+      py::arg("path"),
+      R"(The frames of an image, a folder of images or a video (vision::FrameSource, as measure
+reads them): iterate for Frame objects (image, index, time_s, source).
+
+    tracker = clogscope.Tracker()
+    for f in clogscope.open_frames("step1.mp4"):
+        m = tracker.measure(f.image)
+
+Raises ValueError naming the path when it cannot be opened.)");
+  m.def(
+      "read_image",
+      [](const Path& path) {
+        vision::InputFrame f;
+        {
+          py::gil_scoped_release release;
+          auto source = vision::FrameSource::Open(path.string());
+          if (!source->Next(&f)) throw std::invalid_argument(path.string() + ": no frame");
+        }
+        if (f.image.empty()) throw std::invalid_argument(path.string() + ": " + f.error);
+        return ArrayFromMat(std::move(f.image));
+      },
+      py::arg("path"),
+      "The first frame of an image file (or video) as an array, as measure reads it: 8- or "
+      "16-bit, grey or BGR. Raises ValueError naming the file when it cannot be read.");
+}
+
+}  // namespace clogscope::python
