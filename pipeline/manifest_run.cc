@@ -189,7 +189,7 @@ ManifestRunReport RunManifest(const ManifestRunOptions& o) {
 std::vector<model::StepInput> PredictorSteps(const std::vector<StepResult>& steps) {
   std::vector<model::StepInput> out;
   for (const StepResult& r : steps) {
-    if (r.status == "failed") continue;  // as the table's reader skips them
+    if (r.status == model::StepStatus::kFailed) continue;  // as the table's reader skips them
     if (!(r.has_um && r.n_used > 0)) {
       throw std::invalid_argument(
           fmt::format("step {}: mean_um is missing (no diameter in µm)", r.spec.step));

@@ -60,7 +60,7 @@ TEST_F(ManifestRunTest, PredictsFromItsStepsAsFromTheWrittenTable) {
   o.jobs = 1;
   const ManifestRunReport rep = RunManifest(o);
   ASSERT_EQ(rep.steps.size(), 2u);
-  for (const auto& r : rep.steps) EXPECT_EQ(r.status, "ok") << r.detail;
+  for (const auto& r : rep.steps) EXPECT_EQ(r.status, model::StepStatus::kOk) << r.detail;
   ASSERT_TRUE(rep.conversion.has_value());
   EXPECT_EQ(rep.conversion->scale_um_per_px, 3.0);
   ASSERT_TRUE(rep.prediction.has_value());
@@ -86,20 +86,21 @@ TEST_F(ManifestRunTest, PredictsFromItsStepsAsFromTheWrittenTable) {
   EXPECT_EQ(rep.prediction->prediction.reference_load_n, expected.prediction.reference_load_n);
 }
 
-StepResult Step(int step, const std::string& status, double mean_um) {
+StepResult Step(int step, model::StepStatus status, double mean_um) {
   StepResult r;
   r.spec.step = step;
   r.spec.temperature_c = 200.004;
   r.status = status;
-  r.has_um = status != "failed";
-  r.n_used = status == "failed" ? 0 : 10;
+  r.has_um = status != model::StepStatus::kFailed;
+  r.n_used = status == model::StepStatus::kFailed ? 0 : 10;
   r.mean_um = mean_um;
   return r;
 }
 
 TEST(PredictorSteps, TheTablesNumbersWithFailedStepsLeftOut) {
-  const auto steps = PredictorSteps(
-      {Step(1, "ok", 390.12345), Step(2, "failed", 0), Step(3, "too_few_frames", 380.0006)});
+  const auto steps = PredictorSteps({Step(1, model::StepStatus::kOk, 390.12345),
+                                     Step(2, model::StepStatus::kFailed, 0),
+                                     Step(3, model::StepStatus::kTooFewFrames, 380.0006)});
   ASSERT_EQ(steps.size(), 2u);
   EXPECT_EQ(steps[0].step, 1);
   EXPECT_EQ(steps[0].diameter_m, 390.123 * 1e-6);  // 3 decimals in µm, as diameters.csv
@@ -110,8 +111,8 @@ TEST(PredictorSteps, TheTablesNumbersWithFailedStepsLeftOut) {
 }
 
 TEST(PredictorSteps, AllFailedOrNoMicronsIsRefused) {
-  EXPECT_THROW(PredictorSteps({Step(1, "failed", 0)}), std::invalid_argument);
-  StepResult px_only = Step(1, "ok", 0);
+  EXPECT_THROW(PredictorSteps({Step(1, model::StepStatus::kFailed, 0)}), std::invalid_argument);
+  StepResult px_only = Step(1, model::StepStatus::kOk, 0);
   px_only.has_um = false;
   EXPECT_THROW(PredictorSteps({px_only}), std::invalid_argument);
 }
