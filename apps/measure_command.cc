@@ -245,8 +245,8 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
       if (o.gear_roi) {
         const GearAndSlip g = GearAndSlipOf(r, *conv, *o.gear_radius_mm);
         fields.insert(fields.end(), {CsvNumber(g.gear_mm_s, 5), CsvNumber(g.gear_sigma_mm_s, 5),
-                                     r.gear.valid ? "" : r.gear.reason, CsvNumber(g.slip_pct, 3),
-                                     CsvNumber(g.slip_sigma_pct, 3)});
+                                     r.gear.valid ? "" : vision::SpeedReasonName(r.gear.reason),
+                                     CsvNumber(g.slip_pct, 3), CsvNumber(g.slip_sigma_pct, 3)});
       }
       table << CsvLine(fields) << "\n";
     }
@@ -273,20 +273,20 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o) {
       spdlog::info("{}: {}", input, part);
     if (o.feed_speed) {
       WarnOncePerReason(input, "without a feed speed", rows, [&](const Row& r) {
-        if (r.speed.valid || r.speed.reason == "first_frame") return Skipped();
+        if (r.speed.valid || r.speed.reason == vision::SpeedReason::kFirstFrame) return Skipped();
         std::string detail = r.speed.detail;
-        if (r.speed.reason == "too_fast") {
+        if (r.speed.reason == vision::SpeedReason::kTooFast) {
           detail +=
               fmt::format(" (faster than {:.2f} mm/s)",
                           r.speed.search_limit_px * conv->scale_um_per_px * 1e-3 / r.speed.dt_s);
         }
-        return std::make_pair(r.speed.reason, detail);
+        return std::make_pair(std::string(vision::SpeedReasonName(r.speed.reason)), detail);
       });
     }
     if (o.gear_roi) {
       WarnOncePerReason(input, "without a gear speed", rows, [](const Row& r) {
-        if (r.gear.valid || r.gear.reason == "first_frame") return Skipped();
-        return std::make_pair(r.gear.reason, r.gear.detail);
+        if (r.gear.valid || r.gear.reason == vision::SpeedReason::kFirstFrame) return Skipped();
+        return std::make_pair(std::string(vision::SpeedReasonName(r.gear.reason)), r.gear.detail);
       });
     }
     if (valid < static_cast<int>(rows.size())) {
