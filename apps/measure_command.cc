@@ -376,15 +376,8 @@ int RunMeasure(int argc, char** argv) {
       throw std::invalid_argument("--gear-roi '" + gear_roi + "': expected x,y,w,h");
     }
   }
-  if (!gear_centre.empty()) {
-    cv::Rect c;
-    try {  // "x,y": read as a rectangle with a dummy size
-      c = pipeline::ParseRoi(gear_centre + ",1,1");
-    } catch (const std::invalid_argument&) {
-      throw std::invalid_argument("--gear-centre '" + gear_centre + "': expected x,y");
-    }
-    o.gear_centre_px = cv::Point2d(c.x, c.y);
-  }
+  if (!gear_centre.empty())
+    o.gear_centre_px = cv::Point2d(pipeline::ParsePoint(gear_centre, "--gear-centre"));
   // The measurement options, read once for both modes.
   ApplyMeasurementOptions(app, text, &o);
   if (manifest) {

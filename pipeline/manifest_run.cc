@@ -57,10 +57,8 @@ FeedstockOptions FeedstockOptionsFor(const Manifest& m,
     }
     vision::GearSpeedOptions g;
     g.roi = where("gear_roi", f.gear_roi);
-    if (!f.gear_centre.empty()) {
-      const cv::Rect c = where("gear_centre", f.gear_centre + ",1,1");
-      g.centre_px = cv::Point2d(c.x, c.y);
-    }
+    if (!f.gear_centre.empty())
+      g.centre_px = cv::Point2d(ParsePoint(f.gear_centre, m.path + ": feedstock: gear_centre"));
     g.outer_radius_px = f.gear_radius_mm * 1e3 / fo.conversion->scale_um_per_px;
     fo.gear = g;
     fo.gear_radius_mm = f.gear_radius_mm;
