@@ -26,7 +26,7 @@ extern "C" void OnWatchSignal(int) {
 }  // namespace
 
 WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* stop,
-                        const std::function<void(int)>& on_started) {
+                        const WatchObservers& observers) {
   MeasureCommandOptions m = options.measure;
   m.ResolveBand();
   pipeline::LiveWatchOptions live = options.live;
@@ -51,7 +51,7 @@ WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* s
   WatchReport report;
   report.http_port = http ? http->port() : 0;
   if (http) spdlog::info("serving /status, /metrics and /frame.jpg on {}", options.http);
-  if (on_started) on_started(report.http_port);
+  if (observers.on_started) observers.on_started(report.http_port);
 
   pipeline::LiveWatchEvents events;
   std::string last_line;
@@ -64,16 +64,18 @@ WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* s
     spdlog::log(s.level == pipeline::WatchLevel::kOk ? spdlog::level::info : spdlog::level::warn,
                 "{:.1f} s: {} → {}: {}", s.time_s, pipeline::WatchLevelName(s.previous_level),
                 pipeline::WatchLevelName(s.level), s.reason);
-    if (!alert) return;
-    std::string no_start;
-    if (!alert->Run(s, clog, live.source, last_line, &no_start)) {
-      spdlog::error("{}", no_start);
-      report.alert_failures.push_back(no_start);
+    if (alert) {
+      std::string no_start;
+      if (!alert->Run(s, clog, live.source, last_line, &no_start)) {
+        spdlog::error("{}", no_start);
+        report.alert_failures.push_back(no_start);
+      }
+      for (const std::string& f : alert->Reap()) {
+        spdlog::warn("{}", f);
+        report.alert_failures.push_back(f);
+      }
     }
-    for (const std::string& f : alert->Reap()) {
-      spdlog::warn("{}", f);
-      report.alert_failures.push_back(f);
-    }
+    if (observers.on_level_change) observers.on_level_change(s);
   };
   events.on_warning = [](const std::string& message) { spdlog::warn("{}", message); };
   report.summary = pipeline::RunLiveWatch(live, events, &board, stop);

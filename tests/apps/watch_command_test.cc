@@ -15,7 +15,6 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
-#include <future>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -199,57 +198,37 @@ TEST_F(WatchCommandTest, AnHttpMjpegStreamFromFfmpegIsWatchedAndServed) {
   o.http = "127.0.0.1:0";
   o.live.duration_s = kSeconds + 5;  // past the stream's end: the source drops
   o.live.source_options.read_timeout_s = 2;
-  std::atomic<bool> stop{false};
-  // The port the watch reports once it listens, or what it threw before: never a wait that
-  // cannot end.
-  std::promise<int> started;
-  WatchReport report;
-  std::thread watch([&] {
-    bool told = false;
-    try {
-      report = WatchNozzle(o, &stop, [&](int port) {
-        told = true;
-        started.set_value(port);
-      });
-    } catch (...) {
-      if (!told) started.set_exception(std::current_exception());
-      told = true;
-    }
-    if (!told) started.set_value(0);  // returned without ever listening
-  });
-  std::future<int> reported = started.get_future();
+  // At every level change the watch has published the new state and waits for its observer, so a
+  // real HTTP client (the server answers on its own threads) reads /status while it holds that
+  // state: no polling, and no later change can slip in. At warn it reads the rest too.
   int http_port = 0;
-  try {
-    http_port = reported.get();
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "the watch failed before listening: " << e.what();
-  }
-  if (http_port == 0) {
-    watch.join();
-    kill(ffmpeg, SIGTERM);
-    waitpid(ffmpeg, nullptr, 0);
-    FAIL() << "no HTTP port reported";
-  }
-
-  // A real HTTP client polls /status until the watch says warn, then reads the rest.
-  httplib::Client client("127.0.0.1", http_port);
-  std::set<std::string> seen;
+  std::set<std::string> seen;  // the levels /status reported: at each change and the one before
   nlohmann::json warn_status;
   std::string metrics, jpeg;
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-  while (std::chrono::steady_clock::now() < deadline && metrics.empty()) {
-    if (auto res = client.Get("/status"); res && res->status == 200) {
-      const auto j = nlohmann::json::parse(res->body);
-      seen.insert(j["level"].get<std::string>());
-      if (j["level"] == "warn") {
-        warn_status = j;
-        if (auto m = client.Get("/metrics")) metrics = m->body;
-        if (auto f = client.Get("/frame.jpg"); f && f->status == 200) jpeg = f->body;
-      }
+  WatchObservers observers;
+  observers.on_started = [&](int port) { http_port = port; };
+  observers.on_level_change = [&](const pipeline::WatchStatus& s) {
+    ASSERT_NE(http_port, 0) << "no HTTP port reported";
+    httplib::Client client("127.0.0.1", http_port);
+    const auto res = client.Get("/status");
+    ASSERT_TRUE(res && res->status == 200) << "no /status at " << s.time_s << " s";
+    const auto j = nlohmann::json::parse(res->body);
+    EXPECT_EQ(j["level"], pipeline::WatchLevelName(s.level));
+    seen.insert(j["previous_level"].get<std::string>());
+    seen.insert(j["level"].get<std::string>());
+    if (j["level"] == "warn" && warn_status.is_null()) {
+      warn_status = j;
+      if (auto m = client.Get("/metrics")) metrics = m->body;
+      if (auto f = client.Get("/frame.jpg"); f && f->status == 200) jpeg = f->body;
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  };
+  std::atomic<bool> stop{false};
+  WatchReport report;
+  try {
+    report = WatchNozzle(o, &stop, observers);
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "the watch failed: " << e.what();
   }
-  watch.join();
   kill(ffmpeg, SIGTERM);
   waitpid(ffmpeg, nullptr, 0);
 
