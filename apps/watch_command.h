@@ -23,7 +23,7 @@ struct WatchCommandOptions {
   MeasureCommandOptions measure;
   // Source, its timeouts, the rolling window and thresholds, report interval, duration. Its
   // strand, conversion and extruder are filled from the fields here.
-  pipeline::LiveWatchOptions live;
+  watch::LiveWatchOptions live;
   std::string extruder;                 // preset or YAML: attaches the clog index; empty: none
   std::vector<std::string> set;         // "name=value" overrides of the extruder
   std::optional<double> temperature_c;  // the nozzle's; default the extruder's reference
@@ -33,7 +33,7 @@ struct WatchCommandOptions {
 };
 
 struct WatchReport {
-  pipeline::LiveWatchSummary summary;
+  watch::LiveWatchSummary summary;
   int http_port = 0;  // the bound port (useful with --http HOST:0)
   std::vector<std::string> alert_failures;
 };
@@ -46,7 +46,7 @@ struct WatchObservers {
   // On every level change, after its JSON line and the alert command, once /status, /metrics and
   // /frame.jpg serve the new state; the watch waits for it, so they keep serving that state
   // meanwhile.
-  std::function<void(const pipeline::WatchStatus&)> on_level_change;
+  std::function<void(const watch::WatchStatus&)> on_level_change;
 };
 
 // Watches a camera, stream, file or folder until *stop (or the file's end, or --duration-s),

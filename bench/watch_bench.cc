@@ -69,26 +69,26 @@ std::vector<cv::Mat> Pool(vision::SceneParams s, int n, uint64_t seed) {
 }
 
 struct Outcome {
-  pipeline::LiveWatchSummary summary;
+  watch::LiveWatchSummary summary;
   std::vector<std::pair<double, std::string>> changes;
 };
 
 Outcome Watch(std::function<const cv::Mat&(int64_t)> frame, int64_t frames, bool paced) {
-  pipeline::LiveWatchOptions o;
+  watch::LiveWatchOptions o;
   o.source = "pool";
   o.conversion = pipeline::PlainScale(3.0);
   o.strand.band_start_px = 50.0 / 3;
   o.strand.band_height_px = 50;
   Outcome out;
-  pipeline::LiveWatchEvents events;
-  events.on_level_change = [&](const pipeline::WatchStatus& s,
-                               const std::optional<pipeline::ClogIndex>&) {
-    out.changes.emplace_back(s.time_s, pipeline::WatchLevelName(s.level));
+  watch::LiveWatchEvents events;
+  events.on_level_change = [&](const watch::WatchStatus& s,
+                               const std::optional<watch::ClogIndex>&) {
+    out.changes.emplace_back(s.time_s, watch::WatchLevelName(s.level));
   };
-  pipeline::WatchBoard board;
+  watch::WatchBoard board;
   std::atomic<bool> stop{false};
-  out.summary = pipeline::RunLiveWatch(o, events, &board, &stop,
-                                       std::make_unique<PoolSource>(frame, frames, paced));
+  out.summary = watch::RunLiveWatch(o, events, &board, &stop,
+                                    std::make_unique<PoolSource>(frame, frames, paced));
   return out;
 }
 

@@ -11,7 +11,7 @@
 #include "vision/scene/scene_memory.h"
 #include "vision/scene/track.h"
 
-namespace clogscope::pipeline {
+namespace clogscope::watch {
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -315,4 +315,4 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
   return summary;
 }
 
-}  // namespace clogscope::pipeline
+}  // namespace clogscope::watch

@@ -14,7 +14,7 @@
 #include "watch/watch_report.h"
 #include "watch/watch_state.h"
 
-namespace clogscope::pipeline {
+namespace clogscope::watch {
 
 struct LiveWatchOptions {
   std::string source;  // device, stream URL, video file or folder (OpenLiveSource)
@@ -92,4 +92,4 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
                               WatchBoard* board, std::atomic<bool>* stop,
                               std::unique_ptr<vision::FrameSource> source);
 
-}  // namespace clogscope::pipeline
+}  // namespace clogscope::watch

@@ -207,13 +207,13 @@ TEST_F(WatchCommandTest, AnHttpMjpegStreamFromFfmpegIsWatchedAndServed) {
   std::string metrics, jpeg;
   WatchObservers observers;
   observers.on_started = [&](int port) { http_port = port; };
-  observers.on_level_change = [&](const pipeline::WatchStatus& s) {
+  observers.on_level_change = [&](const watch::WatchStatus& s) {
     ASSERT_NE(http_port, 0) << "no HTTP port reported";
     httplib::Client client("127.0.0.1", http_port);
     const auto res = client.Get("/status");
     ASSERT_TRUE(res && res->status == 200) << "no /status at " << s.time_s << " s";
     const auto j = nlohmann::json::parse(res->body);
-    EXPECT_EQ(j["level"], pipeline::WatchLevelName(s.level));
+    EXPECT_EQ(j["level"], watch::WatchLevelName(s.level));
     seen.insert(j["previous_level"].get<std::string>());
     seen.insert(j["level"].get<std::string>());
     if (j["level"] == "warn" && warn_status.is_null()) {
@@ -249,7 +249,7 @@ TEST_F(WatchCommandTest, AnHttpMjpegStreamFromFfmpegIsWatchedAndServed) {
     if (j["event"] == "level" && j["level"] == "warn" && warn_t < 0) warn_t = j["time_s"];
   EXPECT_GT(warn_t, kDropAtS + 2.0);
   EXPECT_LE(warn_t, kDropAtS + 5.0 + 1.0);
-  EXPECT_EQ(report.summary.final_level, pipeline::WatchLevel::kNoView);
+  EXPECT_EQ(report.summary.final_level, watch::WatchLevel::kNoView);
   EXPECT_EQ(lines.back()["reason"], "the source is down (reconnecting)");
   EXPECT_GT(report.summary.frames, 450);
   std::cout << "stream: " << report.summary.frames << " frames, latency median "

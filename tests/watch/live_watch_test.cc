@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-namespace clogscope::pipeline {
+namespace clogscope::watch {
 namespace {
 
 // A file-like source of `frames` frames without pixels (nothing to measure), then `end`: the end
@@ -96,4 +96,4 @@ TEST(LiveWatchTest, ALevelChangeIsToldOnceTheBoardShowsIt) {
 }
 
 }  // namespace
-}  // namespace clogscope::pipeline
+}  // namespace clogscope::watch
