@@ -58,12 +58,12 @@ double RssMb() {
   return 0;
 }
 
-std::vector<cv::Mat> Pool(vision::SceneParams s, int n, uint64_t seed) {
+std::vector<cv::Mat> Pool(synthetic::SceneParams s, int n, uint64_t seed) {
   std::vector<cv::Mat> out;
   s.seed = seed;
   for (int i = 0; i < n; ++i) {
-    vision::FrameTruth truth;
-    out.push_back(vision::RenderFrame(s, i, &truth));
+    synthetic::FrameTruth truth;
+    out.push_back(synthetic::RenderFrame(s, i, &truth));
   }
   return out;
 }
@@ -95,11 +95,11 @@ Outcome Watch(std::function<const cv::Mat&(int64_t)> frame, int64_t frames, bool
 }  // namespace
 
 void BenchWatch() {
-  vision::SceneParams s;  // the reference camera: 1280×720, 3 µm/px, a 400 µm strand
+  synthetic::SceneParams s;  // the reference camera: 1280×720, 3 µm/px, a 400 µm strand
   s.width_jitter_um = 2.0;
   const auto t0 = Clock::now();
   const std::vector<cv::Mat> steady = Pool(s, 64, 1);
-  vision::SceneParams narrowed = s, narrowed6 = s, occluded = s, blob = s;
+  synthetic::SceneParams narrowed = s, narrowed6 = s, occluded = s, blob = s;
   narrowed.strand_width_um = 388;
   narrowed6.strand_width_um = 376;
   occluded.occlusion_start_s = {0};

@@ -83,7 +83,7 @@ class WatchCommandTest : public ::testing::Test {
   static std::string Video() {
     const fs::path video = *dir_ / "seq.avi";
     if (fs::exists(video)) return video.string();
-    vision::SceneParams s;
+    synthetic::SceneParams s;
     s.width_px = 640;
     s.height_px = 360;
     s.tip_x_px = 320;
@@ -95,19 +95,19 @@ class WatchCommandTest : public ::testing::Test {
     const int frames = static_cast<int>(kSeconds * 25);
     for (int i = 0; i < frames; ++i)
       s.frame_width_um.push_back(i / 25.0 >= kDropAtS ? 388.0 : 400.0);
-    vision::RenderSequence(s, frames, 25, video.string(), (*dir_ / "seq.truth.json").string());
+    synthetic::RenderSequence(s, frames, 25, video.string(), (*dir_ / "seq.truth.json").string());
     return video.string();
   }
   // Ten small frames: enough for the options to be checked against a real file.
   static std::string TinyVideo() {
     const fs::path video = *dir_ / "tiny.avi";
-    vision::SceneParams s;
+    synthetic::SceneParams s;
     s.width_px = 160;
     s.height_px = 120;
     s.tip_x_px = 80;
     s.tip_y_px = 30;
     s.strand_width_um = 120;
-    vision::RenderSequence(s, 10, 25, video.string(), (*dir_ / "tiny.truth.json").string());
+    synthetic::RenderSequence(s, 10, 25, video.string(), (*dir_ / "tiny.truth.json").string());
     return video.string();
   }
   static void TearDownTestSuite() {

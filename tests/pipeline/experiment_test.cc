@@ -19,8 +19,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-vision::SceneParams SmallScene(double width_um, uint64_t seed) {
-  vision::SceneParams p;
+synthetic::SceneParams SmallScene(double width_um, uint64_t seed) {
+  synthetic::SceneParams p;
   p.width_px = 640;
   p.height_px = 360;
   p.tip_x_px = 320;
@@ -42,7 +42,7 @@ class ExperimentTest : public ::testing::Test {
   }
   std::string Render(const std::string& name, double width_um, int frames, uint64_t seed) {
     const std::string path = (dir_ / name).string();
-    truths_[path] = vision::RenderSequence(SmallScene(width_um, seed), frames, 25.0, path, "");
+    truths_[path] = synthetic::RenderSequence(SmallScene(width_um, seed), frames, 25.0, path, "");
     return path;
   }
   ExperimentOptions Options(int samples) {
@@ -68,7 +68,7 @@ class ExperimentTest : public ::testing::Test {
     return m;
   }
   fs::path dir_;
-  std::map<std::string, std::vector<vision::FrameTruth>> truths_;
+  std::map<std::string, std::vector<synthetic::FrameTruth>> truths_;
 };
 
 TEST_F(ExperimentTest, StepSamplesEvenlyAndMatchesTruth) {
@@ -204,7 +204,7 @@ TEST_F(ExperimentTest, AStepOfImagesIsSampledByIndex) {
   for (int k = 0; k < 10; ++k) {
     char name[32];
     std::snprintf(name, sizeof(name), "img_%02d.png", k);
-    cv::imwrite((images / name).string(), vision::RenderFrame(SmallScene(400, 7), k, nullptr));
+    cv::imwrite((images / name).string(), synthetic::RenderFrame(SmallScene(400, 7), k, nullptr));
   }
   StepSpec s;
   s.step = 1;

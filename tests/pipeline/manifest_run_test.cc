@@ -30,7 +30,7 @@ class ManifestRunTest : public ::testing::Test {
   std::string WriteManifest() {
     std::string yaml = "name: t\nsamples: 8\nscale_um_per_px: 3.0\nextruder: direct-pla\nsteps:\n";
     for (int i = 0; i < 2; ++i) {
-      vision::SceneParams p;
+      synthetic::SceneParams p;
       p.width_px = 640;
       p.height_px = 360;
       p.tip_x_px = 320;
@@ -39,7 +39,7 @@ class ManifestRunTest : public ::testing::Test {
       p.width_jitter_um = 2;
       p.seed = i + 1;
       const std::string video = "s" + std::to_string(i) + ".mp4";
-      vision::RenderSequence(p, 40, 25.0, (dir_ / video).string(), "");
+      synthetic::RenderSequence(p, 40, 25.0, (dir_ / video).string(), "");
       yaml += "  - {step: " + std::to_string(i + 1) +
               ", temperature_c: " + std::to_string(220 - 10 * i) + ", video: " + video + "}\n";
     }

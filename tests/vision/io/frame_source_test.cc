@@ -14,6 +14,10 @@
 namespace clogscope::vision {
 namespace {
 
+using synthetic::RenderFrame;
+using synthetic::RenderSequence;
+using synthetic::SceneParams;
+
 namespace fs = std::filesystem;
 
 fs::path FreshDir(const std::string& name) {

@@ -16,6 +16,9 @@
 namespace clogscope::vision {
 namespace {
 
+using synthetic::RenderSequence;
+using synthetic::SceneParams;
+
 namespace fs = std::filesystem;
 
 fs::path Fresh(const std::string& name) {

@@ -11,6 +11,12 @@
 namespace clogscope::vision {
 namespace {
 
+using synthetic::FeedstockScene;
+using synthetic::FrameTruth;
+using synthetic::FrameTruthFor;
+using synthetic::RenderFrame;
+using synthetic::SceneParams;
+
 // The feedstock scene (synthetic.h) with its texture and tilt varied.
 SceneParams Filament(double speed_mm_s, double texture = 8, double tilt_deg = 0) {
   SceneParams p = FeedstockScene(speed_mm_s);

@@ -13,6 +13,12 @@
 namespace clogscope::vision {
 namespace {
 
+using synthetic::FeedstockScene;
+using synthetic::FrameTruth;
+using synthetic::FrameTruthFor;
+using synthetic::RenderFrame;
+using synthetic::SceneParams;
+
 // The feedstock scene with its drive gear (synthetic.h): 2 mm tip radius, 100 px.
 SceneParams GearScene(double surface_speed_mm_s) { return FeedstockScene(0, surface_speed_mm_s); }
 
