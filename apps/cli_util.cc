@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "common/library_text.h"
+#include "common/path_check.h"
 
 namespace clogscope::apps {
 
@@ -25,6 +26,12 @@ bool ParseSize(const std::string& text, int* width, int* height) {
   *width = w;
   *height = h;
   return true;
+}
+
+bool CheckTableAndExtruderPaths(const std::string& diameters, const std::string& extruder,
+                                std::string* why) {
+  return (diameters.empty() || CheckInputPath("--diameters", diameters, PathExpect::kFile, why)) &&
+         CheckInputPath("--extruder", extruder, PathExpect::kPresetOrFile, why);
 }
 
 void SetUpLogging(const std::string& level) {

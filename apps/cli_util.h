@@ -18,6 +18,12 @@ bool ParseCommandLine(CLI::App& app, int argc, char** argv);
 // naming the option. Each quantity's own range is checked where its options are validated.
 void CheckNumbers(const CLI::App& app);
 
+// The files of a command that reads a diameter table with an extruder (predict, drive, thermal):
+// --diameters, when given, a file, and --extruder a preset or a YAML file, each checked as
+// CheckInputPath does. False with its one line in *why.
+bool CheckTableAndExtruderPaths(const std::string& diameters, const std::string& extruder,
+                                std::string* why);
+
 // Writes spdlog output to stderr at the given level name ("info", "warn", "debug", …).
 void SetUpLogging(const std::string& level);
 

@@ -9,7 +9,6 @@
 
 #include "apps/cli_util.h"
 #include "common/atomic_file.h"
-#include "common/path_check.h"
 #include "common/provenance.h"
 #include "model/clog_physics_io.h"
 #include "model/io.h"
@@ -80,9 +79,7 @@ bool DriveCommandOptions::Validate(std::string* why) const {
     *why = "--feed-force-n must be ≥ 0";
   else if (filament_speed_mm_s && !(*filament_speed_mm_s >= 0))
     *why = "--filament-speed-mm-s must be ≥ 0";
-  else if (!diameters.empty() && !CheckInputPath("--diameters", diameters, PathExpect::kFile, why))
-    return false;
-  else if (!CheckInputPath("--extruder", extruder, PathExpect::kPresetOrFile, why))
+  else if (!CheckTableAndExtruderPaths(diameters, extruder, why))
     return false;
   else
     return true;

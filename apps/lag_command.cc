@@ -56,11 +56,6 @@ bool LagCommandOptions::Validate(std::string* why) const {
     *why = "--filament-diameter-mm must be positive";
   else if (out_dir.empty())
     *why = "--out must not be empty";
-  else if (!(fit.max_offset_s >= 0 && fit.max_offset_s <= model::kMaxLagOffsetS))
-    *why = fmt::format(
-        "--max-offset-s {:g}: must be in [0, {:g}] s (shift the profile's times for clocks "
-        "further apart)",
-        fit.max_offset_s, model::kMaxLagOffsetS);
   else if (!fit.Validate(why))
     return false;
   else if (!CheckInputPath("--commanded", commanded, PathExpect::kFile, why))

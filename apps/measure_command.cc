@@ -245,8 +245,8 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o, std::ostream* table_out) {
       if (o.gear_roi) {
         const GearAndSlip g = GearAndSlipOf(r, *conv, *o.gear_radius_mm);
         fields.insert(fields.end(), {CsvNumber(g.gear_mm_s, 5), CsvNumber(g.gear_sigma_mm_s, 5),
-                                     r.gear.valid ? "" : r.gear.reason, CsvNumber(g.slip_pct, 3),
-                                     CsvNumber(g.slip_sigma_pct, 3)});
+                                     r.gear.valid ? "" : vision::SpeedReasonName(r.gear.reason),
+                                     CsvNumber(g.slip_pct, 3), CsvNumber(g.slip_sigma_pct, 3)});
       }
       table << CsvLine(fields) << "\n";
     }
@@ -273,20 +273,20 @@ MeasureSummary MeasureInputs(MeasureCommandOptions o, std::ostream* table_out) {
       spdlog::info("{}: {}", input, part);
     if (o.feed_speed) {
       WarnOncePerReason(input, "without a feed speed", rows, [&](const Row& r) {
-        if (r.speed.valid || r.speed.reason == "first_frame") return Skipped();
+        if (r.speed.valid || r.speed.reason == vision::SpeedReason::kFirstFrame) return Skipped();
         std::string detail = r.speed.detail;
-        if (r.speed.reason == "too_fast") {
+        if (r.speed.reason == vision::SpeedReason::kTooFast) {
           detail +=
               fmt::format(" (faster than {:.2f} mm/s)",
                           r.speed.search_limit_px * conv->scale_um_per_px * 1e-3 / r.speed.dt_s);
         }
-        return std::make_pair(r.speed.reason, detail);
+        return std::make_pair(std::string(vision::SpeedReasonName(r.speed.reason)), detail);
       });
     }
     if (o.gear_roi) {
       WarnOncePerReason(input, "without a gear speed", rows, [](const Row& r) {
-        if (r.gear.valid || r.gear.reason == "first_frame") return Skipped();
-        return std::make_pair(r.gear.reason, r.gear.detail);
+        if (r.gear.valid || r.gear.reason == vision::SpeedReason::kFirstFrame) return Skipped();
+        return std::make_pair(std::string(vision::SpeedReasonName(r.gear.reason)), r.gear.detail);
       });
     }
     if (valid < static_cast<int>(rows.size())) {
@@ -376,15 +376,8 @@ int RunMeasure(int argc, char** argv) {
       throw std::invalid_argument("--gear-roi '" + gear_roi + "': expected x,y,w,h");
     }
   }
-  if (!gear_centre.empty()) {
-    cv::Rect c;
-    try {  // "x,y": read as a rectangle with a dummy size
-      c = pipeline::ParseRoi(gear_centre + ",1,1");
-    } catch (const std::invalid_argument&) {
-      throw std::invalid_argument("--gear-centre '" + gear_centre + "': expected x,y");
-    }
-    o.gear_centre_px = cv::Point2d(c.x, c.y);
-  }
+  if (!gear_centre.empty())
+    o.gear_centre_px = cv::Point2d(pipeline::ParsePoint(gear_centre, "--gear-centre"));
   // The measurement options, read once for both modes.
   ApplyMeasurementOptions(app, text, &o);
   if (manifest) {

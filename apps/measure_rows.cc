@@ -66,7 +66,7 @@ std::vector<std::string> SpeedFields(const vision::FeedSpeedSample& v,
   const pipeline::SpeedUse use = summary.use.at(row);
   const bool used = use == pipeline::SpeedUse::kUsed;
   const std::string left_out = used ? "" : pipeline::SpeedUseName(use);
-  if (!v.valid) return {"", "", v.reason, "", "0", left_out};
+  if (!v.valid) return {"", "", vision::SpeedReasonName(v.reason), "", "0", left_out};
   const double mm_per_px = conv.scale_um_per_px * 1e-3;
   const double speed = v.SpeedPxPerS() * mm_per_px;
   const double sigma = std::hypot(summary.RowSigmaPxPerS(v) * mm_per_px,

@@ -73,8 +73,7 @@ bool PredictCommandOptions::Validate(std::string* why) const {
     *why = "--out must not be empty";
   else if (fit_measured.empty() != fit_params.empty())
     *why = "--fit and --fit-params go together";
-  else if (!CheckInputPath("--diameters", diameters, PathExpect::kFile, why) ||
-           !CheckInputPath("--extruder", extruder, PathExpect::kPresetOrFile, why))
+  else if (!CheckTableAndExtruderPaths(diameters, extruder, why))
     return false;
   else if (!fit_measured.empty() && !CheckInputPath("--fit", fit_measured, PathExpect::kFile, why))
     return false;

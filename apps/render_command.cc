@@ -54,7 +54,7 @@ std::string RenderToFiles(const RenderCommandOptions& o) {
     }
   }
   if (o.lag_commanded.empty()) {
-    vision::SceneParams scene = o.scene;
+    synthetic::SceneParams scene = o.scene;
     if (o.drop_pct != 0) {
       if (!o.scene.frame_width_um.empty() || !(o.drop_pct > -100 && o.drop_pct < 100))
         throw std::invalid_argument("--drop-pct: must be in (−100, 100) % (and without --lag-*)");
@@ -63,7 +63,7 @@ std::string RenderToFiles(const RenderCommandOptions& o) {
                                        (i / o.fps >= o.drop_at_s ? 1 + o.drop_pct / 100 : 1.0));
       }
     }
-    vision::RenderSequence(scene, o.frames, o.fps, o.out, truth);
+    synthetic::RenderSequence(scene, o.frames, o.fps, o.out, truth);
     return truth;
   }
   // The strand's width follows the lagged outlet flow at each frame's time (frame i at i / fps).
@@ -72,7 +72,7 @@ std::string RenderToFiles(const RenderCommandOptions& o) {
   std::vector<double> times;
   for (int i = 0; i < o.frames; ++i) times.push_back(i / o.fps);
   const auto flow = model::OutletFlow(profile, o.lag_k_s, 0.0, times);
-  vision::SceneParams scene = o.scene;
+  synthetic::SceneParams scene = o.scene;
   scene.frame_width_um.clear();
   for (size_t i = 0; i < flow.size(); ++i) {
     scene.frame_width_um.push_back(o.lag_um_per_mm3_s * flow[i]);
@@ -82,7 +82,7 @@ std::string RenderToFiles(const RenderCommandOptions& o) {
                       o.lag_commanded, times[i], flow[i]));
     }
   }
-  vision::RenderSequence(scene, o.frames, o.fps, o.out, truth);
+  synthetic::RenderSequence(scene, o.frames, o.fps, o.out, truth);
   // The lag's truth next to the frames' own.
   auto j = nlohmann::ordered_json::parse(ReadFile(truth));
   j["lag"] = {{"k_s", o.lag_k_s},
@@ -100,7 +100,7 @@ int RunRender(int argc, char** argv) {
       "Render synthetic side-view frames of a nozzle tip and strand with exact ground truth.",
       "clogscope render"};
   RenderCommandOptions o;
-  vision::SceneParams& s = o.scene;
+  synthetic::SceneParams& s = o.scene;
   bool silhouette = false;
   std::string target = "strand";
   app.add_option("--out", o.out,
@@ -231,7 +231,7 @@ int RunRender(int argc, char** argv) {
       "2 --tick-length-um 80 --numerals --dust 12 --fibres 2 --bit-depth 16 --data-bits 12 "
       "--silhouette --out stage/");
   if (!ParseCommandLine(app, argc, argv)) return 0;  // --help printed
-  s.target = vision::ParseRenderTarget(target);
+  s.target = synthetic::ParseRenderTarget(target);
   o.lag_profile_form = model::ParseProfileForm(lag_form);
   s.nozzle = !no_nozzle;
   s.strand = !no_strand;

@@ -14,7 +14,7 @@ namespace clogscope::apps {
 int RunRender(int argc, char** argv);
 
 struct RenderCommandOptions {
-  vision::SceneParams scene;
+  synthetic::SceneParams scene;
   int frames = 1;
   double fps = 25.0;
   std::string out;         // directory of PNGs, or a .avi / .mp4 video

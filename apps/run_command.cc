@@ -29,9 +29,10 @@ class Progress {
  public:
   void Step(const pipeline::StepResult& r, int done, int total) {
     std::lock_guard<std::mutex> lock(mu_);
-    const std::string what = fmt::format(
-        "step {} ({:g} °C): {}, {} valid of {} examined{}", r.spec.step, r.spec.temperature_c,
-        r.status, r.n_valid, r.n_examined, r.resumed ? " (kept from the earlier run)" : "");
+    const std::string what =
+        fmt::format("step {} ({:g} °C): {}, {} valid of {} examined{}", r.spec.step,
+                    r.spec.temperature_c, model::StepStatusName(r.status), r.n_valid, r.n_examined,
+                    r.resumed ? " (kept from the earlier run)" : "");
     if (tty_) {
       const int width = 30, filled = total ? width * done / total : width;
       std::fprintf(clogscope::ToolStderr(), "\r[%s%s] %d/%d  %-60.60s",
@@ -42,7 +43,7 @@ class Progress {
     } else {
       spdlog::info("[{}/{}] {}", done, total, what);
     }
-    if (r.status != "ok" && !r.detail.empty()) {
+    if (r.status != model::StepStatus::kOk && !r.detail.empty()) {
       if (tty_) std::fprintf(clogscope::ToolStderr(), "\n");
       spdlog::warn("step {}: {}", r.spec.step, r.detail);
     }
@@ -76,16 +77,16 @@ int RunExperimentCli(pipeline::ManifestRunOptions o) {
              "±95%", "std µm", "rej", "status");
   int failed = 0;
   for (const auto& r : rep.steps) {
-    failed += r.status != "ok";
+    failed += r.status != model::StepStatus::kOk;
     if (r.has_um && r.n_used) {
       fmt::print("{:>4} {:>7.1f} {:>4} {:>10.2f} {:>8.2f} {:>8.2f} {:>4}  {}\n", r.spec.step,
                  r.spec.temperature_c, r.n_used, r.mean_um, r.ci95_um, r.std_um, r.n_rejected,
-                 r.status);
+                 model::StepStatusName(r.status));
     } else {
       fmt::print("{:>4} {:>7.1f} {:>4} {:>10} {:>8} {:>8} {:>4}  {}{}\n", r.spec.step,
                  r.spec.temperature_c, r.n_used,
                  r.n_used ? fmt::format("{:.3f}px", r.mean_px) : "-", "", "", r.n_rejected,
-                 r.status, r.detail.empty() ? "" : ": " + r.detail);
+                 model::StepStatusName(r.status), r.detail.empty() ? "" : ": " + r.detail);
     }
   }
   for (const auto& r : rep.steps) {

@@ -9,7 +9,6 @@
 
 #include "apps/cli_util.h"
 #include "common/atomic_file.h"
-#include "common/path_check.h"
 #include "common/provenance.h"
 #include "model/clog_physics_io.h"
 #include "model/io.h"
@@ -61,9 +60,7 @@ bool ThermalCommandOptions::Validate(std::string* why) const {
     *why = "--viscosity-pa-s must be positive";
   else if (hp_length_mm && !(*hp_length_mm > 0))
     *why = "--hp-length-mm must be positive";
-  else if (!diameters.empty() && !CheckInputPath("--diameters", diameters, PathExpect::kFile, why))
-    return false;
-  else if (!CheckInputPath("--extruder", extruder, PathExpect::kPresetOrFile, why))
+  else if (!CheckTableAndExtruderPaths(diameters, extruder, why))
     return false;
   else
     return true;

@@ -26,10 +26,10 @@ extern "C" void OnWatchSignal(int) {
 }  // namespace
 
 WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* stop,
-                        const std::function<void(int)>& on_started) {
+                        const WatchObservers& observers) {
   MeasureCommandOptions m = options.measure;
   m.ResolveBand();
-  pipeline::LiveWatchOptions live = options.live;
+  watch::LiveWatchOptions live = options.live;
   live.strand = m.strand;
   live.conversion = m.Conversion();
   if (!options.extruder.empty()) {
@@ -43,7 +43,7 @@ WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* s
   if (!live.Validate(&why)) throw std::invalid_argument(why);
 
   LineLog log(options.log_path);
-  pipeline::WatchBoard board;
+  watch::WatchBoard board;
   std::optional<WatchHttpServer> http;
   if (!options.http.empty()) http.emplace(options.http, &board, live.conversion);
   std::optional<AlertCommand> alert;
@@ -51,32 +51,34 @@ WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* s
   WatchReport report;
   report.http_port = http ? http->port() : 0;
   if (http) spdlog::info("serving /status, /metrics and /frame.jpg on {}", options.http);
-  if (on_started) on_started(report.http_port);
+  if (observers.on_started) observers.on_started(report.http_port);
 
-  pipeline::LiveWatchEvents events;
+  watch::LiveWatchEvents events;
   std::string last_line;
   events.on_line = [&](const std::string& line) {
     log.Write(line);
     last_line = line;
   };
-  events.on_level_change = [&](const pipeline::WatchStatus& s,
-                               const std::optional<pipeline::ClogIndex>& clog) {
-    spdlog::log(s.level == pipeline::WatchLevel::kOk ? spdlog::level::info : spdlog::level::warn,
-                "{:.1f} s: {} → {}: {}", s.time_s, pipeline::WatchLevelName(s.previous_level),
-                pipeline::WatchLevelName(s.level), s.reason);
-    if (!alert) return;
-    std::string no_start;
-    if (!alert->Run(s, clog, live.source, last_line, &no_start)) {
-      spdlog::error("{}", no_start);
-      report.alert_failures.push_back(no_start);
+  events.on_level_change = [&](const watch::WatchStatus& s,
+                               const std::optional<watch::ClogIndex>& clog) {
+    spdlog::log(s.level == watch::WatchLevel::kOk ? spdlog::level::info : spdlog::level::warn,
+                "{:.1f} s: {} → {}: {}", s.time_s, watch::WatchLevelName(s.previous_level),
+                watch::WatchLevelName(s.level), s.reason);
+    if (alert) {
+      std::string no_start;
+      if (!alert->Run(s, clog, live.source, last_line, &no_start)) {
+        spdlog::error("{}", no_start);
+        report.alert_failures.push_back(no_start);
+      }
+      for (const std::string& f : alert->Reap()) {
+        spdlog::warn("{}", f);
+        report.alert_failures.push_back(f);
+      }
     }
-    for (const std::string& f : alert->Reap()) {
-      spdlog::warn("{}", f);
-      report.alert_failures.push_back(f);
-    }
+    if (observers.on_level_change) observers.on_level_change(s);
   };
   events.on_warning = [](const std::string& message) { spdlog::warn("{}", message); };
-  report.summary = pipeline::RunLiveWatch(live, events, &board, stop);
+  report.summary = watch::RunLiveWatch(live, events, &board, stop);
   if (alert) {
     for (const std::string& f : alert->Reap(/*wait=*/true)) {
       spdlog::warn("{}", f);
@@ -94,8 +96,8 @@ int RunWatch(int argc, char** argv) {
       "clogscope watch"};
   WatchCommandOptions o;
   MeasureCliText text;
-  pipeline::LiveWatchOptions& live = o.live;
-  pipeline::WatchOptions& w = live.watch;
+  watch::LiveWatchOptions& live = o.live;
+  watch::WatchOptions& w = live.watch;
   app.add_option("source", live.source,
                  "/dev/videoN, a stream URL (http://…/?action=stream, rtsp://, tcp://, udp://), a "
                  "video file, or a folder a camera writes images into")
@@ -164,12 +166,12 @@ int RunWatch(int argc, char** argv) {
   }
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
-  const pipeline::LiveWatchSummary& s = r.summary;
+  const watch::LiveWatchSummary& s = r.summary;
   spdlog::info(
       "watch ended ({}): {} frames, {} valid, {} skipped, {} reconnect(s), {} level change(s), "
       "final level {}; latency median {:.1f} ms, p95 {:.1f} ms",
       s.ended_because, s.frames, s.valid_frames, s.skipped_frames, s.reconnects, s.level_changes,
-      pipeline::WatchLevelName(s.final_level), s.latency_median_ms, s.latency_p95_ms);
+      watch::WatchLevelName(s.final_level), s.latency_median_ms, s.latency_p95_ms);
   if (!s.error.empty()) throw std::invalid_argument(s.error);
   return 0;
 }

@@ -23,7 +23,7 @@ struct WatchCommandOptions {
   MeasureCommandOptions measure;
   // Source, its timeouts, the rolling window and thresholds, report interval, duration. Its
   // strand, conversion and extruder are filled from the fields here.
-  pipeline::LiveWatchOptions live;
+  watch::LiveWatchOptions live;
   std::string extruder;                 // preset or YAML: attaches the clog index; empty: none
   std::vector<std::string> set;         // "name=value" overrides of the extruder
   std::optional<double> temperature_c;  // the nozzle's; default the extruder's reference
@@ -33,17 +33,27 @@ struct WatchCommandOptions {
 };
 
 struct WatchReport {
-  pipeline::LiveWatchSummary summary;
+  watch::LiveWatchSummary summary;
   int http_port = 0;  // the bound port (useful with --http HOST:0)
   std::vector<std::string> alert_failures;
+};
+
+// What a caller of WatchNozzle may follow (tests, a program embedding the watch), each called on
+// the watch's thread when given.
+struct WatchObservers {
+  // Once the HTTP server listens (before the source opens): its port (0 without --http).
+  std::function<void(int http_port)> on_started;
+  // On every level change, after its JSON line and the alert command, once /status, /metrics and
+  // /frame.jpg serve the new state; the watch waits for it, so they keep serving that state
+  // meanwhile.
+  std::function<void(const watch::WatchStatus&)> on_level_change;
 };
 
 // Watches a camera, stream, file or folder until *stop (or the file's end, or --duration-s),
 // writing JSON lines, serving HTTP and running the alert command. Throws std::invalid_argument
 // (one line naming the option, file or source) when nothing can be watched: bad options, a source
 // that cannot be opened or yields no frame, a log that cannot be opened, a port in use.
-// `on_started`, when given, is called once the HTTP server listens (before the source opens).
 WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* stop,
-                        const std::function<void(int http_port)>& on_started = {});
+                        const WatchObservers& observers = {});
 
 }  // namespace clogscope::apps

@@ -46,9 +46,9 @@ void LineLog::Write(const std::string& line) {
   }
 }
 
-bool AlertCommand::Run(const pipeline::WatchStatus& s,
-                       const std::optional<pipeline::ClogIndex>& clog, const std::string& source,
-                       const std::string& status_json, std::string* why) {
+bool AlertCommand::Run(const watch::WatchStatus& s, const std::optional<watch::ClogIndex>& clog,
+                       const std::string& source, const std::string& status_json,
+                       std::string* why) {
   Reap();
   std::vector<std::string> env;
   for (char** e = environ; *e; ++e)
@@ -56,8 +56,8 @@ bool AlertCommand::Run(const pipeline::WatchStatus& s,
   const auto add = [&](const char* name, const std::string& value) {
     env.push_back(std::string("CLOGSCOPE_") + name + "=" + value);
   };
-  add("LEVEL", pipeline::WatchLevelName(s.level));
-  add("PREVIOUS_LEVEL", pipeline::WatchLevelName(s.previous_level));
+  add("LEVEL", watch::WatchLevelName(s.level));
+  add("PREVIOUS_LEVEL", watch::WatchLevelName(s.previous_level));
   add("TIME_S", CsvNumber(s.time_s, 3));
   add("REASON", s.reason);
   add("DIAMETER_UM", s.has_diameter ? CsvNumber(s.diameter_um, 3) : "");
@@ -109,7 +109,7 @@ struct WatchHttpServer::Impl {
   std::thread thread;
 };
 
-WatchHttpServer::WatchHttpServer(const std::string& host_port, const pipeline::WatchBoard* board,
+WatchHttpServer::WatchHttpServer(const std::string& host_port, const watch::WatchBoard* board,
                                  std::optional<calib::ScaleCalibration> conversion)
     : impl_(std::make_unique<Impl>()) {
   const size_t colon = host_port.rfind(':');
@@ -129,17 +129,17 @@ WatchHttpServer::WatchHttpServer(const std::string& host_port, const pipeline::W
   const std::string host = host_port.substr(0, colon);
   httplib::Server& srv = impl_->server;
   srv.Get("/status", [board](const httplib::Request&, httplib::Response& res) {
-    const pipeline::WatchSnapshot s = board->Read();
-    res.set_content(pipeline::StatusJson(s.status, s.clog, s.counters, "status") + "\n",
+    const watch::WatchSnapshot s = board->Read();
+    res.set_content(watch::StatusJson(s.status, s.clog, s.counters, "status") + "\n",
                     "application/json");
   });
   srv.Get("/metrics", [board](const httplib::Request&, httplib::Response& res) {
-    const pipeline::WatchSnapshot s = board->Read();
-    res.set_content(pipeline::PrometheusText(s.status, s.clog, s.counters),
+    const watch::WatchSnapshot s = board->Read();
+    res.set_content(watch::PrometheusText(s.status, s.clog, s.counters),
                     "text/plain; version=0.0.4; charset=utf-8");
   });
   srv.Get("/frame.jpg", [board, conversion](const httplib::Request&, httplib::Response& res) {
-    const pipeline::WatchSnapshot s = board->Read();
+    const watch::WatchSnapshot s = board->Read();
     if (s.frame.empty()) {
       res.status = 503;
       res.set_content("no frame yet\n", "text/plain");

@@ -32,7 +32,7 @@ class AlertCommand {
   explicit AlertCommand(std::string command) : command_(std::move(command)) {}
   ~AlertCommand();  // waits (up to 10 s) for the commands still running
   // Starts the command; false with *why when it could not be started.
-  bool Run(const pipeline::WatchStatus& status, const std::optional<pipeline::ClogIndex>& clog,
+  bool Run(const watch::WatchStatus& status, const std::optional<watch::ClogIndex>& clog,
            const std::string& source, const std::string& status_json, std::string* why);
   // Collects finished commands; returns lines about those that failed.
   std::vector<std::string> Reap(bool wait = false);
@@ -47,7 +47,7 @@ class WatchHttpServer {
  public:
   // Binds at once: throws std::invalid_argument naming --http when the address is malformed or the
   // port cannot be bound (in use, no permission). Serves on its own threads from then on.
-  WatchHttpServer(const std::string& host_port, const pipeline::WatchBoard* board,
+  WatchHttpServer(const std::string& host_port, const watch::WatchBoard* board,
                   std::optional<calib::ScaleCalibration> conversion);
   ~WatchHttpServer();  // stops serving
   int port() const { return port_; }

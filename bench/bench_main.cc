@@ -31,9 +31,9 @@
 
 namespace {
 
-using clogscope::vision::FrameTruth;
+using clogscope::synthetic::FrameTruth;
+using clogscope::synthetic::SceneParams;
 using clogscope::vision::MeasureStrand;
-using clogscope::vision::SceneParams;
 using clogscope::vision::StrandMeasureOptions;
 using clogscope::vision::StrandTracker;
 using Clock = std::chrono::steady_clock;
@@ -158,7 +158,7 @@ void BenchVideo() {
   SceneParams p;
   p.width_jitter_um = 2;
   p.sway_deg = 0.3;
-  const auto truth = clogscope::vision::RenderSequence(p, 250, 25.0, path, "");
+  const auto truth = clogscope::synthetic::RenderSequence(p, 250, 25.0, path, "");
 
   // Decoding alone, two ways: OpenCV's reader (decode + conversion to BGR) and clogscope's own
   // libavcodec reader (decode, luma plane kept), which `measure` uses.
@@ -259,7 +259,7 @@ void BenchExperiment() {
       p.width_jitter_um = 2;
       p.sway_deg = 0.3;
       p.seed = i + 1;
-      clogscope::vision::RenderSequence(p, 250, 25.0, path, "");
+      clogscope::synthetic::RenderSequence(p, 250, 25.0, path, "");
     }
     videos.push_back(path);
     clogscope::pipeline::StepSpec s;
@@ -425,7 +425,7 @@ void BenchFeedSpeed() {
       "used | ms per frame |\n|---|---|---|---|---|---|---|---|\n");
   for (auto [v, tilt] :
        std::vector<std::pair<double, double>>{{0, 0}, {0.5, 0}, {2, 0}, {5, 0}, {15, 0}, {2, 7}}) {
-    SceneParams p = clogscope::vision::FeedstockScene(v);
+    SceneParams p = clogscope::synthetic::FeedstockScene(v);
     p.tilt_deg = tilt;
     StrandMeasureOptions o;
     o.target = clogscope::vision::MeasureTarget::kFilament;
@@ -462,7 +462,7 @@ void BenchSlip() {
       "per frame |\n|---|---|---|---|---|---|---|\n");
   for (double vg : {0.5, 5.0, 15.0}) {
     for (double slip : {0.0, 10.0, 20.0}) {
-      const SceneParams p = clogscope::vision::FeedstockScene(vg * (1 - slip / 100), vg);
+      const SceneParams p = clogscope::synthetic::FeedstockScene(vg * (1 - slip / 100), vg);
       StrandMeasureOptions o;
       o.target = clogscope::vision::MeasureTarget::kFilament;
       StrandTracker tracker(o);
@@ -511,16 +511,16 @@ struct SpeedCodec {
 std::string RenderFeed(const SpeedCodec& codec, double speed_mm_s, uint64_t seed, int frames,
                        const std::filesystem::path& dir) {
   namespace fs = std::filesystem;
-  SceneParams p = clogscope::vision::FeedstockScene(speed_mm_s);
+  SceneParams p = clogscope::synthetic::FeedstockScene(speed_mm_s);
   p.seed = seed;
   const std::string video = (dir / fmt::format("feed{}", codec.extension)).string();
   if (codec.ffmpeg_args.empty()) {
-    clogscope::vision::RenderSequence(p, frames, 30, video, "");
+    clogscope::synthetic::RenderSequence(p, frames, 30, video, "");
     return video;
   }
   const fs::path frames_dir = dir / "png";
   fs::remove_all(frames_dir);
-  clogscope::vision::RenderSequence(p, frames, 30, frames_dir.string(), "");
+  clogscope::synthetic::RenderSequence(p, frames, 30, frames_dir.string(), "");
   const std::string cmd = fmt::format("ffmpeg -v error -y -framerate 30 -i {}/frame_%06d.png {} {}",
                                       frames_dir.string(), codec.ffmpeg_args, video);
   if (std::system(cmd.c_str()) != 0) throw std::runtime_error("failed: " + cmd);
@@ -558,7 +558,7 @@ void BenchFeedSpeedCodec(int first_seed) {
   };
   const std::vector<double> speeds = {0.3, 0.8, 2, 5, 15};
   constexpr int kSeeds = 6, kFrames = 61;
-  const double kMmPerPx = clogscope::vision::FeedstockScene(0).scale_um_per_px / 1e3;
+  const double kMmPerPx = clogscope::synthetic::FeedstockScene(0).scale_um_per_px / 1e3;
   fmt::print(
       "\n## Feed speed through codecs (640x480, 20 µm/px, 30 frames/s, {} frames, seeds {}-{} "
       "per row)\n\nError: the logged mean against the rendered speed (mean over seeds, worst); "

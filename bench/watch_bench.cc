@@ -58,48 +58,48 @@ double RssMb() {
   return 0;
 }
 
-std::vector<cv::Mat> Pool(vision::SceneParams s, int n, uint64_t seed) {
+std::vector<cv::Mat> Pool(synthetic::SceneParams s, int n, uint64_t seed) {
   std::vector<cv::Mat> out;
   s.seed = seed;
   for (int i = 0; i < n; ++i) {
-    vision::FrameTruth truth;
-    out.push_back(vision::RenderFrame(s, i, &truth));
+    synthetic::FrameTruth truth;
+    out.push_back(synthetic::RenderFrame(s, i, &truth));
   }
   return out;
 }
 
 struct Outcome {
-  pipeline::LiveWatchSummary summary;
+  watch::LiveWatchSummary summary;
   std::vector<std::pair<double, std::string>> changes;
 };
 
 Outcome Watch(std::function<const cv::Mat&(int64_t)> frame, int64_t frames, bool paced) {
-  pipeline::LiveWatchOptions o;
+  watch::LiveWatchOptions o;
   o.source = "pool";
   o.conversion = pipeline::PlainScale(3.0);
   o.strand.band_start_px = 50.0 / 3;
   o.strand.band_height_px = 50;
   Outcome out;
-  pipeline::LiveWatchEvents events;
-  events.on_level_change = [&](const pipeline::WatchStatus& s,
-                               const std::optional<pipeline::ClogIndex>&) {
-    out.changes.emplace_back(s.time_s, pipeline::WatchLevelName(s.level));
+  watch::LiveWatchEvents events;
+  events.on_level_change = [&](const watch::WatchStatus& s,
+                               const std::optional<watch::ClogIndex>&) {
+    out.changes.emplace_back(s.time_s, watch::WatchLevelName(s.level));
   };
-  pipeline::WatchBoard board;
+  watch::WatchBoard board;
   std::atomic<bool> stop{false};
-  out.summary = pipeline::RunLiveWatch(o, events, &board, &stop,
-                                       std::make_unique<PoolSource>(frame, frames, paced));
+  out.summary = watch::RunLiveWatch(o, events, &board, &stop,
+                                    std::make_unique<PoolSource>(frame, frames, paced));
   return out;
 }
 
 }  // namespace
 
 void BenchWatch() {
-  vision::SceneParams s;  // the reference camera: 1280×720, 3 µm/px, a 400 µm strand
+  synthetic::SceneParams s;  // the reference camera: 1280×720, 3 µm/px, a 400 µm strand
   s.width_jitter_um = 2.0;
   const auto t0 = Clock::now();
   const std::vector<cv::Mat> steady = Pool(s, 64, 1);
-  vision::SceneParams narrowed = s, narrowed6 = s, occluded = s, blob = s;
+  synthetic::SceneParams narrowed = s, narrowed6 = s, occluded = s, blob = s;
   narrowed.strand_width_um = 388;
   narrowed6.strand_width_um = 376;
   occluded.occlusion_start_s = {0};

@@ -123,7 +123,20 @@ bool ParameterSigmas(ceres::Problem& problem, const std::vector<double*>& blocks
   return true;
 }
 
-void Summarise(ScaleCalibration* cal, const ScaleFitOptions& opt, double robust_spread_px) {
+// Records a target's residual (measured − model) in `cal`, `r` given its name, nominal, measured
+// and model values; returns the residual's square in units of its σ.
+double AddResidual(TargetResidual r, double sigma_px, ScaleCalibration* cal) {
+  r.residual_px = r.measured_px - r.model_px;
+  cal->residuals.push_back(r);
+  return std::pow(r.residual_px / sigma_px, 2);
+}
+
+// The residuals in µm, the worst and the RMS, and the outliers: beyond the options' threshold in
+// units of the residuals' robust spread (their MAD as a σ, at least the σ floor).
+void Summarise(ScaleCalibration* cal, const ScaleFitOptions& opt) {
+  std::vector<double> abs_res;
+  for (const auto& r : cal->residuals) abs_res.push_back(std::abs(r.residual_px));
+  const double robust_spread_px = std::max(kMadToSigma * UpperMedian(abs_res), kSigmaFloorPx);
   double sum2 = 0;
   cal->worst_residual_px = 0;
   for (auto& r : cal->residuals) {
@@ -218,19 +231,11 @@ ScaleCalibration FitPinScale(const std::vector<PinObservation>& pins, const Scal
   cal.scale_um_per_px = scale;
   cal.edge_bias_px = bias;
   cal.edge_bias_fitted = with_bias;
-  std::vector<double> abs_res;
   double chi2 = 0;
   for (size_t i = 0; i < pins.size(); ++i) {
     const auto& p = pins[i];
-    TargetResidual r;
-    r.name = p.name;
-    r.nominal_um = p.diameter_um;
-    r.measured_px = p.width_px;
-    r.model_px = p.diameter_um / scale + bias;
-    r.residual_px = p.width_px - r.model_px;
-    chi2 += std::pow(r.residual_px / sigmas[i], 2);
-    abs_res.push_back(std::abs(r.residual_px));
-    cal.residuals.push_back(r);
+    chi2 += AddResidual({p.name, p.diameter_um, p.width_px, p.diameter_um / scale + bias},
+                        sigmas[i], &cal);
   }
   const int unknowns = with_bias ? 2 : 1;
   const int dof = static_cast<int>(pins.size()) - unknowns;
@@ -242,7 +247,7 @@ ScaleCalibration FitPinScale(const std::vector<PinObservation>& pins, const Scal
   const bool ok = ParameterSigmas(problem, blocks, residual_var, &sig);
   cal.scale_sigma_um_per_px = ok ? sig[0] : NAN;
   cal.edge_bias_sigma_px = ok && with_bias ? sig[1] : 0.0;
-  Summarise(&cal, opt, std::max(kMadToSigma * UpperMedian(abs_res), kSigmaFloorPx));
+  Summarise(&cal, opt);
   const bool converged = summary.termination_type == ceres::CONVERGENCE;
   cal.usable = converged && ok;
   if (!converged) {
@@ -359,19 +364,13 @@ ScaleCalibration FitMicrometerScale(const std::vector<LineObservation>& lines, d
   cal.distortion_px = d2;
   cal.distortion_fitted = opt.fit_distortion;
   double chi2 = 0;
-  std::vector<double> abs_res;
   for (const auto& l : lines) {
     const double k = l.index - kmid;
-    TargetResidual r;
-    r.name = images > 1 ? fmt::format("image {} line {}", l.image, l.index)
-                        : fmt::format("line {}", l.index);
-    r.nominal_um = l.index * pitch_um;
-    r.measured_px = l.position_px;
-    r.model_px = x0[l.image] + k * pitch_um / scale + d2 * k * k;
-    r.residual_px = l.position_px - r.model_px;
-    chi2 += std::pow(r.residual_px / LineSigma(l), 2);
-    abs_res.push_back(std::abs(r.residual_px));
-    cal.residuals.push_back(r);
+    chi2 += AddResidual(
+        {images > 1 ? fmt::format("image {} line {}", l.image, l.index)
+                    : fmt::format("line {}", l.index),
+         l.index * pitch_um, l.position_px, x0[l.image] + k * pitch_um / scale + d2 * k * k},
+        LineSigma(l), &cal);
   }
   const int dof = static_cast<int>(lines.size()) - unknowns;
   std::vector<double*> blocks = {&scale};
@@ -380,7 +379,7 @@ ScaleCalibration FitMicrometerScale(const std::vector<LineObservation>& lines, d
   const bool ok = ParameterSigmas(problem, blocks, chi2 / dof, &sig);
   cal.scale_sigma_um_per_px = ok ? sig[0] : NAN;
   cal.distortion_sigma_px = ok && opt.fit_distortion ? sig[1] : 0.0;
-  Summarise(&cal, opt, std::max(kMadToSigma * UpperMedian(abs_res), kSigmaFloorPx));
+  Summarise(&cal, opt);
   const bool converged = summary.termination_type == ceres::CONVERGENCE;
   cal.usable = converged && ok;
   cal.message = !converged ? "the fit did not converge: " + summary.message

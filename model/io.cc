@@ -12,6 +12,7 @@
 #include "common/atomic_file.h"
 #include "common/csv.h"
 #include "common/path_check.h"
+#include "model/step_status.h"
 
 namespace clogscope::model {
 namespace {
@@ -41,7 +42,7 @@ std::vector<StepInput> ReadDiameterTable(const std::string& path, double default
   for (size_t i = 0; i < t.rows.size(); ++i) {
     const auto& row = t.rows[i];
     const std::string where = fmt::format("{}:{}", path, t.row_line_numbers[i]);
-    if (c_status >= 0 && row[c_status] == "failed") continue;
+    if (c_status >= 0 && row[c_status] == StepStatusName(StepStatus::kFailed)) continue;
     StepInput s;
     s.step = c_step >= 0 ? ParseStep(row[c_step], where) : static_cast<int>(i) + 1;
     s.source_line = t.row_line_numbers[i];

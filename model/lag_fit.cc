@@ -115,7 +115,7 @@ bool LagFitOptions::Validate(std::string* why) const {
     *why = "K bounds: need 0 < min < max";
   else if (!(max_offset_s >= 0 && max_offset_s <= kMaxLagOffsetS))
     *why = fmt::format(
-        "maximum time offset {:g} s: must be in [0, {:g}] s (shift the profile's times for clocks "
+        "--max-offset-s {:g}: must be in [0, {:g}] s (shift the profile's times for clocks "
         "further apart)",
         max_offset_s, kMaxLagOffsetS);
   else if (!(outlier_threshold_sigma > 1))

@@ -27,6 +27,7 @@ struct LagFitOptions {
   double max_offset_s = 0.5;  // |time offset| between the profile's and video's clocks, ≤ 60 s
   double outlier_threshold_sigma = 5;  // residuals beyond this many robust σ are left out, once
   int max_iterations = 100;            // ≤ kMaxLagIterations
+  // Names the lag command's option where there is one (--max-offset-s).
   bool Validate(std::string* why) const;
 };
 

@@ -2,13 +2,17 @@
 
 #include <fmt/format.h>
 
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
 
 namespace clogscope::pipeline {
 
-cv::Rect ParseRoi(const std::string& text) {
+namespace {
+
+// The comma-separated whole numbers of `text`; nullopt when one is not a whole number.
+std::optional<std::vector<int>> WholeNumbers(const std::string& text) {
   std::vector<int> v;
   std::stringstream ss(text);
   std::string item;
@@ -16,16 +20,31 @@ cv::Rect ParseRoi(const std::string& text) {
     try {
       size_t used = 0;
       v.push_back(std::stoi(item, &used));
-      if (used != item.size()) throw std::invalid_argument(item);
+      if (used != item.size()) return std::nullopt;
     } catch (const std::exception&) {
-      throw std::invalid_argument("--roi '" + text + "': expected x,y,w,h in whole px");
+      return std::nullopt;
     }
   }
-  if (v.size() != 4)
+  return v;
+}
+
+}  // namespace
+
+cv::Rect ParseRoi(const std::string& text) {
+  const std::optional<std::vector<int>> v = WholeNumbers(text);
+  if (!v || v->size() != 4)
     throw std::invalid_argument("--roi '" + text + "': expected x,y,w,h in whole px");
-  if (v[0] < 0 || v[1] < 0 || v[2] <= 0 || v[3] <= 0)
+  const std::vector<int>& r = *v;
+  if (r[0] < 0 || r[1] < 0 || r[2] <= 0 || r[3] <= 0)
     throw std::invalid_argument("--roi '" + text + "': x and y must be >= 0, w and h > 0");
-  return cv::Rect(v[0], v[1], v[2], v[3]);
+  return cv::Rect(r[0], r[1], r[2], r[3]);
+}
+
+cv::Point ParsePoint(const std::string& text, const std::string& what) {
+  const std::optional<std::vector<int>> v = WholeNumbers(text);
+  if (!v || v->size() != 2 || (*v)[0] < 0 || (*v)[1] < 0)
+    throw std::invalid_argument(what + " '" + text + "': expected x,y");
+  return cv::Point((*v)[0], (*v)[1]);
 }
 
 BandRequest BandOver(const BandRequest& base, const BandRequest& top) {

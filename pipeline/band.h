@@ -12,6 +12,10 @@ namespace clogscope::pipeline {
 // --roi on a malformed value.
 cv::Rect ParseRoi(const std::string& text);
 
+// "x,y" in whole px, both >= 0 (a --gear-centre, or a feedstock's gear_centre:) -> point; throws
+// std::invalid_argument "WHAT 'text': expected x,y" on anything else.
+cv::Point ParsePoint(const std::string& text, const std::string& what);
+
 // The reference band as asked for: its start (below the tip) and its height, each in µm or in px
 // or not at all, with the names to give them in messages (options, or manifest keys).
 struct BandRequest {

@@ -46,7 +46,7 @@ void Summarise(StepResult* r, const ExperimentOptions& o) {
   }
   r->n_valid = static_cast<int>(widths.size());
   if (widths.empty()) {
-    r->status = "failed";
+    r->status = model::StepStatus::kFailed;
     if (r->detail.empty()) r->detail = "no valid frame";
     return;
   }
@@ -64,8 +64,8 @@ void Summarise(StepResult* r, const ExperimentOptions& o) {
     r->sem_um = st.sem * c.scale_um_per_px;
     r->ci95_um = MeanCi95Um(st, c, &r->cal_sigma_um);
   }
-  r->status = r->n_valid >= o.samples ? "ok" : "too_few_frames";
-  if (r->status == "too_few_frames") {
+  r->status = r->n_valid >= o.samples ? model::StepStatus::kOk : model::StepStatus::kTooFewFrames;
+  if (r->status == model::StepStatus::kTooFewFrames) {
     r->detail = fmt::format("{} valid of {} asked ({} frames examined)", r->n_valid, o.samples,
                             r->n_examined);
   }
@@ -143,7 +143,7 @@ std::vector<std::string> FrameFields(const std::string& source, int frame, doubl
 static StepResult FailedStep(const StepSpec& spec, std::string detail) {
   StepResult r;
   r.spec = spec;
-  r.status = "failed";
+  r.status = model::StepStatus::kFailed;
   r.detail = std::move(detail);
   return r;
 }
@@ -171,12 +171,12 @@ StepResult MeasureStep(const StepSpec& spec, const ExperimentOptions& o, int dec
       b = static_cast<double>(frames->expected_frames());
     }
   } catch (const std::invalid_argument& e) {
-    r.status = "failed";
+    r.status = model::StepStatus::kFailed;
     r.detail = e.what();
     return r;
   }
   if (!(b > a)) {
-    r.status = "failed";
+    r.status = model::StepStatus::kFailed;
     r.detail =
         fmt::format("nothing left after start {:g} s and settle {:g} s (source ends at {:g})",
                     spec.start_s, spec.settle_s, b);
@@ -301,7 +301,7 @@ std::vector<StepResult> RunExperiment(const Manifest& m, const ExperimentOptions
         } catch (const std::exception& e) {
           // The strand's diameter stands without the feedstock's.
           r.feedstock = FeedstockResult{};
-          r.feedstock->status = "failed";
+          r.feedstock->status = FeedstockStatus::kFailed;
           r.feedstock->detail = e.what();
           r.feedstock->video = s.feedstock_video;
         }
@@ -408,7 +408,7 @@ std::vector<std::string> WriteExperimentTables(const Manifest& m,
                                       std::to_string(r.n_rejected),
                                       std::to_string(r.n_valid),
                                       std::to_string(r.n_examined),
-                                      r.status,
+                                      model::StepStatusName(r.status),
                                       r.detail};
     if (feedstock) {
       const std::vector<std::string> f =
@@ -425,7 +425,7 @@ std::vector<std::string> WriteExperimentTables(const Manifest& m,
                 {"n_rejected", r.n_rejected},
                 {"n_valid", r.n_valid},
                 {"n_examined", r.n_examined},
-                {"status", r.status},
+                {"status", model::StepStatusName(r.status)},
                 {"detail", r.detail},
                 {"source", r.spec.video.empty() ? r.spec.images : r.spec.video}};
     if (r.feedstock) row["feedstock"] = FeedstockJson(*r.feedstock);

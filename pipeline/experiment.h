@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "calib/pixel_scale.h"
+#include "model/step_status.h"
 #include "pipeline/feedstock.h"
 #include "pipeline/manifest.h"
 #include "pipeline/statistics.h"
@@ -29,7 +30,7 @@ struct FrameRecord {
 // A step's outcome: the diameter table's row and the frames behind it.
 struct StepResult {
   StepSpec spec;
-  std::string status;  // "ok", "too_few_frames" (fewer valid frames than asked), "failed"
+  model::StepStatus status = model::StepStatus::kFailed;  // until measured
   std::string detail;
   int n_examined = 0, n_valid = 0, n_used = 0, n_rejected = 0;
   double mean_px = 0, std_px = 0;
@@ -64,7 +65,7 @@ struct ExperimentOptions {
 
 // Measures one step: N valid frames spread evenly over its settled part (the first valid frame from
 // the middle of each of N equal slots on), outliers rejected by MAD. Video parts are reached by
-// seeking. An unreadable source gives status "failed", never an exception.
+// seeking. An unreadable source gives status kFailed, never an exception.
 StepResult MeasureStep(const StepSpec& spec, const ExperimentOptions& options,
                        int decoder_threads = 0,
                        std::vector<std::pair<int, cv::Mat>>* overlay_frames = nullptr);

@@ -26,6 +26,26 @@ void MeanAndCi(const std::vector<double>& v, std::optional<double>* mean,
 
 }  // namespace
 
+const char* FeedstockStatusName(FeedstockStatus status) {
+  switch (status) {
+    case FeedstockStatus::kOk:
+      return "ok";
+    case FeedstockStatus::kTooFewPairs:
+      return "too_few_pairs";
+    case FeedstockStatus::kFailed:
+      return "failed";
+  }
+  return "?";
+}
+
+FeedstockStatus ParseFeedstockStatus(const std::string& name) {
+  for (FeedstockStatus s :
+       {FeedstockStatus::kOk, FeedstockStatus::kTooFewPairs, FeedstockStatus::kFailed}) {
+    if (name == FeedstockStatusName(s)) return s;
+  }
+  throw std::invalid_argument("unknown feedstock status '" + name + "'");
+}
+
 bool FeedstockOptions::Validate(std::string* why) const {
   auto fail = [&](const std::string& m) {
     if (why) *why = m;
@@ -57,7 +77,7 @@ FeedstockResult MeasureFeedstock(const std::string& video, double start_s, doubl
     vo.gap_entries = false;  // pairs of frames decoded
     dec = vision::FrameSource::OpenVideo(video, vo);
   } catch (const std::invalid_argument& e) {
-    r.status = "failed";
+    r.status = FeedstockStatus::kFailed;
     r.detail = e.what();
     return r;
   }
@@ -66,7 +86,7 @@ FeedstockResult MeasureFeedstock(const std::string& video, double start_s, doubl
                        ? end_s
                        : dec->duration_s();
   if (!(b > a)) {
-    r.status = "failed";
+    r.status = FeedstockStatus::kFailed;
     r.detail = fmt::format("{}: nothing between {:g} s and {:g} s", video, a, b);
     return r;
   }
@@ -114,7 +134,7 @@ FeedstockResult MeasureFeedstock(const std::string& video, double start_s, doubl
   r.n_gear = static_cast<int>(gears.size());
   r.n_slip = static_cast<int>(slips.size());
   if (widths.empty()) {
-    r.status = "failed";
+    r.status = FeedstockStatus::kFailed;
     r.detail = fmt::format("{}: no valid filament width in {} frame pairs", video, r.n_pairs);
     return r;
   }
@@ -131,8 +151,8 @@ FeedstockResult MeasureFeedstock(const std::string& video, double start_s, doubl
   MeanAndCi(speeds, &r.speed_mm_s, &r.speed_ci95_mm_s);
   MeanAndCi(gears, &r.gear_mm_s, &r.gear_ci95_mm_s);
   MeanAndCi(slips, &r.slip_pct, &r.slip_ci95_pct);
-  r.status = r.n_diameter >= o.pairs ? "ok" : "too_few_pairs";
-  if (r.status != "ok") {
+  r.status = r.n_diameter >= o.pairs ? FeedstockStatus::kOk : FeedstockStatus::kTooFewPairs;
+  if (r.status != FeedstockStatus::kOk) {
     r.detail = fmt::format("{} valid filament widths of {} pairs asked ({} examined)", r.n_diameter,
                            o.pairs, r.n_pairs);
   }

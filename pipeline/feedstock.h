@@ -25,8 +25,18 @@ struct FeedstockOptions {
   bool Validate(std::string* why) const;
 };
 
+enum class FeedstockStatus {
+  kOk,           // as many valid diameters as pairs asked
+  kTooFewPairs,  // fewer valid diameters than pairs asked
+  kFailed,       // no diameter (an unreadable video, no valid pair, an error)
+};
+const char* FeedstockStatusName(FeedstockStatus status);  // "ok", "too_few_pairs", "failed"
+// The status FeedstockStatusName gives `name`; throws std::invalid_argument ("unknown feedstock
+// status 'x'") for any other text.
+FeedstockStatus ParseFeedstockStatus(const std::string& name);
+
 struct FeedstockResult {
-  std::string status;  // "ok", "too_few_pairs" (fewer valid diameters than pairs asked), "failed"
+  FeedstockStatus status = FeedstockStatus::kFailed;  // until measured
   std::string detail;
   std::string video;
   int n_pairs = 0;  // pairs examined
@@ -47,7 +57,7 @@ struct FeedstockResult {
 // to the end): the filament's width on the first frame of each (tracked from pair to pair), its
 // feed speed and the gear's from each pair, the slip 1 − v_filament / v_gear where the gear turns
 // measurably (over 3σ). Speeds need the options' conversion. An unreadable video, or no valid
-// pair, gives status "failed" with the reason; throws std::invalid_argument only for options that
+// pair, gives status kFailed with the reason; throws std::invalid_argument only for options that
 // do not validate.
 FeedstockResult MeasureFeedstock(const std::string& video, double start_s, double end_s,
                                  const FeedstockOptions& options);

@@ -49,12 +49,12 @@ std::vector<std::string> FeedstockFields(const FeedstockResult& r) {
           Cell(r.slip_pct, 3),
           Cell(r.slip_ci95_pct, 3),
           std::to_string(r.n_slip),
-          r.status,
+          FeedstockStatusName(r.status),
           r.detail};
 }
 
 json FeedstockJson(const FeedstockResult& r) {
-  return {{"status", r.status},
+  return {{"status", FeedstockStatusName(r.status)},
           {"detail", r.detail},
           {"video", r.video},
           {"n_pairs", r.n_pairs},
@@ -77,9 +77,7 @@ json FeedstockJson(const FeedstockResult& r) {
 
 FeedstockResult FeedstockFromJson(const json& j) {
   FeedstockResult r;
-  r.status = j.at("status").get<std::string>();
-  if (r.status != "ok" && r.status != "too_few_pairs" && r.status != "failed")
-    throw std::invalid_argument("unknown feedstock status '" + r.status + "'");
+  r.status = ParseFeedstockStatus(j.at("status").get<std::string>());
   r.detail = j.at("detail").get<std::string>();
   r.video = j.at("video").get<std::string>();
   r.n_pairs = j.at("n_pairs").get<int>();

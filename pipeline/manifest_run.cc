@@ -57,10 +57,8 @@ FeedstockOptions FeedstockOptionsFor(const Manifest& m,
     }
     vision::GearSpeedOptions g;
     g.roi = where("gear_roi", f.gear_roi);
-    if (!f.gear_centre.empty()) {
-      const cv::Rect c = where("gear_centre", f.gear_centre + ",1,1");
-      g.centre_px = cv::Point2d(c.x, c.y);
-    }
+    if (!f.gear_centre.empty())
+      g.centre_px = cv::Point2d(ParsePoint(f.gear_centre, m.path + ": feedstock: gear_centre"));
     g.outer_radius_px = f.gear_radius_mm * 1e3 / fo.conversion->scale_um_per_px;
     fo.gear = g;
     fo.gear_radius_mm = f.gear_radius_mm;
@@ -189,7 +187,7 @@ ManifestRunReport RunManifest(const ManifestRunOptions& o) {
 std::vector<model::StepInput> PredictorSteps(const std::vector<StepResult>& steps) {
   std::vector<model::StepInput> out;
   for (const StepResult& r : steps) {
-    if (r.status == "failed") continue;  // as the table's reader skips them
+    if (r.status == model::StepStatus::kFailed) continue;  // as the table's reader skips them
     if (!(r.has_um && r.n_used > 0)) {
       throw std::invalid_argument(
           fmt::format("step {}: mean_um is missing (no diameter in µm)", r.spec.step));

@@ -33,7 +33,7 @@ std::string Summary(const ManifestRunReport& rep, const Provenance& prov) {
                       r.has_um && r.n_used ? fmt::format("{:.2f}", r.mean_um) : "",
                       r.has_um && r.n_used ? fmt::format("{:.2f}", r.ci95_um) : "",
                       r.has_um && r.n_used ? fmt::format("{:.2f}", r.std_um) : "", r.n_rejected,
-                      r.status, r.detail.empty() ? "" : ": " + r.detail);
+                      model::StepStatusName(r.status), r.detail.empty() ? "" : ": " + r.detail);
   }
   bool feedstock_header = false;
   for (const auto& r : rep.steps) {
@@ -67,7 +67,8 @@ std::string Summary(const ManifestRunReport& rep, const Provenance& prov) {
 // "filament 1749.91 ± 0.07 µm (10 of 10 pairs), feed 4.502 mm/s, gear 5.001 mm/s, slip 9.98 ±
 // 0.31 % (10 pairs)", or why not.
 std::string FeedstockLine(const pipeline::FeedstockResult& f) {
-  if (f.n_diameter == 0) return fmt::format("feedstock {}: {}", f.status, f.detail);
+  if (f.n_diameter == 0)
+    return fmt::format("feedstock {}: {}", FeedstockStatusName(f.status), f.detail);
   std::string out =
       f.has_um ? fmt::format("filament {:.2f} ± {:.2f} µm", f.diameter_um, f.diameter_ci95_um)
                : fmt::format("filament {:.3f} px", f.diameter_px);
@@ -78,7 +79,8 @@ std::string FeedstockLine(const pipeline::FeedstockResult& f) {
     out += fmt::format(", slip {:.2f}{} % ({} pairs)", *f.slip_pct,
                        f.slip_ci95_pct ? fmt::format(" ± {:.2f}", *f.slip_ci95_pct) : "", f.n_slip);
   }
-  if (f.status != "ok") out += fmt::format("; {}: {}", f.status, f.detail);
+  if (f.status != FeedstockStatus::kOk)
+    out += fmt::format("; {}: {}", FeedstockStatusName(f.status), f.detail);
   return out;
 }
 
@@ -104,9 +106,12 @@ void WriteRunSummary(const std::string& out_dir, ManifestRunReport* report) {
   }
   auto steps = nlohmann::ordered_json::array();
   for (const auto& r : rep.steps) {
-    nlohmann::ordered_json s = {{"step", r.spec.step}, {"temperature_c", r.spec.temperature_c},
-                                {"n", r.n_used},       {"n_rejected", r.n_rejected},
-                                {"status", r.status},  {"detail", r.detail}};
+    nlohmann::ordered_json s = {{"step", r.spec.step},
+                                {"temperature_c", r.spec.temperature_c},
+                                {"n", r.n_used},
+                                {"n_rejected", r.n_rejected},
+                                {"status", model::StepStatusName(r.status)},
+                                {"detail", r.detail}};
     if (r.has_um && r.n_used) {
       s["mean_um"] = r.mean_um;
       s["ci95_um"] = r.ci95_um;

@@ -26,7 +26,8 @@ FeedSpeedSummary SummariseFeedSpeeds(const std::vector<vision::FeedSpeedSample>&
   s.use.assign(samples.size(), SpeedUse::kNoSpeed);
   bool any_full = false;
   for (const vision::FeedSpeedSample& v : samples) {
-    if (v.reason != "first_frame" && v.reason != "no_time") ++s.pairs;
+    if (v.reason != vision::SpeedReason::kFirstFrame && v.reason != vision::SpeedReason::kNoTime)
+      ++s.pairs;
     if (!v.valid) continue;
     ++s.with_speed;
     any_full = any_full || v.baseline_frames >= v.wanted_baseline_frames;

@@ -97,10 +97,9 @@ void Read(const json& j, const StepSpec& spec, const ExperimentOptions& o, StepR
   if (j.at("spec") != MeasuredHow(spec, o))
     throw std::invalid_argument("measured another way (step, source, options or conversion)");
   r->spec = spec;
-  r->status = j.at("status").get<std::string>();
-  if (r->status == "failed") throw std::invalid_argument("the step failed last time");
-  if (r->status != "ok" && r->status != "too_few_frames")
-    throw std::invalid_argument("unknown status '" + r->status + "'");
+  r->status = model::ParseStepStatus(j.at("status").get<std::string>());
+  if (r->status == model::StepStatus::kFailed)
+    throw std::invalid_argument("the step failed last time");
   r->detail = j.at("detail").get<std::string>();
   r->n_examined = Count(j, "n_examined");
   r->n_valid = Count(j, "n_valid");
@@ -132,7 +131,7 @@ void Read(const json& j, const StepSpec& spec, const ExperimentOptions& o, StepR
   // The counts, the frames and the summary must tell the same story.
   if (r->n_examined != static_cast<int>(r->frames.size()) || r->n_valid != valid ||
       r->n_used != used || r->n_used + r->n_rejected != r->n_valid || r->n_used < 1 ||
-      (r->status == "ok") != (r->n_valid >= o.samples))
+      (r->status == model::StepStatus::kOk) != (r->n_valid >= o.samples))
     throw std::invalid_argument("its counts do not match its frames");
   if (!(r->mean_px > 0) || r->std_px < 0 || std::abs(sum_px / used - r->mean_px) > kMeanTolerancePx)
     throw std::invalid_argument("its mean does not match its frames");
@@ -141,7 +140,7 @@ void Read(const json& j, const StepSpec& spec, const ExperimentOptions& o, StepR
     throw std::invalid_argument("its spreads are inconsistent");
   if (j.contains("feedstock") && !j.at("feedstock").is_null()) {
     r->feedstock = FeedstockFromJson(j.at("feedstock"));
-    if (r->feedstock->status == "failed")
+    if (r->feedstock->status == FeedstockStatus::kFailed)
       throw std::invalid_argument("the step's feedstock failed last time");
   }
   r->resumed = true;
@@ -156,7 +155,7 @@ std::string StepFileText(const StepResult& r, const ExperimentOptions& o) {
   for (const auto& f : r.frames) frames.push_back({{"fields", f.fields}, {"used", f.used}});
   json j = {{"spec", MeasuredHow(r.spec, o)},
             {"line", r.spec.line},
-            {"status", r.status},
+            {"status", model::StepStatusName(r.status)},
             {"detail", r.detail},
             {"n_examined", r.n_examined},
             {"n_valid", r.n_valid},

@@ -17,7 +17,7 @@
 #include "vision/edges/edge_profile.h"
 #include "vision/io/video_io.h"
 
-namespace clogscope::vision {
+namespace clogscope::synthetic {
 namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
@@ -32,7 +32,7 @@ struct SoftHalfPlane {
   Vec2 normal;    // unit normal in the image frame, pointing inside
   double offset;  // t = normal · (p - origin) - offset
   double Eval(Vec2 d, double sigma) const {
-    return PixelMeanOfBlurredStep(Dot(normal, d) - offset, sigma, normal.x, normal.y);
+    return vision::PixelMeanOfBlurredStep(Dot(normal, d) - offset, sigma, normal.x, normal.y);
   }
 };
 
@@ -450,8 +450,8 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
           cov = 0;
           for (long k = k0 - 2; k <= k0 + 2; ++k) {
             const double c = k * pitch_px;
-            cov += PixelMeanOfBlurredStep(u - c + 0.5 * w, sigma, n_strand.x, n_strand.y) -
-                   PixelMeanOfBlurredStep(u - c - 0.5 * w, sigma, n_strand.x, n_strand.y);
+            cov += vision::PixelMeanOfBlurredStep(u - c + 0.5 * w, sigma, n_strand.x, n_strand.y) -
+                   vision::PixelMeanOfBlurredStep(u - c - 0.5 * w, sigma, n_strand.x, n_strand.y);
           }
           front = p.strand_level * cov;
         } else {
@@ -615,11 +615,11 @@ std::vector<FrameTruth> RenderSequence(const SceneParams& p, int frame_count, do
   timed.frame_rate_hz = fps;
   namespace fs = std::filesystem;
   std::vector<FrameTruth> truth;
-  const VideoKind kind = VideoKindForPath(out_path);
-  if (kind != VideoKind::kNone) {
+  const vision::VideoKind kind = vision::VideoKindForPath(out_path);
+  if (kind != vision::VideoKind::kNone) {
     if (p.bit_depth != 8)
       throw std::invalid_argument(out_path + ": video output needs bit_depth 8");
-    VideoFileWriter writer(out_path, kind, fps, cv::Size(p.width_px, p.height_px));
+    vision::VideoFileWriter writer(out_path, kind, fps, cv::Size(p.width_px, p.height_px));
     for (int i = 0; i < frame_count; ++i) {
       FrameTruth t;
       writer.Write(RenderFrame(timed, i, &t));
@@ -635,7 +635,7 @@ std::vector<FrameTruth> RenderSequence(const SceneParams& p, int frame_count, do
       FrameTruth t;
       cv::Mat img = RenderFrame(timed, i, &t);
       std::string name = (fs::path(out_path) / fmt::format("frame_{:06d}.png", i)).string();
-      WriteImageAtomically(name, img);
+      vision::WriteImageAtomically(name, img);
       truth.push_back(t);
     }
   }
@@ -643,4 +643,4 @@ std::vector<FrameTruth> RenderSequence(const SceneParams& p, int frame_count, do
   return truth;
 }
 
-}  // namespace clogscope::vision
+}  // namespace clogscope::synthetic

@@ -8,7 +8,7 @@
 
 #include "vision/edges/polarity.h"
 
-namespace clogscope::vision {
+namespace clogscope::synthetic {
 
 // What the scene shows: the strand below a nozzle, a calibration pin gauge (a cylinder across the
 // whole frame, no nozzle), or a stage micrometer (parallel lines at a known pitch). (What the
@@ -180,4 +180,4 @@ std::vector<FrameTruth> RenderSequence(const SceneParams& params, int frame_coun
 // Ground truth as JSON text: the scene parameters and one entry per frame.
 std::string TruthToJson(const SceneParams& params, const std::vector<FrameTruth>& truth);
 
-}  // namespace clogscope::vision
+}  // namespace clogscope::synthetic

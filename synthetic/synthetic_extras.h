@@ -3,7 +3,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace clogscope::vision::render {
+namespace clogscope::synthetic::render {
 
 // Pieces of a realistic scene for the renderer (synthetic.cc). Levels are 8-bit grey levels.
 
@@ -100,4 +100,4 @@ class MicrometerMarks {
   std::vector<Fibre> fibres_;
 };
 
-}  // namespace clogscope::vision::render
+}  // namespace clogscope::synthetic::render

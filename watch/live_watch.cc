@@ -11,7 +11,7 @@
 #include "vision/scene/scene_memory.h"
 #include "vision/scene/track.h"
 
-namespace clogscope::pipeline {
+namespace clogscope::watch {
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -213,16 +213,18 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
     counters.latency_max_ms = latency.max();
     counters.uptime_s = Seconds(Clock::now() - started);
   };
-  const auto after_update = [&](bool changed, double t) {
+  // After each update of the state: its clog index and counters, the level's line, the board
+  // (`publish`), then the level change told (a reader of /status sees the new level by then), then
+  // the periodic status line.
+  const auto after_update = [&](bool changed, double t, const auto& publish) {
     if (options.extruder) {
       std::string no_index;
       clog = ComputeClogIndex(*options.extruder, options.temperature_c, state.status(), &no_index);
     }
     update_counters();
-    if (changed) {
-      emit("level");
-      if (events.on_level_change) events.on_level_change(state.status(), clog);
-    }
+    if (changed) emit("level");
+    if (board) publish();
+    if (changed && events.on_level_change) events.on_level_change(state.status(), clog);
     if (!next_report_s) next_report_s = t + report_every;
     if (t >= *next_report_s) {
       emit("status");
@@ -252,8 +254,7 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
       state.SetSourceUp(reader.up);
       const double t = Seconds(Clock::now() - started);
       const bool changed = state.Tick(t);
-      after_update(changed, t);
-      if (board) board->PublishState(state.status(), clog, counters);
+      after_update(changed, t, [&] { board->PublishState(state.status(), clog, counters); });
       continue;
     }
     // A file read as fast as it decodes is read ahead by design: its frames' wait in the queue is
@@ -288,11 +289,10 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
     const bool changed = state.Add(t, view, m.width_px);
     ++counters.frames_total;
     counters.frames_valid_total += view == FrameView::kStrand;
-    after_update(changed, t);
-    if (board) {
+    after_update(changed, t, [&] {
       board->Publish({state.status(), clog, counters, std::move(frame.image), std::move(m),
                       counters.frames_total});
-    }
+    });
     // Arrival (decoded, in hand) to the state published: what a reader of /status waits for.
     latency.Add(1e3 * Seconds(Clock::now() - frame.arrival));
     frame = vision::InputFrame{};
@@ -315,4 +315,4 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
   return summary;
 }
 
-}  // namespace clogscope::pipeline
+}  // namespace clogscope::watch

@@ -14,7 +14,7 @@
 #include "watch/watch_report.h"
 #include "watch/watch_state.h"
 
-namespace clogscope::pipeline {
+namespace clogscope::watch {
 
 struct LiveWatchOptions {
   std::string source;  // device, stream URL, video file or folder (OpenLiveSource)
@@ -58,7 +58,9 @@ class WatchBoard {
 struct LiveWatchEvents {
   // One JSON line (StatusJson): every report_every_s, on every level change and at the stop.
   std::function<void(const std::string& line)> on_line;
-  // On every level change, after its line.
+  // On every level change, after its line and once the board shows the new state (what /status,
+  // /metrics and /frame.jpg serve); the watch waits for it, so the board holds that state
+  // meanwhile.
   std::function<void(const WatchStatus&, const std::optional<ClogIndex>&)> on_level_change;
   // Warnings worth a log line (the source dropped, reconnecting, a frame that could not be
   // measured).
@@ -90,4 +92,4 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
                               WatchBoard* board, std::atomic<bool>* stop,
                               std::unique_ptr<vision::FrameSource> source);
 
-}  // namespace clogscope::pipeline
+}  // namespace clogscope::watch

@@ -8,7 +8,7 @@
 
 #include "model/predictor.h"
 
-namespace clogscope::pipeline {
+namespace clogscope::watch {
 namespace {
 
 // JSON has no NaN: a quantity not known yet is null.
@@ -171,4 +171,4 @@ std::string PrometheusText(const WatchStatus& s, const std::optional<ClogIndex>&
   return out;
 }
 
-}  // namespace clogscope::pipeline
+}  // namespace clogscope::watch

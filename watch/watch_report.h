@@ -6,7 +6,7 @@
 #include "model/parameters.h"
 #include "watch/watch_state.h"
 
-namespace clogscope::pipeline {
+namespace clogscope::watch {
 
 // What the drift means physically (predictor.md): the predictor run at the baseline and at the
 // current diameter, both at temperature_c.
@@ -45,4 +45,4 @@ std::string StatusJson(const WatchStatus& status, const std::optional<ClogIndex>
 std::string PrometheusText(const WatchStatus& status, const std::optional<ClogIndex>& clog,
                            const WatchCounters& counters);
 
-}  // namespace clogscope::pipeline
+}  // namespace clogscope::watch

@@ -9,7 +9,7 @@
 #include "common/robust.h"
 #include "pipeline/statistics.h"
 
-namespace clogscope::pipeline {
+namespace clogscope::watch {
 namespace {
 
 constexpr int kMinRecentFrames = 5;
@@ -144,7 +144,8 @@ WatchState::MeanCi WatchState::RobustMean(const std::vector<double>& widths_px) 
   if (widths_px.size() < 2) return out;
   const double med = Median(widths_px);
   // MAD floored at 0.05 px: a steady strand's widths may agree far better than a frame's noise.
-  const SampleStats st = RobustStats(widths_px, 3.5, std::max(0.05, 1e-3 * std::abs(med)));
+  const pipeline::SampleStats st =
+      pipeline::RobustStats(widths_px, 3.5, std::max(0.05, 1e-3 * std::abs(med)));
   if (st.n_used < 2) return out;
   std::vector<double> used;
   used.reserve(st.n_used);
@@ -157,7 +158,7 @@ WatchState::MeanCi WatchState::RobustMean(const std::vector<double>& widths_px) 
   out.n_rejected = st.n_rejected;
   out.n_eff = EffectiveSampleSize(used);
   const int dof = std::max(1, static_cast<int>(std::floor(out.n_eff)) - 1);
-  out.half_px = StudentT975(dof) * st.std / std::sqrt(out.n_eff);
+  out.half_px = pipeline::StudentT975(dof) * st.std / std::sqrt(out.n_eff);
   return out;
 }
 
@@ -345,4 +346,4 @@ bool WatchState::Evaluate(double t) {
   return changed;
 }
 
-}  // namespace clogscope::pipeline
+}  // namespace clogscope::watch

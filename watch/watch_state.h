@@ -9,7 +9,7 @@
 #include "calib/pixel_scale.h"
 #include "common/robust.h"
 
-namespace clogscope::pipeline {
+namespace clogscope::watch {
 
 // What a live watch says about the nozzle.
 enum class WatchLevel {
@@ -148,4 +148,4 @@ std::pair<double, double> WilsonInterval(int k, int n, double z = kZ95);
 // least 2 and at most n: how many independent samples a correlated series is worth for its mean.
 double EffectiveSampleSize(const std::vector<double>& values);
 
-}  // namespace clogscope::pipeline
+}  // namespace clogscope::watch

@@ -2,8 +2,7 @@
 // and `measure --manifest`), its step results as objects. The Python layer reads the diameter
 // table the run wrote into a DataFrame.
 //
-// The steps' and feedstock's status words are read in one place, below (StatusText), for their
-// move from strings to enums.
+// The steps' and feedstock's statuses are given as the table's words, in one place (StatusText).
 #include "pipeline/experiment.h"
 
 #include <fmt/format.h>
@@ -17,8 +16,10 @@ namespace clogscope::python {
 namespace {
 
 // A step's or feedstock's status as the diameter table's status column writes it.
-std::string StatusText(const pipeline::StepResult& r) { return r.status; }
-std::string StatusText(const pipeline::FeedstockResult& r) { return r.status; }
+std::string StatusText(const pipeline::StepResult& r) { return model::StepStatusName(r.status); }
+std::string StatusText(const pipeline::FeedstockResult& r) {
+  return pipeline::FeedstockStatusName(r.status);
+}
 
 }  // namespace
 

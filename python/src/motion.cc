@@ -172,9 +172,12 @@ too_fast, no_strand) when there is none. Raises ValueError for frames of another
 
   py::class_<vision::FeedSpeedSample>(m, "FeedSpeedSample", "One frame's feed speed.")
       .def_readonly("valid", &vision::FeedSpeedSample::valid)
-      .def_readonly("reason", &vision::FeedSpeedSample::reason,
-                    "When not valid: first_frame, no_time, bad_time, no_strand, no_texture, "
-                    "too_fast.")
+      .def_property_readonly(
+          "reason",
+          [](const vision::FeedSpeedSample& s) {
+            return s.valid ? std::string() : std::string(vision::SpeedReasonName(s.reason));
+          },
+          "When not valid: first_frame, no_time, bad_time, no_strand, no_texture, too_fast.")
       .def_readonly("detail", &vision::FeedSpeedSample::detail)
       .def_readonly("shift_px", &vision::FeedSpeedSample::shift_px)
       .def_readonly("sigma_px", &vision::FeedSpeedSample::sigma_px)

@@ -2,7 +2,6 @@
 // (synthetic/: RenderFrame, the function `clogscope render` writes its frames with), or written to
 // files by the command's own apps::RenderToFiles.
 //
-// The renderer's namespace is named once, below (RenderNs), for its move out of vision.
 #include <fmt/format.h>
 #include <pybind11/stl.h>
 
@@ -16,9 +15,8 @@
 namespace clogscope::python {
 namespace {
 
-namespace RenderNs = clogscope::vision;  // the renderer's namespace (synthetic/synthetic.h)
-using Scene = RenderNs::SceneParams;
-using Truth = RenderNs::FrameTruth;
+using Scene = synthetic::SceneParams;
+using Truth = synthetic::FrameTruth;
 
 void ValidateScene(const Scene& s) {
   std::string why;
@@ -49,7 +47,7 @@ py::tuple Render(const Scene& scene, int count, int first) {
   {
     py::gil_scoped_release release;
     for (int i = 0; i < count; ++i) {
-      const cv::Mat f = RenderNs::RenderFrame(scene, first + i, &truth[i]);
+      const cv::Mat f = synthetic::RenderFrame(scene, first + i, &truth[i]);
       cv::Mat dst(f.rows, f.cols, f.type(), data + i * frame_bytes);
       f.copyTo(dst);
     }
@@ -60,10 +58,10 @@ py::tuple Render(const Scene& scene, int count, int first) {
 }  // namespace
 
 void BindRender(py::module_& m) {
-  py::enum_<RenderNs::RenderTarget>(m, "RenderTarget", "What a rendered scene shows.")
-      .value("strand", RenderNs::RenderTarget::kStrand, "a strand below a nozzle")
-      .value("pin", RenderNs::RenderTarget::kPin, "a pin gauge across the frame")
-      .value("micrometer", RenderNs::RenderTarget::kMicrometer, "a stage micrometer's lines");
+  py::enum_<synthetic::RenderTarget>(m, "RenderTarget", "What a rendered scene shows.")
+      .value("strand", synthetic::RenderTarget::kStrand, "a strand below a nozzle")
+      .value("pin", synthetic::RenderTarget::kPin, "a pin gauge across the frame")
+      .value("micrometer", synthetic::RenderTarget::kMicrometer, "a stage micrometer's lines");
 
   py::class_<Scene>(
       m, "SceneParams",
@@ -170,10 +168,10 @@ void BindRender(py::module_& m) {
              "blur_sigma_px", "noise_sigma", "edge_bias_px", "colour", "bit_depth", "seed"});
       });
 
-  m.def("random_realistic_scene", &RenderNs::RandomRealisticScene, py::arg("seed"),
+  m.def("random_realistic_scene", &synthetic::RandomRealisticScene, py::arg("seed"),
         "A randomised scene far from the defaults (tilt, blur, clutter, shading, colour, ...): "
         "the robustness tests' scenes. `seed` picks everything.");
-  m.def("feedstock_scene", &RenderNs::FeedstockScene, py::arg("feed_speed_mm_s"),
+  m.def("feedstock_scene", &synthetic::FeedstockScene, py::arg("feed_speed_mm_s"),
         py::arg("gear_surface_speed_mm_s") = py::none(),
         "A 1.75 mm filament at 20 µm/px running down a 640×480 frame with a moving surface "
         "texture (feed_speed_mm_s), optionally a drive gear beside it.");
@@ -206,7 +204,7 @@ void BindRender(py::module_& m) {
         cv::Mat f;
         {
           py::gil_scoped_release release;
-          f = RenderNs::RenderFrame(scene, index, &t);
+          f = synthetic::RenderFrame(scene, index, &t);
         }
         return py::make_tuple(ArrayFromMat(std::move(f)), t);
       },

@@ -123,6 +123,9 @@ TEST_F(FeedstockManifestTest, BadFeedstockBlocksAreOneLineErrors) {
       {"feedstock:\n  gear_radius_mm: 2\n  speed: yes\n", "unknown key 'speed'"},
       {"feedstock:\n  scale_um_per_px: -1\n", "must be positive"},
       {"feedstock:\n  roi: 1,2,3\n", "roi"},
+      {"feedstock:\n  scale_um_per_px: 20\n  gear_roi: 70,134,213,213\n  gear_radius_mm: 2\n"
+       "  gear_centre: 176\n",
+       "feedstock: gear_centre '176': expected x,y"},
   };
   int k = 0;
   for (const auto& [block, expected] : cases) {

@@ -16,9 +16,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string Render(const fs::path& dir, const std::string& name, const vision::SceneParams& p) {
+std::string Render(const fs::path& dir, const std::string& name, const synthetic::SceneParams& p) {
   const std::string path = (dir / name).string();
-  cv::imwrite(path, vision::RenderFrame(p, 0, nullptr));
+  cv::imwrite(path, synthetic::RenderFrame(p, 0, nullptr));
   return path;
 }
 
@@ -46,7 +46,7 @@ TEST(InspectCommandTest, OutMustBeAPngName) {
 
 TEST(InspectCommandTest, ExplainsTheFrameAndSuggestsOptions) {
   const fs::path d = testing::FreshDir("clogscope_inspect");
-  vision::SceneParams p;
+  synthetic::SceneParams p;
   p.nozzle_level = 30;  // darker than the background
   p.clutter_discs = 2;
   InspectCommandOptions o;
@@ -65,7 +65,7 @@ TEST(InspectCommandTest, ExplainsTheFrameAndSuggestsOptions) {
   EXPECT_EQ(png.cols, 1280);
 
   // No tip in view: the filament target is suggested.
-  p = vision::SceneParams();
+  p = synthetic::SceneParams();
   p.nozzle = false;
   o.input = Render(d, "filament.png", p);
   const InspectReport f = InspectInput(o);

@@ -1,7 +1,6 @@
 // End-to-end tests of `clogscope render` and `clogscope measure`: the binary on a small rendered
 // video, its exit codes and one-line errors, and the typed MeasureInputs() behind it.
 #include "apps/measure_command.h"
-#include "apps/render_command.h"
 
 #include <gtest/gtest.h>
 #include <sys/resource.h>
@@ -17,6 +16,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
+#include "apps/render_command.h"
 #include "common/atomic_file.h"
 #include "common/csv.h"
 #include "tests/apps/cli_test_util.h"
@@ -223,6 +223,13 @@ TEST(MeasureCommandTest, GearSpeedAndSlip) {
   r = RunCli("measure " + video + speed + " --gear-radius-mm 2", d);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--gear-roi"), std::string::npos) << r.err;
+  // The gear's centre is x,y.
+  r = RunCli("measure " + video + speed +
+                 " --gear-roi 70,134,213,213 --gear-radius-mm 2 --gear-centre 176,240,1",
+             d);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--gear-centre '176,240,1': expected x,y"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
 }
 
 TEST(MeasureCommandTest, BadInputsGiveOneLineErrorsAndExitCodes) {

@@ -15,7 +15,6 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
-#include <future>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -84,7 +83,7 @@ class WatchCommandTest : public ::testing::Test {
   static std::string Video() {
     const fs::path video = *dir_ / "seq.avi";
     if (fs::exists(video)) return video.string();
-    vision::SceneParams s;
+    synthetic::SceneParams s;
     s.width_px = 640;
     s.height_px = 360;
     s.tip_x_px = 320;
@@ -96,19 +95,19 @@ class WatchCommandTest : public ::testing::Test {
     const int frames = static_cast<int>(kSeconds * 25);
     for (int i = 0; i < frames; ++i)
       s.frame_width_um.push_back(i / 25.0 >= kDropAtS ? 388.0 : 400.0);
-    vision::RenderSequence(s, frames, 25, video.string(), (*dir_ / "seq.truth.json").string());
+    synthetic::RenderSequence(s, frames, 25, video.string(), (*dir_ / "seq.truth.json").string());
     return video.string();
   }
   // Ten small frames: enough for the options to be checked against a real file.
   static std::string TinyVideo() {
     const fs::path video = *dir_ / "tiny.avi";
-    vision::SceneParams s;
+    synthetic::SceneParams s;
     s.width_px = 160;
     s.height_px = 120;
     s.tip_x_px = 80;
     s.tip_y_px = 30;
     s.strand_width_um = 120;
-    vision::RenderSequence(s, 10, 25, video.string(), (*dir_ / "tiny.truth.json").string());
+    synthetic::RenderSequence(s, 10, 25, video.string(), (*dir_ / "tiny.truth.json").string());
     return video.string();
   }
   static void TearDownTestSuite() {
@@ -199,57 +198,37 @@ TEST_F(WatchCommandTest, AnHttpMjpegStreamFromFfmpegIsWatchedAndServed) {
   o.http = "127.0.0.1:0";
   o.live.duration_s = kSeconds + 5;  // past the stream's end: the source drops
   o.live.source_options.read_timeout_s = 2;
-  std::atomic<bool> stop{false};
-  // The port the watch reports once it listens, or what it threw before: never a wait that
-  // cannot end.
-  std::promise<int> started;
-  WatchReport report;
-  std::thread watch([&] {
-    bool told = false;
-    try {
-      report = WatchNozzle(o, &stop, [&](int port) {
-        told = true;
-        started.set_value(port);
-      });
-    } catch (...) {
-      if (!told) started.set_exception(std::current_exception());
-      told = true;
-    }
-    if (!told) started.set_value(0);  // returned without ever listening
-  });
-  std::future<int> reported = started.get_future();
+  // At every level change the watch has published the new state and waits for its observer, so a
+  // real HTTP client (the server answers on its own threads) reads /status while it holds that
+  // state: no polling, and no later change can slip in. At warn it reads the rest too.
   int http_port = 0;
-  try {
-    http_port = reported.get();
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "the watch failed before listening: " << e.what();
-  }
-  if (http_port == 0) {
-    watch.join();
-    kill(ffmpeg, SIGTERM);
-    waitpid(ffmpeg, nullptr, 0);
-    FAIL() << "no HTTP port reported";
-  }
-
-  // A real HTTP client polls /status until the watch says warn, then reads the rest.
-  httplib::Client client("127.0.0.1", http_port);
-  std::set<std::string> seen;
+  std::set<std::string> seen;  // the levels /status reported: at each change and the one before
   nlohmann::json warn_status;
   std::string metrics, jpeg;
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-  while (std::chrono::steady_clock::now() < deadline && metrics.empty()) {
-    if (auto res = client.Get("/status"); res && res->status == 200) {
-      const auto j = nlohmann::json::parse(res->body);
-      seen.insert(j["level"].get<std::string>());
-      if (j["level"] == "warn") {
-        warn_status = j;
-        if (auto m = client.Get("/metrics")) metrics = m->body;
-        if (auto f = client.Get("/frame.jpg"); f && f->status == 200) jpeg = f->body;
-      }
+  WatchObservers observers;
+  observers.on_started = [&](int port) { http_port = port; };
+  observers.on_level_change = [&](const watch::WatchStatus& s) {
+    ASSERT_NE(http_port, 0) << "no HTTP port reported";
+    httplib::Client client("127.0.0.1", http_port);
+    const auto res = client.Get("/status");
+    ASSERT_TRUE(res && res->status == 200) << "no /status at " << s.time_s << " s";
+    const auto j = nlohmann::json::parse(res->body);
+    EXPECT_EQ(j["level"], watch::WatchLevelName(s.level));
+    seen.insert(j["previous_level"].get<std::string>());
+    seen.insert(j["level"].get<std::string>());
+    if (j["level"] == "warn" && warn_status.is_null()) {
+      warn_status = j;
+      if (auto m = client.Get("/metrics")) metrics = m->body;
+      if (auto f = client.Get("/frame.jpg"); f && f->status == 200) jpeg = f->body;
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  };
+  std::atomic<bool> stop{false};
+  WatchReport report;
+  try {
+    report = WatchNozzle(o, &stop, observers);
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "the watch failed: " << e.what();
   }
-  watch.join();
   kill(ffmpeg, SIGTERM);
   waitpid(ffmpeg, nullptr, 0);
 
@@ -270,7 +249,7 @@ TEST_F(WatchCommandTest, AnHttpMjpegStreamFromFfmpegIsWatchedAndServed) {
     if (j["event"] == "level" && j["level"] == "warn" && warn_t < 0) warn_t = j["time_s"];
   EXPECT_GT(warn_t, kDropAtS + 2.0);
   EXPECT_LE(warn_t, kDropAtS + 5.0 + 1.0);
-  EXPECT_EQ(report.summary.final_level, pipeline::WatchLevel::kNoView);
+  EXPECT_EQ(report.summary.final_level, watch::WatchLevel::kNoView);
   EXPECT_EQ(lines.back()["reason"], "the source is down (reconnecting)");
   EXPECT_GT(report.summary.frames, 450);
   std::cout << "stream: " << report.summary.frames << " frames, latency median "

@@ -12,13 +12,13 @@
 namespace clogscope::calib {
 namespace {
 
-using vision::SceneParams;
+using synthetic::SceneParams;
 
 constexpr double kScale = 3.0, kBias = 0.35;
 
 SceneParams PinScene(double diameter_um, uint64_t seed, int width = 1280, int height = 720) {
   SceneParams p;
-  p.target = vision::RenderTarget::kPin;
+  p.target = synthetic::RenderTarget::kPin;
   p.width_px = width;
   p.height_px = height;
   p.tip_x_px = width / 2.0;
@@ -39,7 +39,7 @@ ScaleCalibration CalibrateFromRenderedPins(uint64_t seed, int width = 1280, int 
   mo.band_height_px = 1e6;
   std::vector<PinObservation> pins;
   for (double d : {300.0, 350.0, 400.0, 450.0, 500.0}) {
-    const cv::Mat img = vision::RenderFrame(
+    const cv::Mat img = synthetic::RenderFrame(
         PinScene(d, seed + static_cast<uint64_t>(d), width, height), 0, nullptr);
     const auto m = vision::MeasureStrand(img, mo);
     EXPECT_TRUE(m.valid()) << m.detail;
@@ -57,13 +57,13 @@ TEST(CalibrationAccuracyTest, FivePinsWithinFiveHundredthsOfAPercent) {
 
 TEST(CalibrationAccuracyTest, MicrometerWithinTwoHundredthsOfAPercent) {
   SceneParams p;
-  p.target = vision::RenderTarget::kMicrometer;
+  p.target = synthetic::RenderTarget::kMicrometer;
   p.pitch_um = 100;
   p.line_width_um = 8;
   p.tilt_deg = -3;
   p.scale_um_per_px = kScale;
   p.SetSilhouette();
-  const cv::Mat img = vision::RenderFrame(p, 0, nullptr);
+  const cv::Mat img = synthetic::RenderFrame(p, 0, nullptr);
   const auto found = vision::FindMicrometerLines(img, {});
   ASSERT_TRUE(found.ok) << found.reason;
   ASSERT_GE(found.lines.size(), 30u);

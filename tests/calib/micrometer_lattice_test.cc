@@ -108,9 +108,9 @@ TEST(LineLatticeTest, UnevenSpacingIsRefused) {
 // A 10 µm stage micrometer as in the issue: ticks 20 px apart (0.5 µm/px), short ones 160 px,
 // every 5th 240 px and every 10th 320 px long, numerals above the long ticks, dust specks and
 // fibres, noise 3 grey levels (8-bit scale).
-vision::SceneParams StageMicrometer(double tilt_deg, int bit_depth, uint64_t seed) {
-  vision::SceneParams p;
-  p.target = vision::RenderTarget::kMicrometer;
+synthetic::SceneParams StageMicrometer(double tilt_deg, int bit_depth, uint64_t seed) {
+  synthetic::SceneParams p;
+  p.target = synthetic::RenderTarget::kMicrometer;
   p.scale_um_per_px = 0.5;
   p.pitch_um = 10;
   p.line_width_um = 2;
@@ -147,7 +147,7 @@ Calibrated Calibrate(const cv::Mat& img, double pitch_um) {
 
 // The calibrated scale's relative error against the rendered one, printed after `label` with the
 // lattice's lines and what it left out.
-double ReportScaleError(const Calibrated& c, const vision::SceneParams& p,
+double ReportScaleError(const Calibrated& c, const synthetic::SceneParams& p,
                         const std::string& label) {
   const double error = c.cal.scale_um_per_px / p.scale_um_per_px - 1;
   std::printf("%s: scale error %+.5f %%, %zu lines, %s\n", label.c_str(), 100 * error,
@@ -165,8 +165,8 @@ class StageMicrometerTest : public testing::TestWithParam<StageCase> {};
 
 TEST_P(StageMicrometerTest, ScaleWithinTwoHundredthsOfAPercent) {
   const StageCase sc = GetParam();
-  const vision::SceneParams p = StageMicrometer(sc.tilt_deg, sc.bit_depth, sc.seed);
-  const cv::Mat img = vision::RenderFrame(p, 0, nullptr);
+  const synthetic::SceneParams p = StageMicrometer(sc.tilt_deg, sc.bit_depth, sc.seed);
+  const cv::Mat img = synthetic::RenderFrame(p, 0, nullptr);
   ASSERT_EQ(img.depth(), sc.bit_depth == 16 ? CV_16U : CV_8U);
   if (sc.bit_depth == 16) {
     double lo = 0, hi = 0;
@@ -207,12 +207,12 @@ INSTANTIATE_TEST_SUITE_P(EightAndSixteenBit, StageMicrometerTest,
 
 // The same kind of picture at 100 µm pitch and 3 µm/px, the scale of the existing tests.
 TEST(StageMicrometerCoarseTest, HundredMicronPitch) {
-  vision::SceneParams p = StageMicrometer(2, 8, 5);
+  synthetic::SceneParams p = StageMicrometer(2, 8, 5);
   p.scale_um_per_px = 3;
   p.pitch_um = 100;
   p.line_width_um = 8;
   p.tick_length_um = 300;
-  const Calibrated c = Calibrate(vision::RenderFrame(p, 0, nullptr), p.pitch_um);
+  const Calibrated c = Calibrate(synthetic::RenderFrame(p, 0, nullptr), p.pitch_um);
   ASSERT_TRUE(c.lattice.ok()) << c.lattice.reason;
   const double error = ReportScaleError(c, p, "100 µm pitch");
   EXPECT_LE(std::abs(error), 2e-4);
@@ -224,9 +224,9 @@ TEST(StageMicrometerCoarseTest, HundredMicronPitch) {
 // beside the slots of ticks ±1, well within the lattice's tolerance. They are marks of their own
 // above those ticks and must not move them.
 TEST(StageMicrometerCoarseTest, NumeralStrokesOnSlotsDoNotBias) {
-  vision::SceneParams p = StageMicrometer(1.5, 16, 7);
+  synthetic::SceneParams p = StageMicrometer(1.5, 16, 7);
   p.tick_length_um = (21.6 + 2) / 0.15 * p.scale_um_per_px;
-  const Calibrated c = Calibrate(vision::RenderFrame(p, 0, nullptr), p.pitch_um);
+  const Calibrated c = Calibrate(synthetic::RenderFrame(p, 0, nullptr), p.pitch_um);
   ASSERT_TRUE(c.lattice.ok()) << c.lattice.reason;
   const double error = ReportScaleError(c, p, "numerals on slots");
   EXPECT_LE(std::abs(error), 2e-4);
@@ -238,9 +238,10 @@ TEST(StageMicrometerCoarseTest, NumeralStrokesOnSlotsDoNotBias) {
 
 // Two micrometers of different pitch side by side (10 and 12 µm): refused, with no scale.
 TEST(StageMicrometerCoarseTest, TwoPitchesSideBySideAreRefused) {
-  vision::SceneParams a = StageMicrometer(-2, 8, 6), b = a;
+  synthetic::SceneParams a = StageMicrometer(-2, 8, 6), b = a;
   b.pitch_um = 12;
-  const cv::Mat ia = vision::RenderFrame(a, 0, nullptr), ib = vision::RenderFrame(b, 0, nullptr);
+  const cv::Mat ia = synthetic::RenderFrame(a, 0, nullptr),
+                ib = synthetic::RenderFrame(b, 0, nullptr);
   cv::Mat mixed = ia.clone();
   ib.colRange(640, 1280).copyTo(mixed.colRange(640, 1280));
   const Calibrated c = Calibrate(mixed, a.pitch_um);

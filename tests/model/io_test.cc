@@ -29,6 +29,20 @@ std::string ErrorOf(const std::function<void()>& f) {
   return "";
 }
 
+// run's table marks a step that failed (no mean) by the word "failed": the reader skips it and
+// keeps the others, a step with too few frames among them.
+TEST(ModelIoTest, SkipsFailedStepsOfTheDiameterTable) {
+  const auto steps = ReadDiameterTable(
+      Write("failed.csv",
+            "step,temperature_c,n,mean_um,status,detail\n1,220,50,400.0,ok,\n2,210,0,,failed,"
+            "no valid frame\n3,200,40,390.1,too_few_frames,40 valid of 50 asked\n"),
+      220);
+  ASSERT_EQ(steps.size(), 2u);
+  EXPECT_EQ(steps[0].step, 1);
+  EXPECT_EQ(steps[1].step, 3);
+  EXPECT_DOUBLE_EQ(steps[1].diameter_m, 390.1e-6);
+}
+
 TEST(ModelIoTest, ReadsTheDiameterTable) {
   const auto steps = ReadDiameterTable(
       Write("d.csv",

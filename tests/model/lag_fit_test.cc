@@ -108,16 +108,22 @@ TEST(LagFitTest, WidthsUnrelatedToTheFlowAreNotUsable) {
 }
 
 // Every search has a stated bound: the offset range is limited to 60 s (the count of offsets tried
-// once overflowed an int at 2147483648 s, and 1e5 s took minutes), refused in one line past it.
+// once overflowed an int at 2147483648 s, and 1e5 s took minutes), refused in one line past it
+// that names the option (the lag command's --max-offset-s) and the value.
 TEST(LagFitTest, OffsetRangesPastTheLimitAreRefusedInOneLine) {
   std::mt19937 rng(5);
   const auto s = Widths(Steps(), 0.2, 10.0, 0.0, 0.1, &rng);
-  for (double max_offset_s : {2147483648.0, 1e5, 60.5}) {
+  const std::pair<double, const char*> cases[] = {
+      {2147483648.0, "--max-offset-s 2.14748e+09: must be in [0, 60] s"},
+      {1e5, "--max-offset-s 100000: must be in [0, 60] s"},
+      {60.5, "--max-offset-s 60.5: must be in [0, 60] s"},
+      {-0.1, "--max-offset-s -0.1: must be in [0, 60] s"}};
+  for (const auto& [max_offset_s, expect] : cases) {
     LagFitOptions o;
     o.max_offset_s = max_offset_s;
     std::string why;
     EXPECT_FALSE(o.Validate(&why)) << max_offset_s;
-    EXPECT_NE(why.find("must be in [0, 60] s"), std::string::npos) << why;
+    EXPECT_EQ(why.rfind(expect, 0), 0u) << why;
     EXPECT_EQ(why.find('\n'), std::string::npos) << why;
   }
   LagFitOptions o;

@@ -20,8 +20,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-vision::SceneParams SmallScene(double width_um, uint64_t seed) {
-  vision::SceneParams p;
+synthetic::SceneParams SmallScene(double width_um, uint64_t seed) {
+  synthetic::SceneParams p;
   p.width_px = 640;
   p.height_px = 360;
   p.tip_x_px = 320;
@@ -36,7 +36,7 @@ class ExperimentTest : public ::testing::Test {
  protected:
   std::string Render(const std::string& name, double width_um, int frames, uint64_t seed) {
     const std::string path = (dir_ / name).string();
-    truths_[path] = vision::RenderSequence(SmallScene(width_um, seed), frames, 25.0, path, "");
+    truths_[path] = synthetic::RenderSequence(SmallScene(width_um, seed), frames, 25.0, path, "");
     return path;
   }
   ExperimentOptions Options(int samples) {
@@ -63,7 +63,7 @@ class ExperimentTest : public ::testing::Test {
   }
   testutil::ScratchDir scratch_{"clogscope_experiment"};
   const fs::path dir_ = scratch_.path();
-  std::map<std::string, std::vector<vision::FrameTruth>> truths_;
+  std::map<std::string, std::vector<synthetic::FrameTruth>> truths_;
 };
 
 TEST_F(ExperimentTest, StepSamplesEvenlyAndMatchesTruth) {
@@ -73,7 +73,7 @@ TEST_F(ExperimentTest, StepSamplesEvenlyAndMatchesTruth) {
   s.video = Render("v.mp4", 390.1, 100, 7);  // 4 s
   s.settle_s = 1.0;
   const StepResult r = MeasureStep(s, Options(15));
-  ASSERT_EQ(r.status, "ok") << r.detail;
+  ASSERT_EQ(r.status, model::StepStatus::kOk) << r.detail;
   EXPECT_EQ(r.n_valid, 15);
   EXPECT_EQ(r.n_examined, 15);
   // Frames spread over the settled 3 s: one per 0.2 s slot, from 1.1 s on.
@@ -119,17 +119,17 @@ TEST_F(ExperimentTest, ShortStepsAndBadSourcesAreMarkedNotFatal) {
   short_step.temperature_c = 220;
   short_step.video = Render("short.mp4", 400, 10, 1);
   const StepResult r = MeasureStep(short_step, Options(20));
-  EXPECT_EQ(r.status, "too_few_frames");
+  EXPECT_EQ(r.status, model::StepStatus::kTooFewFrames);
   EXPECT_EQ(r.n_valid, 10);
   EXPECT_NE(r.detail.find("10 valid of 20"), std::string::npos);
   StepSpec missing = short_step;
   missing.video = (dir_ / "nope.mp4").string();
   const StepResult m = MeasureStep(missing, Options(20));
-  EXPECT_EQ(m.status, "failed");
+  EXPECT_EQ(m.status, model::StepStatus::kFailed);
   EXPECT_NE(m.detail.find("nope.mp4"), std::string::npos);
   StepSpec late = short_step;
   late.start_s = 100;
-  EXPECT_EQ(MeasureStep(late, Options(5)).status, "failed");
+  EXPECT_EQ(MeasureStep(late, Options(5)).status, model::StepStatus::kFailed);
 }
 
 TEST_F(ExperimentTest, RunWritesTablesAndResumes) {
@@ -181,10 +181,10 @@ TEST_F(ExperimentTest, OneStepsErrorDoesNotStopTheRun) {
   std::vector<StepResult> results;
   ASSERT_NO_THROW(results = RunExperiment(m, o));
   ASSERT_EQ(results.size(), 3u);
-  EXPECT_EQ(results[0].status, "ok") << results[0].detail;
-  EXPECT_EQ(results[1].status, "ok") << results[1].detail;
+  EXPECT_EQ(results[0].status, model::StepStatus::kOk) << results[0].detail;
+  EXPECT_EQ(results[1].status, model::StepStatus::kOk) << results[1].detail;
   EXPECT_NE(results[1].detail.find("step file not written"), std::string::npos);
-  EXPECT_EQ(results[2].status, "failed");
+  EXPECT_EQ(results[2].status, model::StepStatus::kFailed);
   EXPECT_NE(results[2].detail.find("roi"), std::string::npos) << results[2].detail;
   std::vector<std::string> warnings;
   WriteExperimentTables(m, results, o, &warnings);
@@ -199,14 +199,14 @@ TEST_F(ExperimentTest, AStepOfImagesIsSampledByIndex) {
   for (int k = 0; k < 10; ++k) {
     char name[32];
     std::snprintf(name, sizeof(name), "img_%02d.png", k);
-    cv::imwrite((images / name).string(), vision::RenderFrame(SmallScene(400, 7), k, nullptr));
+    cv::imwrite((images / name).string(), synthetic::RenderFrame(SmallScene(400, 7), k, nullptr));
   }
   StepSpec s;
   s.step = 1;
   s.temperature_c = 220;
   s.images = images.string();
   const StepResult r = MeasureStep(s, Options(5));
-  ASSERT_EQ(r.status, "ok") << r.detail;
+  ASSERT_EQ(r.status, model::StepStatus::kOk) << r.detail;
   std::vector<int> frames;
   for (const auto& f : r.frames) {
     frames.push_back(f.frame);

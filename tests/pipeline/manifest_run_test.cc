@@ -23,7 +23,7 @@ class ManifestRunTest : public ::testing::Test {
   std::string WriteManifest() {
     std::string yaml = "name: t\nsamples: 8\nscale_um_per_px: 3.0\nextruder: direct-pla\nsteps:\n";
     for (int i = 0; i < 2; ++i) {
-      vision::SceneParams p;
+      synthetic::SceneParams p;
       p.width_px = 640;
       p.height_px = 360;
       p.tip_x_px = 320;
@@ -32,7 +32,7 @@ class ManifestRunTest : public ::testing::Test {
       p.width_jitter_um = 2;
       p.seed = i + 1;
       const std::string video = "s" + std::to_string(i) + ".mp4";
-      vision::RenderSequence(p, 40, 25.0, (dir_ / video).string(), "");
+      synthetic::RenderSequence(p, 40, 25.0, (dir_ / video).string(), "");
       yaml += "  - {step: " + std::to_string(i + 1) +
               ", temperature_c: " + std::to_string(220 - 10 * i) + ", video: " + video + "}\n";
     }
@@ -54,7 +54,7 @@ TEST_F(ManifestRunTest, PredictsFromItsStepsAsFromTheWrittenTable) {
   o.jobs = 1;
   const ManifestRunReport rep = RunManifest(o);
   ASSERT_EQ(rep.steps.size(), 2u);
-  for (const auto& r : rep.steps) EXPECT_EQ(r.status, "ok") << r.detail;
+  for (const auto& r : rep.steps) EXPECT_EQ(r.status, model::StepStatus::kOk) << r.detail;
   ASSERT_TRUE(rep.conversion.has_value());
   EXPECT_EQ(rep.conversion->scale_um_per_px, 3.0);
   ASSERT_TRUE(rep.prediction.has_value());
@@ -80,20 +80,21 @@ TEST_F(ManifestRunTest, PredictsFromItsStepsAsFromTheWrittenTable) {
   EXPECT_EQ(rep.prediction->prediction.reference_load_n, expected.prediction.reference_load_n);
 }
 
-StepResult Step(int step, const std::string& status, double mean_um) {
+StepResult Step(int step, model::StepStatus status, double mean_um) {
   StepResult r;
   r.spec.step = step;
   r.spec.temperature_c = 200.004;
   r.status = status;
-  r.has_um = status != "failed";
-  r.n_used = status == "failed" ? 0 : 10;
+  r.has_um = status != model::StepStatus::kFailed;
+  r.n_used = status == model::StepStatus::kFailed ? 0 : 10;
   r.mean_um = mean_um;
   return r;
 }
 
 TEST(PredictorSteps, TheTablesNumbersWithFailedStepsLeftOut) {
-  const auto steps = PredictorSteps(
-      {Step(1, "ok", 390.12345), Step(2, "failed", 0), Step(3, "too_few_frames", 380.0006)});
+  const auto steps = PredictorSteps({Step(1, model::StepStatus::kOk, 390.12345),
+                                     Step(2, model::StepStatus::kFailed, 0),
+                                     Step(3, model::StepStatus::kTooFewFrames, 380.0006)});
   ASSERT_EQ(steps.size(), 2u);
   EXPECT_EQ(steps[0].step, 1);
   EXPECT_EQ(steps[0].diameter_m, 390.123 * 1e-6);  // 3 decimals in µm, as diameters.csv
@@ -104,8 +105,8 @@ TEST(PredictorSteps, TheTablesNumbersWithFailedStepsLeftOut) {
 }
 
 TEST(PredictorSteps, AllFailedOrNoMicronsIsRefused) {
-  EXPECT_THROW(PredictorSteps({Step(1, "failed", 0)}), std::invalid_argument);
-  StepResult px_only = Step(1, "ok", 0);
+  EXPECT_THROW(PredictorSteps({Step(1, model::StepStatus::kFailed, 0)}), std::invalid_argument);
+  StepResult px_only = Step(1, model::StepStatus::kOk, 0);
   px_only.has_um = false;
   EXPECT_THROW(PredictorSteps({px_only}), std::invalid_argument);
 }

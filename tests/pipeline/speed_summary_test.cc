@@ -20,7 +20,7 @@ vision::FeedSpeedSample Speed(double shift_px, int baseline, int wanted) {
   return s;
 }
 
-vision::FeedSpeedSample Without(const char* reason) {
+vision::FeedSpeedSample Without(vision::SpeedReason reason) {
   vision::FeedSpeedSample s;
   s.reason = reason;
   return s;
@@ -30,10 +30,10 @@ vision::FeedSpeedSample Without(const char* reason) {
 // with nearer frames and are left out, as are a row without a speed and an outlier; the mean is
 // that of the rows left in.
 TEST(SpeedSummaryTest, LeavesOutShortBaselinesAndOutliersAndSaysWhy) {
-  std::vector<vision::FeedSpeedSample> rows = {Without("first_frame")};
+  std::vector<vision::FeedSpeedSample> rows = {Without(vision::SpeedReason::kFirstFrame)};
   for (int k = 1; k < 16; ++k) rows.push_back(Speed(0.49 * k, k, 16));  // 14.7 px/s
   for (int i = 0; i < 20; ++i) rows.push_back(Speed(8.0 + 0.01 * (i % 5 - 2), 16, 16));
-  rows.push_back(Without("no_texture"));
+  rows.push_back(Without(vision::SpeedReason::kNoTexture));
   rows.push_back(Speed(12.0, 16, 16));  // 22.5 px/s
   const FeedSpeedSummary s = SummariseFeedSpeeds(rows);
   ASSERT_EQ(s.use.size(), rows.size());
@@ -63,8 +63,9 @@ TEST(SpeedSummaryTest, LeavesOutShortBaselinesAndOutliersAndSaysWhy) {
 
 // A video too short for any row to reach the baseline it wants: those rows are all there is.
 TEST(SpeedSummaryTest, UsesShortBaselinesWhenNoRowReachesItsOwn) {
-  const std::vector<vision::FeedSpeedSample> rows = {Without("first_frame"), Speed(0.5, 1, 16),
-                                                     Speed(1.0, 2, 16), Speed(1.5, 3, 16)};
+  const std::vector<vision::FeedSpeedSample> rows = {Without(vision::SpeedReason::kFirstFrame),
+                                                     Speed(0.5, 1, 16), Speed(1.0, 2, 16),
+                                                     Speed(1.5, 3, 16)};
   const FeedSpeedSummary s = SummariseFeedSpeeds(rows);
   EXPECT_EQ(s.used, 3);
   EXPECT_EQ(s.short_baseline, 0);
@@ -73,9 +74,9 @@ TEST(SpeedSummaryTest, UsesShortBaselinesWhenNoRowReachesItsOwn) {
 
 // Consecutive frames (baseline 1) in two runs: the plain t·sd/√n.
 TEST(SpeedSummaryTest, ConsecutiveFramesHaveThePlainInterval) {
-  std::vector<vision::FeedSpeedSample> rows = {Without("first_frame")};
+  std::vector<vision::FeedSpeedSample> rows = {Without(vision::SpeedReason::kFirstFrame)};
   for (int i = 0; i < 30; ++i) rows.push_back(Speed(10.0 + 0.1 * (i % 3 - 1), 1, 1));
-  rows.push_back(Without("too_fast"));
+  rows.push_back(Without(vision::SpeedReason::kTooFast));
   for (int i = 0; i < 10; ++i) rows.push_back(Speed(10.0 + 0.1 * (i % 3 - 1), 1, 1));
   const FeedSpeedSummary s = SummariseFeedSpeeds(rows);
   EXPECT_EQ(s.used, 40);
@@ -92,8 +93,9 @@ TEST(SpeedSummaryTest, ConsecutiveFramesHaveThePlainInterval) {
 }
 
 TEST(SpeedSummaryTest, NoSpeedsNoMean) {
-  const FeedSpeedSummary s =
-      SummariseFeedSpeeds({Without("first_frame"), Without("no_texture"), Without("no_time")});
+  const FeedSpeedSummary s = SummariseFeedSpeeds({Without(vision::SpeedReason::kFirstFrame),
+                                                  Without(vision::SpeedReason::kNoTexture),
+                                                  Without(vision::SpeedReason::kNoTime)});
   EXPECT_EQ(s.pairs, 1);
   EXPECT_EQ(s.used, 0);
   EXPECT_EQ(s.mean_px_per_s, 0);

@@ -45,7 +45,7 @@ StepResult Step(const std::vector<double>& widths_px, const ExperimentOptions& o
   }
   const int n = static_cast<int>(widths_px.size());
   r.n_examined = r.n_valid = r.n_used = n;
-  r.status = n >= o.samples ? "ok" : "too_few_frames";
+  r.status = n >= o.samples ? model::StepStatus::kOk : model::StepStatus::kTooFewFrames;
   r.mean_px = sum / n;
   r.std_px = 0.05;
   r.has_um = true;
@@ -63,7 +63,7 @@ TEST(StepFileTest, RoundTripsAFinishedStep) {
   std::string why;
   ASSERT_TRUE(ReadStepFile(StepFileText(r, o), Spec(), o, &back, &why)) << why;
   EXPECT_TRUE(back.resumed);
-  EXPECT_EQ(back.status, "ok");
+  EXPECT_EQ(back.status, model::StepStatus::kOk);
   EXPECT_EQ(back.n_used, 3);
   EXPECT_DOUBLE_EQ(back.mean_px, r.mean_px);
   EXPECT_DOUBLE_EQ(back.mean_um, r.mean_um);
@@ -140,6 +140,62 @@ TEST(StepFileTest, FilesThatDoNotAddUpAreRefused) {
     EXPECT_FALSE(why.empty()) << what;
     EXPECT_FALSE(back.resumed) << what;
   }
+}
+
+// The statuses go into the step file (and the tables) by their words, and come back from them.
+TEST(StepFileTest, StatusesAreWrittenAndReadByTheirWords) {
+  const ExperimentOptions o = Options();
+  StepResult r = Step({130.1, 130.2}, o);  // 2 of 3 samples
+  r.feedstock = FeedstockResult{};
+  r.feedstock->status = FeedstockStatus::kTooFewPairs;
+  r.feedstock->n_pairs = 5;
+  r.feedstock->n_diameter = 4;
+  r.feedstock->diameter_px = 580;
+  const std::string text = StepFileText(r, o);
+  const json j = json::parse(text);
+  EXPECT_EQ(j["status"], "too_few_frames");
+  EXPECT_EQ(j["feedstock"]["status"], "too_few_pairs");
+  StepResult back;
+  std::string why;
+  ASSERT_TRUE(ReadStepFile(text, Spec(), o, &back, &why)) << why;
+  EXPECT_EQ(back.status, model::StepStatus::kTooFewFrames);
+  ASSERT_TRUE(back.feedstock.has_value());
+  EXPECT_EQ(back.feedstock->status, FeedstockStatus::kTooFewPairs);
+  // A feedstock that failed last time is measured again; a word that is no status is refused.
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {"failed", "failed last time"}, {"great", "unknown feedstock status 'great'"}};
+  for (const auto& [word, reason] : refused) {
+    json edited = j;
+    edited["feedstock"]["status"] = word;
+    EXPECT_FALSE(ReadStepFile(edited.dump(), Spec(), o, &back, &why)) << word;
+    EXPECT_NE(why.find(reason), std::string::npos) << word << ": " << why;
+  }
+  json unknown = j;
+  unknown["status"] = "OK";
+  EXPECT_FALSE(ReadStepFile(unknown.dump(), Spec(), o, &back, &why));
+  EXPECT_EQ(why, "unknown status 'OK'");
+}
+
+TEST(StatusNamesTest, EachStatusHasItsWordAndParsesBack) {
+  const std::vector<std::pair<model::StepStatus, std::string>> steps = {
+      {model::StepStatus::kOk, "ok"},
+      {model::StepStatus::kTooFewFrames, "too_few_frames"},
+      {model::StepStatus::kFailed, "failed"}};
+  for (const auto& [status, word] : steps) {
+    EXPECT_EQ(model::StepStatusName(status), word);
+    EXPECT_EQ(model::ParseStepStatus(word), status) << word;
+  }
+  const std::vector<std::pair<FeedstockStatus, std::string>> feedstock = {
+      {FeedstockStatus::kOk, "ok"},
+      {FeedstockStatus::kTooFewPairs, "too_few_pairs"},
+      {FeedstockStatus::kFailed, "failed"}};
+  for (const auto& [status, word] : feedstock) {
+    EXPECT_EQ(FeedstockStatusName(status), word);
+    EXPECT_EQ(ParseFeedstockStatus(word), status) << word;
+  }
+  EXPECT_THROW(model::ParseStepStatus("too_few_pairs"), std::invalid_argument);
+  EXPECT_THROW(model::ParseStepStatus(""), std::invalid_argument);
+  EXPECT_THROW(ParseFeedstockStatus("too_few_frames"), std::invalid_argument);
 }
 
 // A file name that is not UTF-8 does not stop the step file from being written.

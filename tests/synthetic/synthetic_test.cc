@@ -12,7 +12,7 @@
 #include "tests/scratch_dir.h"
 #include "vision/io/frame_source.h"
 
-namespace clogscope::vision {
+namespace clogscope::synthetic {
 namespace {
 
 namespace fs = std::filesystem;
@@ -231,9 +231,9 @@ TEST(SyntheticTest, SequencesAsPngAviAndMp4WithTruth) {
     ASSERT_EQ(j["frames"].size(), 6u);
     EXPECT_DOUBLE_EQ(j["frames"][2]["width_um"].get<double>(), truth[2].width_um);
     EXPECT_DOUBLE_EQ(j["scene"]["scale_um_per_px"].get<double>(), 3.0);
-    auto src = FrameSource::Open(out_path);
+    auto src = vision::FrameSource::Open(out_path);
     int n = 0;
-    InputFrame f;
+    vision::InputFrame f;
     while (src->Next(&f)) {
       ASSERT_FALSE(f.image.empty()) << out;
       EXPECT_EQ(f.image.cols, 320);
@@ -248,4 +248,4 @@ TEST(SyntheticTest, SequencesAsPngAviAndMp4WithTruth) {
 }
 
 }  // namespace
-}  // namespace clogscope::vision
+}  // namespace clogscope::synthetic

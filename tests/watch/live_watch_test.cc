@@ -5,8 +5,9 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
-namespace clogscope::pipeline {
+namespace clogscope::watch {
 namespace {
 
 // A file-like source of `frames` frames without pixels (nothing to measure), then `end`: the end
@@ -68,5 +69,31 @@ TEST(LiveWatchTest, AnErrorEscapingTheReaderReachesTheCaller) {
   EXPECT_TRUE(stop);
 }
 
+// A level change is told once the board (what /status, /metrics and /frame.jpg serve) shows it:
+// a reader called then sees the new level, never the one before.
+TEST(LiveWatchTest, ALevelChangeIsToldOnceTheBoardShowsIt) {
+  std::atomic<bool> stop{false};
+  WatchBoard board;
+  struct Told {
+    WatchLevel level, shown;
+    double time_s, shown_time_s;
+  };
+  std::vector<Told> told;
+  LiveWatchEvents events;
+  events.on_level_change = [&](const WatchStatus& s, const std::optional<ClogIndex>&) {
+    const WatchSnapshot shown = board.Read();
+    told.push_back({s.level, shown.status.level, s.time_s, shown.status.time_s});
+  };
+  // Frames without pixels: nothing in view, so the watch goes to no_view once that held 2 s.
+  RunLiveWatch(Options(), events, &board, &stop,
+               std::make_unique<ScriptedSource>(500, Ending::kEnd));
+  ASSERT_FALSE(told.empty());
+  EXPECT_EQ(told.front().level, WatchLevel::kNoView);
+  for (const Told& t : told) {
+    EXPECT_EQ(t.shown, t.level) << WatchLevelName(t.level);
+    EXPECT_EQ(t.shown_time_s, t.time_s);
+  }
+}
+
 }  // namespace
-}  // namespace clogscope::pipeline
+}  // namespace clogscope::watch

@@ -11,7 +11,7 @@
 #include "pipeline/experiment.h"
 #include "watch/watch_report.h"
 
-namespace clogscope::pipeline {
+namespace clogscope::watch {
 namespace {
 
 constexpr double kScale = 3.0;  // µm/px, the reference camera
@@ -28,7 +28,7 @@ struct Simulation {
   int changes = 0;
   std::vector<std::pair<double, WatchLevel>> levels;  // every change: time, new level
 
-  explicit Simulation(const WatchOptions& o = {}) : state(o, PlainScale(kScale)) {}
+  explicit Simulation(const WatchOptions& o = {}) : state(o, pipeline::PlainScale(kScale)) {}
 
   double Jittered(double diameter_um) {
     const double phi = std::exp(-1.0 / (0.5 * kFps));
@@ -281,4 +281,4 @@ TEST(WatchStateTest, WithoutAScaleTheMicrometreFieldsAreNull) {
 }
 
 }  // namespace
-}  // namespace clogscope::pipeline
+}  // namespace clogscope::watch

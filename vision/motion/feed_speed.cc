@@ -250,7 +250,44 @@ int WantedBaselineFrames(double shift_px, const FeedSpeedOptions& o) {
                     o.max_baseline_frames);
 }
 
+// A frame pair's shift status as the frame's reason for having no speed.
+SpeedReason ReasonOf(FeedShiftStatus status) {
+  switch (status) {
+    case FeedShiftStatus::kValid:
+      return SpeedReason::kNone;
+    case FeedShiftStatus::kNoTexture:
+      return SpeedReason::kNoTexture;
+    case FeedShiftStatus::kTooFast:
+      return SpeedReason::kTooFast;
+    case FeedShiftStatus::kNoStrand:
+      return SpeedReason::kNoStrand;
+  }
+  return SpeedReason::kNoStrand;
+}
+
 }  // namespace
+
+const char* SpeedReasonName(SpeedReason reason) {
+  switch (reason) {
+    case SpeedReason::kNone:
+      return "none";
+    case SpeedReason::kFirstFrame:
+      return "first_frame";
+    case SpeedReason::kNoTime:
+      return "no_time";
+    case SpeedReason::kBadTime:
+      return "bad_time";
+    case SpeedReason::kNoStrand:
+      return "no_strand";
+    case SpeedReason::kNoTexture:
+      return "no_texture";
+    case SpeedReason::kTooFast:
+      return "too_fast";
+    case SpeedReason::kNoGear:
+      return "no_gear";
+  }
+  return "?";
+}
 
 FeedSpeedSample FeedSpeedTracker::Next(const cv::Mat& frame, double time_s,
                                        const StrandMeasurement& m) {
@@ -266,19 +303,19 @@ FeedSpeedSample FeedSpeedTracker::Next(const cv::Mat& frame, double time_s,
   const bool have_previous = !previous_.empty() && previous_t_ >= 0;
   bool sampled = false;
   if (time_s < 0) {
-    out.reason = "no_time";
+    out.reason = SpeedReason::kNoTime;
     out.detail = "still images have no frame times";
   } else if (!have_previous) {
-    out.reason = "first_frame";
+    out.reason = SpeedReason::kFirstFrame;
     out.detail = "no frame before it";
   } else if (grey.empty() || grey.size() != previous_.size()) {
-    out.reason = "no_strand";
+    out.reason = SpeedReason::kNoStrand;
     out.detail = "the frame could not be read";
   } else if (!(time_s > previous_t_)) {
-    out.reason = "bad_time";
+    out.reason = SpeedReason::kBadTime;
     out.detail = fmt::format("timestamp {:g} s does not follow {:g} s", time_s, previous_t_);
   } else if (!previous_m_.valid()) {
-    out.reason = "no_strand";
+    out.reason = SpeedReason::kNoStrand;
     out.detail = "no filament measured in the frame before";
   } else {
     sampled = true;
@@ -301,7 +338,7 @@ FeedSpeedSample FeedSpeedTracker::Next(const cv::Mat& frame, double time_s,
     out.dt_s = time_s - previous_t_;
     out.search_limit_px = shift.search_limit_px;
     out.valid = shift.valid();
-    out.reason = out.valid ? "" : FeedShiftStatusName(shift.status);
+    out.reason = ReasonOf(shift.status);
     out.detail =
         shift.detail.empty() ? "the filament's stretch could not be sampled" : shift.detail;
     out.shift_px = shift.shift_px;

@@ -92,13 +92,26 @@ AxisShift EstimateAxisShift(const AxisProfile& a, const AxisProfile& b,
 AxisShift EstimateFeedShift(const cv::Mat& grey_a, const cv::Mat& grey_b,
                             const StrandMeasurement& geometry, const FeedSpeedOptions& options);
 
+// Why a frame has no speed, the filament's (FeedSpeedSample) or the gear's (GearSpeedSample).
+enum class SpeedReason {
+  kNone,        // it has one
+  kFirstFrame,  // no frame before it
+  kNoTime,      // still images have no frame times
+  kBadTime,     // its time does not follow the frame before's
+  kNoStrand,    // the filament: not measured in the frame before, or the frame unreadable
+  kNoTexture,   // the filament: its texture too weak for its noise
+  kTooFast,     // no match inside the search range
+  kNoGear,      // the gear: its ROI off the frame, or nothing varies around its centre
+};
+// "none", "first_frame", "no_time", "bad_time", "no_strand", "no_texture", "too_fast", "no_gear".
+const char* SpeedReasonName(SpeedReason reason);
+
 // One frame's feed speed in px per second: the shift against an earlier frame over the time
 // between them. The frame before decides whether there is a speed (and its reason when not); the
 // speed itself comes from baseline_frames back when the tracker could look that far.
 struct FeedSpeedSample {
   bool valid = false;
-  std::string
-      reason;  // when not valid: first_frame, no_time, bad_time, no_strand, no_texture, too_fast
+  SpeedReason reason = SpeedReason::kNone;  // when not valid: first_frame … too_fast
   std::string detail;
   double shift_px = 0, sigma_px = 0;
   double dt_s = 0;  // between the two frames' own timestamps

@@ -70,16 +70,16 @@ GearSpeedSample GearSpeedTracker::Next(const cv::Mat& frame, double time_s) {
       grey.empty() ? std::vector<double>{} : GearAngularProfile(grey, options_);
   const double step_rad = 2 * M_PI / options_.angle_samples;
   if (time_s < 0) {
-    out.reason = "no_time";
+    out.reason = SpeedReason::kNoTime;
     out.detail = "still images have no frame times";
   } else if (current.empty()) {
-    out.reason = "no_gear";
+    out.reason = SpeedReason::kNoGear;
     out.detail = "the gear ROI does not lie inside the frame";
   } else if (previous_.empty() || previous_t_ < 0) {
-    out.reason = "first_frame";
+    out.reason = SpeedReason::kFirstFrame;
     out.detail = "no frame before it";
   } else if (!(time_s > previous_t_)) {
-    out.reason = "bad_time";
+    out.reason = SpeedReason::kBadTime;
     out.detail = fmt::format("timestamp {:g} s does not follow {:g} s", time_s, previous_t_);
   } else {
     out.dt_s = time_s - previous_t_;
@@ -99,10 +99,10 @@ GearSpeedSample GearSpeedTracker::Next(const cv::Mat& frame, double time_s) {
     const bool flat = StdDev(a) < 1e-6;
     const WholeShift whole = flat ? WholeShift{} : BestWholeShift(a, b, limit, /*circular=*/true);
     if (flat) {
-      out.reason = "no_gear";
+      out.reason = SpeedReason::kNoGear;
       out.detail = "nothing varies around the gear's centre";
     } else if (whole.correlation < options_.min_correlation || std::abs(whole.samples) >= limit) {
-      out.reason = "too_fast";
+      out.reason = SpeedReason::kTooFast;
       out.detail =
           fmt::format("no match of the gear within ±{:g}° between frames (best correlation {:.2f})",
                       options_.max_rotation_deg, whole.correlation);

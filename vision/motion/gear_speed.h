@@ -29,8 +29,7 @@ struct GearSpeedOptions {
 // One frame's rotation against the frame before it.
 struct GearSpeedSample {
   bool valid = false;
-  std::string
-      reason;  // first_frame, no_time, bad_time, no_gear (ROI off the frame, flat), too_fast
+  SpeedReason reason = SpeedReason::kNone;  // first_frame, no_time, bad_time, no_gear, too_fast
   std::string detail;
   double rotation_rad = 0;  // signed: + clockwise in the image (y down)
   double sigma_rad = 0;

@@ -11,6 +11,11 @@
 namespace clogscope::vision {
 namespace {
 
+using synthetic::FeedstockScene;
+using synthetic::FrameTruth;
+using synthetic::RenderFrame;
+using synthetic::SceneParams;
+
 // n calipers 4 px apart with edges at ∓50 px, leaning 0.02 px/px, with 0.05 px of fitting noise.
 std::vector<Caliper> StraightCalipers(int n, uint64_t seed = 1) {
   std::mt19937_64 rng(seed);

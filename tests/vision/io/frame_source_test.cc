@@ -15,6 +15,10 @@
 namespace clogscope::vision {
 namespace {
 
+using synthetic::RenderFrame;
+using synthetic::RenderSequence;
+using synthetic::SceneParams;
+
 namespace fs = std::filesystem;
 
 fs::path FreshDir(const std::string& name) { return testutil::FreshDir("clogscope_fs_" + name); }

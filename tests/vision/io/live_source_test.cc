@@ -17,6 +17,9 @@
 namespace clogscope::vision {
 namespace {
 
+using synthetic::RenderSequence;
+using synthetic::SceneParams;
+
 namespace fs = std::filesystem;
 
 fs::path Fresh(const std::string& name) { return testutil::FreshDir(name); }

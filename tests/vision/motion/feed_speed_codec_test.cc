@@ -19,6 +19,11 @@
 namespace clogscope::vision {
 namespace {
 
+using synthetic::FeedstockScene;
+using synthetic::FrameTruth;
+using synthetic::RenderSequence;
+using synthetic::SceneParams;
+
 namespace fs = std::filesystem;
 
 const double kMmPerPx = FeedstockScene(0).scale_um_per_px / 1e3;

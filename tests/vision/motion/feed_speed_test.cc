@@ -11,6 +11,12 @@
 namespace clogscope::vision {
 namespace {
 
+using synthetic::FeedstockScene;
+using synthetic::FrameTruth;
+using synthetic::FrameTruthFor;
+using synthetic::RenderFrame;
+using synthetic::SceneParams;
+
 // The feedstock scene (synthetic.h) with its texture and tilt varied.
 SceneParams Filament(double speed_mm_s, double texture = 8, double tilt_deg = 0) {
   SceneParams p = FeedstockScene(speed_mm_s);
@@ -145,7 +151,7 @@ TEST(FeedSpeedTest, TrackerUsesTheFramesOwnTimesAndFollowsTheAxis) {
   for (int i : {0, 1, 3, 4, 7, 8, 9, 12, 13, 15}) {
     const FeedSpeedSample v = speed.Next(p, i);
     if (i == 0) {
-      EXPECT_EQ(v.reason, "first_frame");
+      EXPECT_EQ(v.reason, SpeedReason::kFirstFrame);
     }
     if (!v.valid) continue;
     ++valid;
@@ -156,8 +162,18 @@ TEST(FeedSpeedTest, TrackerUsesTheFramesOwnTimesAndFollowsTheAxis) {
   // Still images have no times: no speed, a reason.
   FilamentSpeeds still;
   const cv::Mat f = RenderFrame(p, 0, nullptr);
-  EXPECT_EQ(still.Next(f, -1).reason, "no_time");
-  EXPECT_EQ(still.Next(f, -1).reason, "no_time");
+  EXPECT_EQ(still.Next(f, -1).reason, SpeedReason::kNoTime);
+  EXPECT_EQ(still.Next(f, -1).reason, SpeedReason::kNoTime);
+}
+
+// The reasons' words are those of measure's speed_reason and gear_reason columns.
+TEST(SpeedReasonTest, EachReasonHasItsWord) {
+  const std::vector<std::pair<SpeedReason, std::string>> words = {
+      {SpeedReason::kFirstFrame, "first_frame"}, {SpeedReason::kNoTime, "no_time"},
+      {SpeedReason::kBadTime, "bad_time"},       {SpeedReason::kNoStrand, "no_strand"},
+      {SpeedReason::kNoTexture, "no_texture"},   {SpeedReason::kTooFast, "too_fast"},
+      {SpeedReason::kNoGear, "no_gear"}};
+  for (const auto& [reason, word] : words) EXPECT_EQ(SpeedReasonName(reason), word);
 }
 
 // A slow filament (0.3 mm/s, 0.5 px per frame): each frame is compared with the one 16 back (8 px)

@@ -13,6 +13,12 @@
 namespace clogscope::vision {
 namespace {
 
+using synthetic::FeedstockScene;
+using synthetic::FrameTruth;
+using synthetic::FrameTruthFor;
+using synthetic::RenderFrame;
+using synthetic::SceneParams;
+
 // The feedstock scene with its drive gear (synthetic.h): 2 mm tip radius, 100 px.
 SceneParams GearScene(double surface_speed_mm_s) { return FeedstockScene(0, surface_speed_mm_s); }
 
@@ -41,10 +47,10 @@ double MeanSurfaceSpeed(const SceneParams& p, const GearSpeedOptions& o, int fra
     const cv::Mat frame = RenderFrame(p, i, &t);  // fills t before t.time_s is read
     const GearSpeedSample s = tracker.Next(frame, t.time_s);
     if (i == 0) {
-      EXPECT_EQ(s.reason, "first_frame");
+      EXPECT_EQ(s.reason, SpeedReason::kFirstFrame);
     }
     if (!s.valid) {
-      if (i > 0) ADD_FAILURE() << s.reason << ": " << s.detail;
+      if (i > 0) ADD_FAILURE() << SpeedReasonName(s.reason) << ": " << s.detail;
       continue;
     }
     ++valid;
@@ -100,7 +106,8 @@ TEST(GearSpeedTest, SlipAtASlowFeedWithinHalfAPercentagePoint) {
       const FeedSpeedSample f = feed.Next(frame, t.time_s, strand.Measure(frame));
       const GearSpeedSample g = gear.Next(frame, t.time_s);
       if (i == 0) continue;
-      ASSERT_TRUE(f.valid && g.valid) << f.reason << " " << g.reason;
+      ASSERT_TRUE(f.valid && g.valid)
+          << SpeedReasonName(f.reason) << " " << SpeedReasonName(g.reason);
       vf += f.SpeedPxPerS() * p.scale_um_per_px * 1e-3;
       vg += std::abs(g.RadPerS()) * p.gear_radius_px * p.scale_um_per_px * 1e-3;
       ++pairs;
@@ -115,11 +122,11 @@ TEST(GearSpeedTest, TurnsBeyondTheSearchRangeAndROIsOffTheFrameGiveReasons) {
   GearSpeedTracker fast(o);
   const SceneParams p = GearScene(15);
   fast.Next(RenderFrame(p, 0, nullptr), 0.0);
-  EXPECT_EQ(fast.Next(RenderFrame(p, 1, nullptr), 1 / 30.0).reason, "too_fast");
+  EXPECT_EQ(fast.Next(RenderFrame(p, 1, nullptr), 1 / 30.0).reason, SpeedReason::kTooFast);
   o = Options();
   o.roi = cv::Rect(600, 400, 100, 100);
   GearSpeedTracker outside(o);
-  EXPECT_EQ(outside.Next(RenderFrame(p, 0, nullptr), 0.0).reason, "no_gear");
+  EXPECT_EQ(outside.Next(RenderFrame(p, 0, nullptr), 0.0).reason, SpeedReason::kNoGear);
   std::string why;
   o.roi = cv::Rect(0, 0, 8, 8);
   EXPECT_FALSE(o.Validate(&why));

@@ -11,6 +11,11 @@
 namespace clogscope::vision {
 namespace {
 
+using synthetic::FrameTruth;
+using synthetic::RandomRealisticScene;
+using synthetic::RenderFrame;
+using synthetic::SceneParams;
+
 StrandMeasureOptions OptionsFor(const SceneParams& p) {
   StrandMeasureOptions o;
   if (!p.nozzle) {  // a filament through the frame: the whole stretch

@@ -7,6 +7,10 @@
 namespace clogscope::vision {
 namespace {
 
+using synthetic::FrameTruth;
+using synthetic::RenderFrame;
+using synthetic::SceneParams;
+
 SceneParams Scene() {
   SceneParams s;
   s.width_px = 640;

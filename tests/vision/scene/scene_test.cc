@@ -10,6 +10,10 @@
 namespace clogscope::vision {
 namespace {
 
+using synthetic::FrameTruth;
+using synthetic::RenderFrame;
+using synthetic::SceneParams;
+
 SceneResult Find(const cv::Mat& img, MeasureTarget target = MeasureTarget::kStrand) {
   StrandMeasureOptions o;
   o.target = target;

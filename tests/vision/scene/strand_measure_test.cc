@@ -10,6 +10,10 @@
 namespace clogscope::vision {
 namespace {
 
+using synthetic::FrameTruth;
+using synthetic::RenderFrame;
+using synthetic::SceneParams;
+
 struct ErrorStats {
   double mean = 0, sd = 0, max_angle_error_deg = 0, max_tip_error_px = 0;
   int valid = 0;

@@ -7,6 +7,10 @@
 namespace clogscope::vision {
 namespace {
 
+using synthetic::FrameTruth;
+using synthetic::RenderFrame;
+using synthetic::SceneParams;
+
 // Tracking must give the widths a fresh search gives, while searching only when it must.
 TEST(StrandTrackerTest, TrackedWidthsMatchFreshSearchesWithFewDetections) {
   SceneParams p;
