@@ -14,7 +14,7 @@
 
 #include "common/atomic_file.h"
 #include "synthetic/synthetic_extras.h"
-#include "vision/edges/edge_profile.h"
+#include "synthetic/edge_profile.h"
 #include "vision/io/video_io.h"
 
 namespace clogscope::synthetic {
@@ -32,7 +32,7 @@ struct SoftHalfPlane {
   Vec2 normal;    // unit normal in the image frame, pointing inside
   double offset;  // t = normal · (p - origin) - offset
   double Eval(Vec2 d, double sigma) const {
-    return vision::PixelMeanOfBlurredStep(Dot(normal, d) - offset, sigma, normal.x, normal.y);
+    return PixelMeanOfBlurredStep(Dot(normal, d) - offset, sigma, normal.x, normal.y);
   }
 };
 
@@ -450,8 +450,8 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
           cov = 0;
           for (long k = k0 - 2; k <= k0 + 2; ++k) {
             const double c = k * pitch_px;
-            cov += vision::PixelMeanOfBlurredStep(u - c + 0.5 * w, sigma, n_strand.x, n_strand.y) -
-                   vision::PixelMeanOfBlurredStep(u - c - 0.5 * w, sigma, n_strand.x, n_strand.y);
+            cov += PixelMeanOfBlurredStep(u - c + 0.5 * w, sigma, n_strand.x, n_strand.y) -
+                   PixelMeanOfBlurredStep(u - c - 0.5 * w, sigma, n_strand.x, n_strand.y);
           }
           front = p.strand_level * cov;
         } else {

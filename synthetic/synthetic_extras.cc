@@ -5,7 +5,7 @@
 #include <random>
 #include <string>
 
-#include "vision/edges/edge_profile.h"
+#include "synthetic/edge_profile.h"
 
 namespace clogscope::synthetic::render {
 namespace {
@@ -55,7 +55,7 @@ double ClutterObject::Coverage(double x, double y, double sigma_px) const {
   // Signed distance to the boundary, first order in its slope.
   const double t =
       (r - rho) / std::sqrt(1 + (slope / std::max(rho, 1.0)) * (slope / std::max(rho, 1.0)));
-  return vision::PixelMeanOfBlurredStep(t, sigma_px, rx / rho, ry / rho);
+  return PixelMeanOfBlurredStep(t, sigma_px, rx / rho, ry / rho);
 }
 
 std::vector<ClutterObject> PlaceClutter(int discs, int gears, double x0, double y0, double dx,
@@ -109,8 +109,8 @@ ShadingProfile::ShadingProfile(double width_px, double level, double ambient, do
   // Cell integrals of the kernel (PSF ⊗ footprint) from its CDF, the blurred step's pixel mean.
   std::vector<double> k(2 * margin + 1);
   for (int i = -margin; i <= margin; ++i) {
-    k[i + margin] = vision::PixelMeanOfBlurredStep((i + 0.5) * h_, sigma_px, nx, ny) -
-                    vision::PixelMeanOfBlurredStep((i - 0.5) * h_, sigma_px, nx, ny);
+    k[i + margin] = PixelMeanOfBlurredStep((i + 0.5) * h_, sigma_px, nx, ny) -
+                    PixelMeanOfBlurredStep((i - 0.5) * h_, sigma_px, nx, ny);
   }
   // Values at the cell centres from −w/2 − reach to w/2 + reach.
   u0_ = -half - margin * h_ + 0.5 * h_;
@@ -181,10 +181,10 @@ double MicrometerMarks::BoxCoverage(const Box& b, double u, double s) const {
   if (u < b.u0 - r || u > b.u1 + r || s < b.s0 - r || s > b.s1 + r) return 0;
   // Across: exact for the pixel's footprint; along: the same with the footprint's other
   // projection (the product is exact away from the box's corners).
-  const double across = vision::PixelMeanOfBlurredStep(u - b.u0, p_.sigma_px, p_.nx, p_.ny) -
-                        vision::PixelMeanOfBlurredStep(u - b.u1, p_.sigma_px, p_.nx, p_.ny);
-  const double along = vision::PixelMeanOfBlurredStep(s - b.s0, p_.sigma_px, -p_.ny, p_.nx) -
-                       vision::PixelMeanOfBlurredStep(s - b.s1, p_.sigma_px, -p_.ny, p_.nx);
+  const double across = PixelMeanOfBlurredStep(u - b.u0, p_.sigma_px, p_.nx, p_.ny) -
+                        PixelMeanOfBlurredStep(u - b.u1, p_.sigma_px, p_.nx, p_.ny);
+  const double along = PixelMeanOfBlurredStep(s - b.s0, p_.sigma_px, -p_.ny, p_.nx) -
+                       PixelMeanOfBlurredStep(s - b.s1, p_.sigma_px, -p_.ny, p_.nx);
   return across * along;
 }
 
@@ -248,8 +248,7 @@ double MicrometerMarks::Coverage(double x, double y) const {
       d2 = std::min(d2, std::pow(x - ax - h * bx, 2) + std::pow(y - ay - h * by, 2));
     }
     const double d = std::sqrt(d2);
-    clear *= 1 - (vision::NormalCdf((d + 0.5 * f.width_px) / se) -
-                  vision::NormalCdf((d - 0.5 * f.width_px) / se));
+    clear *= 1 - (NormalCdf((d + 0.5 * f.width_px) / se) - NormalCdf((d - 0.5 * f.width_px) / se));
   }
   return 1 - clear;
 }

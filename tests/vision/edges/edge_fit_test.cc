@@ -5,10 +5,12 @@
 #include <cmath>
 #include <random>
 
-#include "vision/edges/edge_profile.h"
+#include "synthetic/edge_profile.h"
 
 namespace clogscope::vision {
 namespace {
+
+using synthetic::PixelMeanOfBlurredStep;
 
 // Samples of a pixel-integrated blurred step at spacing 1/k (k rows sheared by a tilt), with noise.
 std::vector<EdgeSample> Samples(double edge, double sigma, double lo, double hi, double noise,

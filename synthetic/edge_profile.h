@@ -1,6 +1,6 @@
 #pragma once
 
-namespace clogscope::vision {
+namespace clogscope::synthetic {
 
 // Standard normal CDF.
 double NormalCdf(double z);
@@ -15,4 +15,4 @@ double NormalCdf(double z);
 // so the rendered edge is exact to rounding error for any tilt and blur.
 double PixelMeanOfBlurredStep(double t_px, double sigma_px, double nx, double ny);
 
-}  // namespace clogscope::vision
+}  // namespace clogscope::synthetic

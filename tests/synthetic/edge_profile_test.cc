@@ -1,11 +1,11 @@
-#include "vision/edges/edge_profile.h"
+#include "synthetic/edge_profile.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <vector>
 
-namespace clogscope::vision {
+namespace clogscope::synthetic {
 namespace {
 
 // Exact area of the unit pixel [-0.5, 0.5]² where nx·x + ny·y + t > 0, by clipping the square
@@ -80,4 +80,4 @@ TEST(EdgeProfileTest, SymmetricAboutTheEdge) {
 }
 
 }  // namespace
-}  // namespace clogscope::vision
+}  // namespace clogscope::synthetic

@@ -1,9 +1,9 @@
-#include "vision/edges/edge_profile.h"
+#include "synthetic/edge_profile.h"
 
 #include <algorithm>
 #include <cmath>
 
-namespace clogscope::vision {
+namespace clogscope::synthetic {
 namespace {
 
 constexpr double kInvSqrt2 = 0.70710678118654752440;
@@ -44,4 +44,4 @@ double PixelMeanOfBlurredStep(double t, double sigma, double nx, double ny) {
   return (G2(t + hp, sigma) - G2(t + hm, sigma) - G2(t - hm, sigma) + G2(t - hp, sigma)) / (a * b);
 }
 
-}  // namespace clogscope::vision
+}  // namespace clogscope::synthetic
