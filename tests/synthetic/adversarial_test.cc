@@ -59,17 +59,21 @@ TEST(AdversarialTest, BacklitLensIsMeasuredAtItsOuterSilhouette) {
   EXPECT_GE(valid, 5);
 }
 
+// A tip in doubt leaves the mean of a changing width in doubt: such a frame may be refused as
+// imprecise, with a σ that covers its error (checked here). False: the frame is to be judged.
+bool RefusedAsImprecise(const vision::StrandMeasurement& m, const AdversarialTruth& t,
+                        const AdversarialScene& p) {
+  if (m.status != vision::FrameStatus::kImprecise) return false;
+  EXPECT_LT(std::abs(m.width_px - t.width_px), 4 * m.width_sigma_px) << Describe(p);
+  return true;
+}
+
 TEST(AdversarialTest, DieSwellPutsTheTipAtTheNozzleAndReportsTheSwell) {
   for (uint64_t seed = 1; seed <= 6; ++seed) {
     const AdversarialScene p = RandomAdversarialScene(TroubleClass::kDieSwell, seed);
     AdversarialTruth t;
     const vision::StrandMeasurement m = RenderAndMeasure(p, &t);
-    // A tip the nozzle's face does not fix leaves the mean of a changing width in doubt: such a
-    // frame may be refused as imprecise, with a σ that covers its error.
-    if (m.status == vision::FrameStatus::kImprecise) {
-      EXPECT_LT(std::abs(m.width_px - t.width_px), 4 * m.width_sigma_px) << Describe(p);
-      continue;
-    }
+    if (RefusedAsImprecise(m, t, p)) continue;
     ASSERT_TRUE(m.valid()) << m.detail << " " << Describe(p);
     // Where the edges become parallel lies 0.2–1 widths below the tip: within 3 px here.
     EXPECT_LT(std::hypot(m.tip_x_px - t.tip_x_px, m.tip_y_px - t.tip_y_px), 3.0) << Describe(p);
@@ -95,10 +99,7 @@ TEST(AdversarialTest, ASwellUnderANozzleAtTheBackgroundsLevelHangsFromItsOwnEnd)
     p.background_texture = 0;
     AdversarialTruth t;
     const vision::StrandMeasurement m = RenderAndMeasure(p, &t);
-    if (m.status == vision::FrameStatus::kImprecise) {
-      EXPECT_LT(std::abs(m.width_px - t.width_px), 4 * m.width_sigma_px) << Describe(p);
-      continue;
-    }
+    if (RefusedAsImprecise(m, t, p)) continue;
     ASSERT_TRUE(m.valid()) << m.detail << " " << Describe(p);
     ++valid;
     EXPECT_LT(std::hypot(m.tip_x_px - t.tip_x_px, m.tip_y_px - t.tip_y_px), 1.0) << Describe(p);
