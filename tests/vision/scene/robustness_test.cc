@@ -2,6 +2,7 @@
 // labelled slow.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -43,7 +44,7 @@ struct Stats {
 TEST(RobustnessTest, RandomisedScenesAgainstTruth) {
   constexpr int kFrames = 200;
   Stats plain, shaded;
-  int valid = 0;
+  int valid = 0, wrong = 0;
   for (int seed = 0; seed < kFrames; ++seed) {
     const SceneParams p = RandomRealisticScene(seed);
     FrameTruth t;
@@ -54,20 +55,27 @@ TEST(RobustnessTest, RandomisedScenesAgainstTruth) {
     }
     ++valid;
     (p.shading_ambient < 1.0 ? shaded : plain).Add(m.width_px - t.width_px);
-    if (std::abs(m.width_px - t.width_px) > 0.3)
+    // Confidently wrong, as the adversarial matrix counts it.
+    if (std::abs(m.width_px - t.width_px) > std::max(0.3, 0.005 * t.width_px)) {
+      ++wrong;
       std::printf("seed %d: error %+.2f px\n", seed, m.width_px - t.width_px);
+    }
   }
   std::printf("%d of %d valid; unshaded %+.4f ± %.4f px (%d); shaded %+.4f ± %.4f px (%d)\n", valid,
               kFrames, plain.mean(), plain.sd(), plain.n, shaded.mean(), shaded.sd(), shaded.n);
-  // Measured on this suite: 191 of 200 valid; unshaded −0.006 ± 0.038 px; shaded −0.03 ± 0.14 px.
-  // (198 before issue 22's self-checks: a highlight clipped inside a shaded strand (seeds 20, 89)
-  // and a disc against the strand's edge (seed 31) are refused now, as the rules say; 195 before
-  // the σ carried the edge model's doubt: seeds 14, 38, 133 and 194 are `imprecise`, ±0.2–0.4 px.)
-  EXPECT_GE(valid, 0.95 * kFrames);
+  // Measured on this suite: 187 of 200 valid, none confidently wrong; unshaded −0.006 ± 0.037 px;
+  // shaded −0.01 ± 0.08 px. (190 valid before the tip was read on the strand's own end, one of
+  // them wrong: seed 98, a gear against the band's edge, −0.86 px at 4.4σ, now `imprecise`; seeds
+  // 173 and 175, a disc by the band's lower end, are `imprecise` too, ±0.19–0.27 px. 198 before
+  // issue 22's self-checks: a highlight clipped inside a shaded strand (seeds 20, 89) and a disc
+  // against the strand's edge (seed 31) are refused now, as the rules say; 195 before the σ
+  // carried the edge model's doubt: seeds 14, 38, 133 and 194 are `imprecise`, ±0.2–0.4 px.)
+  EXPECT_EQ(wrong, 0);
+  EXPECT_GE(valid, 0.93 * kFrames);
   EXPECT_LE(std::abs(plain.mean()), 0.05);
   EXPECT_LE(plain.sd(), 0.06);
   EXPECT_LE(std::abs(shaded.mean()), 0.1);
-  EXPECT_LE(shaded.sd(), 0.25);
+  EXPECT_LE(shaded.sd(), 0.15);
 }
 
 // Empty textured backgrounds, clutter only, a nozzle with nothing below: never a width.
