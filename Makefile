@@ -47,7 +47,7 @@ fuzz:
 	done
 
 # The arm64 cross-build (Debian 12 arm64 sysroot, aarch64-linux-gnu-g++) and its unit tests under
-# qemu-user, in build-arm64/ (docs/arm64.md). Not in .ci/run: ~N min of emulated tests.
+# qemu-user, in build-arm64/ (docs/arm64.md). Not in .ci/run: ~25 min of emulated tests (-j2).
 arm64-check:
 	@JOBS=$(ARM64_JOBS) scripts/arm64-check.sh
 
