@@ -44,5 +44,7 @@ set(ENV{PKG_CONFIG_LIBDIR}
 set(ENV{PKG_CONFIG_PATH} "")
 
 # Test programs (and gtest_discover_tests' listing of them) run under qemu-user, the target's
-# loader and libraries taken from the sysroot.
-set(CMAKE_CROSSCOMPILING_EMULATOR qemu-aarch64 -L "${CLOGSCOPE_ARM64_SYSROOT}")
+# loader and libraries taken from the sysroot. Through QEMU_LD_PREFIX rather than -L: the emulated
+# program's environment is the host's, so the arm64 clogscope that a command test spawns (started
+# by binfmt_misc's qemu-aarch64-static) finds the sysroot too, without anything set around ctest.
+set(CMAKE_CROSSCOMPILING_EMULATOR env "QEMU_LD_PREFIX=${CLOGSCOPE_ARM64_SYSROOT}" qemu-aarch64)

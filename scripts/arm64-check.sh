@@ -81,14 +81,13 @@ fi
 
 # 3. binfmt_misc: the tests that spawn build-arm64/bin/clogscope exec an arm64 program from an
 #    emulated one; the kernel hands it to qemu-aarch64-static, which finds the loader and libraries
-#    through QEMU_LD_PREFIX.
+#    through QEMU_LD_PREFIX (set by the toolchain file's CMAKE_CROSSCOMPILING_EMULATOR).
 if [ ! -e /proc/sys/fs/binfmt_misc/status ]; then
   $SUDO mount -t binfmt_misc binfmt_misc /proc/sys/fs/binfmt_misc
 fi
 if [ ! -e /proc/sys/fs/binfmt_misc/qemu-aarch64 ]; then
   $SUDO update-binfmts --enable qemu-aarch64
 fi
-export QEMU_LD_PREFIX="$sysroot"
 
 # 4. Configure, build (Release; no Python module: it would need an arm64 Python with NumPy and
 #    pandas under the emulator).
