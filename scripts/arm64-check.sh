@@ -9,9 +9,8 @@
 #
 # Why a sysroot and not Debian multiarch: several -dev packages the build needs are not
 # Multi-Arch: same, so their :arm64 builds replace the amd64 ones (libopencv-dev, libyaml-cpp-dev,
-# libgoogle-glog-dev and libgflags-dev under libceres-dev, and libgdal-dev/libgdcm-dev/
-# libopenexr-dev under OpenCV's imgcodecs): installing them would remove the native build's
-# packages. Instead mmdebstrap unpacks Debian's arm64 packages (no maintainer scripts run) into
+# libgoogle-glog-dev and libgflags-dev under libceres-dev, libgdal32/libgdcm-dev/libopenexr-dev
+# and more under OpenCV's imgcodecs): installing them would remove the native build's packages. Instead mmdebstrap unpacks Debian's arm64 packages (no maintainer scripts run) into
 # a directory that the cross compiler uses as --sysroot and qemu-aarch64 as its -L prefix.
 set -euo pipefail
 cd "$(dirname "$0")/.."
