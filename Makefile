@@ -2,8 +2,9 @@
 # then build in Release under build/ (the binary is build/bin/clogscope).
 BUILD_DIR ?= build
 JOBS ?= $(shell nproc)
+ARM64_JOBS ?= 1
 
-.PHONY: all deps build test sanitize fuzz demo bench clean format
+.PHONY: all deps build test sanitize fuzz demo bench clean format arm64-check
 
 all: build
 
@@ -45,6 +46,11 @@ fuzz:
 	    -rss_limit_mb=2048 -print_final_stats=1 corpus/$$t ../fuzz/corpus/$$t) || exit 1; \
 	done
 
+# The arm64 cross-build (Debian 12 arm64 sysroot, aarch64-linux-gnu-g++) and its unit tests under
+# qemu-user, in build-arm64/ (docs/arm64.md). Not in .ci/run: ~25 min of emulated tests (-j2).
+arm64-check:
+	@JOBS=$(ARM64_JOBS) scripts/arm64-check.sh
+
 demo: build
 	@scripts/demo.sh $(BUILD_DIR)/bin/clogscope
 
@@ -56,4 +62,4 @@ format:
 	@clang-format -i $$(git ls-files '*.h' '*.cc')
 
 clean:
-	@rm -rf $(BUILD_DIR) $(SANITIZE_DIR) $(FUZZ_DIR)
+	@rm -rf $(BUILD_DIR) $(SANITIZE_DIR) $(FUZZ_DIR) build-arm64
