@@ -70,13 +70,21 @@ bool StrandTracker::Follow(const cv::Mat& frame, StrandMeasurement* out) {
       return false;
     }
     const double tip_shift = g.axis.S(now.axis.ox, now.axis.oy);
+    // The tip's doubt and what showed there go with the tip (tip.h).
+    const auto take_tip = [&] {
+      g.tip_sigma_px = now.tip_sigma_px;
+      g.tip_face_sides = now.tip_face_sides;
+      g.tip_width_px = now.tip_width_px;
+    };
     if (std::abs(tip_shift) > kTipHysteresisPx) {
       g.axis = now.axis;
       g.left_u0 = now.left_u0;
       g.right_u0 = now.right_u0;
       g.s_end = now.s_end;
+      take_tip();
     } else if (std::abs(now.s_end + tip_shift - g.s_end) > kTipHysteresisPx) {
       g.s_end = now.s_end + tip_shift;
+      take_tip();
     }
   }
   StrandMeasurement m =
