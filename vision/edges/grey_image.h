@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cassert>
 #include <cmath>
 #include <cstdint>
 #include <opencv2/core.hpp>
@@ -14,13 +15,24 @@ struct GreyImage {
     return is16 ? static_cast<float>(m.ptr<uint16_t>(y)[x])
                 : static_cast<float>(m.ptr<uint8_t>(y)[x]);
   }
-  // Bilinear, inside the image only (the caller checks with InsideForBilinear).
+  // Bilinear, inside the image only (the caller checks with InsideForBilinear). Every edge walk
+  // and profile samples through here: x, y >= 0 make truncation the floor, and the two rows are
+  // read through one pointer each.
   float Bilinear(double x, double y) const {
-    const int x0 = static_cast<int>(std::floor(x));
-    const int y0 = static_cast<int>(std::floor(y));
+    assert(x >= 0 && y >= 0);
+    const int x0 = static_cast<int>(x);
+    const int y0 = static_cast<int>(y);
     const double fx = x - x0, fy = y - y0;
-    const double v00 = At(x0, y0), v10 = At(x0 + 1, y0);
-    const double v01 = At(x0, y0 + 1), v11 = At(x0 + 1, y0 + 1);
+    double v00, v10, v01, v11;
+    if (is16) {
+      const uint16_t* r0 = m.ptr<uint16_t>(y0) + x0;
+      const uint16_t* r1 = m.ptr<uint16_t>(y0 + 1) + x0;
+      v00 = r0[0], v10 = r0[1], v01 = r1[0], v11 = r1[1];
+    } else {
+      const uint8_t* r0 = m.ptr<uint8_t>(y0) + x0;
+      const uint8_t* r1 = m.ptr<uint8_t>(y0 + 1) + x0;
+      v00 = r0[0], v10 = r0[1], v01 = r1[0], v11 = r1[1];
+    }
     return static_cast<float>((v00 * (1 - fx) + v10 * fx) * (1 - fy) +
                               (v01 * (1 - fx) + v11 * fx) * fy);
   }
