@@ -42,15 +42,23 @@ ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, d
   std::array<int, kBins> h{};
   const double scale = (kBins - 1) / data_max;
   int n = 0;
-  for (int y = y_lo; y <= y_hi; ++y) {
+  // Every band of every frame passes here: the pixel type is fixed per row, and the values are
+  // never negative, so rounding is a truncation of v + 0.5.
+  const auto count_row = [&](const auto* row, int y) {
     const double ry = y - f.oy;
     for (int x = x_lo; x <= x_hi; ++x) {
       const double rx = x - f.ox;
       const double s = rx * f.dx + ry * f.dy, u = rx * f.dy - ry * f.dx;
       if (s < s0 || s >= s1 || u < u0 || u > u1) continue;
-      ++h[std::clamp(static_cast<int>(std::lround(img.At(x, y) * scale)), 0, kBins - 1)];
+      ++h[std::min(static_cast<int>(row[x] * scale + 0.5), kBins - 1)];
       ++n;
     }
+  };
+  for (int y = y_lo; y <= y_hi; ++y) {
+    if (img.is16)
+      count_row(img.m.ptr<uint16_t>(y), y);
+    else
+      count_row(img.m.ptr<uint8_t>(y), y);
   }
   // A spike: the fullest bin of the outer tenth, well above the bins just inside it.
   const auto spike = [&](int from, int to, int inward) {
