@@ -106,18 +106,16 @@ bool AxialStep(const GreyImage& img, const AxisFrame& a, double s_guess, double 
   constexpr int kMinPixels = 60;
   std::vector<EdgeSample> profile;
   int pixels = 0;
+  const int columns = static_cast<int>(std::floor(u1 - u0 + 1e-9)) + 1;
   for (double s = s_guess - kReachPx; s <= s_guess + kReachPx; s += kStepPx) {
+    // A row across the axis lies in the image when both its ends do; then every column does.
+    const double x0 = a.ImageX(s, u0), y0 = a.ImageY(s, u0);
+    const double x1 = a.ImageX(s, u0 + columns - 1), y1 = a.ImageY(s, u0 + columns - 1);
+    if (!img.InsideForBilinear(x0, y0) || !img.InsideForBilinear(x1, y1)) continue;
     double sum = 0;
-    int n = 0;
-    for (double u = u0; u <= u1 + 1e-9; u += 1.0) {
-      const double x = a.ImageX(s, u), y = a.ImageY(s, u);
-      if (!img.InsideForBilinear(x, y)) continue;
-      sum += img.Bilinear(x, y);
-      ++n;
-    }
-    if (n == 0) continue;
-    profile.push_back({static_cast<float>(s), static_cast<float>(sum / n)});
-    pixels += n;
+    for (int k = 0; k < columns; ++k) sum += img.Bilinear(x0 + k * a.dy, y0 - k * a.dx);
+    profile.push_back({static_cast<float>(s), static_cast<float>(sum / columns)});
+    pixels += columns;
   }
   if (pixels < kMinPixels) return false;
   *fit = FitBlurredStep(profile, s_guess, 1.5, s_guess);
