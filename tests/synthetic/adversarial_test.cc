@@ -168,6 +168,24 @@ TEST(AdversarialTest, AStripeAtTheBackgroundsLevelSplitsTheStrandIntoAmbiguity) 
   }
 }
 
+TEST(AdversarialTest, AStripeBetweenTwoDarkHalvesIsNotTheStrand) {
+  // A dark 52 px strand whose bright stripe, 10 px wide, has the background's level (matrix seed
+  // 117 of the unseen set, its noise lowered): two dark bars hang from the nozzle with a bright
+  // gap between them, and the silhouette around all three is ruled out for the background
+  // showing inside it. The gap was measured as a bright strand, 9.8 px (valid at this noise).
+  // It is as much a stripe as a strand between two gaps: `ambiguous`.
+  AdversarialScene p = RandomAdversarialScene(TroubleClass::kSpecularStripe, 117);
+  p.noise_sigma = 2;
+  AdversarialTruth t;
+  for (const cv::Mat& frame : MatrixFrames(p, &t)) {
+    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p);
+    EXPECT_TRUE(!m.valid() || std::abs(m.width_px - t.width_px) <= WrongTolerancePx(t.width_px))
+        << m.width_px << " ± " << m.width_sigma_px << " px, truth " << t.width_px << ": "
+        << Describe(p);
+    EXPECT_EQ(m.status, vision::FrameStatus::kAmbiguous) << m.detail;
+  }
+}
+
 TEST(AdversarialTest, ALitCylinderThatTradedItsBlurForAStripeIsNotTrusted) {
   // A shaded lit strand with a stripe near one edge, through H.264 (matrix seed 8): the lit
   // cylinders put the far silhouette 6 px inside the per-edge fits' (their blur 4.9 px against

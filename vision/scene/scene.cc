@@ -7,6 +7,7 @@
 #include <cmath>
 #include <numeric>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 
 #include "common/robust.h"
 #include "vision/scene/edge_segments.h"
@@ -603,6 +604,29 @@ std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const P
 
 namespace {
 
+// The chosen pair's outsides when both are strand-like pairs of the other polarity that share its
+// edges, hold up and score as well as it: then the chosen pair is as much a gap between two
+// objects (or a stripe at the background's level inside one) as an object between two gaps. The
+// wider silhouette around all three is ruled out for the background showing inside it, so
+// nothing else would stop a dark strand's bright stripe from being measured as the strand.
+std::optional<std::pair<const PairCandidate*, const PairCandidate*>> OtherPolarityFlanks(
+    const SceneResult& r, const SceneOptions& o) {
+  const PairCandidate& b = r.candidates[r.chosen];
+  if (b.polarity == Polarity::kMixed) return std::nullopt;
+  const PairCandidate* flank[2] = {nullptr, nullptr};
+  for (const auto& [index, g] : r.runners_up) {
+    const PairCandidate& c = r.candidates[index];
+    if (c.polarity == b.polarity || c.polarity == Polarity::kMixed ||
+        c.score < o.ambiguity_ratio * b.score ||
+        std::abs(c.axis.dx * b.axis.dy - c.axis.dy * b.axis.dx) >= kParallelSine)
+      continue;
+    if (c.right == b.left) flank[0] = &c;
+    if (c.left == b.right) flank[1] = &c;
+  }
+  if (!flank[0] || !flank[1]) return std::nullopt;
+  return std::make_pair(flank[0], flank[1]);
+}
+
 // Follows the best candidates of one channel on its full-resolution image; the first that holds
 // up is chosen (or the frame is ambiguous, or nothing holds up: r.status says which, and why).
 void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* result) {
@@ -671,6 +695,14 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
     r.runners_up.emplace_back(i, g);
   }
   if (r.chosen >= 0) {
+    if (const auto flanks = OtherPolarityFlanks(r, o)) {
+      r.status = FrameStatus::kAmbiguous;
+      r.detail = fmt::format(
+          "{} lies between two strand-like objects of the other polarity, {} and {}: a stripe in "
+          "one strand or a gap between two",
+          Describe(r.candidates[r.chosen]), Describe(*flanks->first), Describe(*flanks->second));
+      return;
+    }
     r.status = FrameStatus::kValid;
     r.detail.clear();
     return;
