@@ -65,7 +65,8 @@ MatrixResult RunAdversarialMatrix(const MatrixOptions& o) {
     const auto trouble = static_cast<TroubleClass>(c);
     for (int k = 0; k < o.scenes_per_class; ++k) {
       const uint64_t seed = o.first_seed + k;
-      const AdversarialScene scene = RandomAdversarialScene(trouble, seed);
+      AdversarialScene scene = RandomAdversarialScene(trouble, seed);
+      scene.noise_sigma *= o.noise_scale;
       AdversarialTruth truth;
       const std::vector<cv::Mat> frames =
           RenderAdversarial(scene, o.frames_per_scene, temp, &truth);

@@ -18,6 +18,9 @@ struct MatrixOptions {
   int scenes_per_class = 20;
   int frames_per_scene = 4;
   uint64_t first_seed = 1;
+  // Every scene's noise times this: below 1, a bias the noise hid (its σ was too large to be
+  // valid) shows as a confidently wrong width where the model's doubt does not cover it.
+  double noise_scale = 1.0;
   std::string temp_dir;  // for H.264 round trips; empty: the system's temporary directory
 };
 
