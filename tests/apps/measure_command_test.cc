@@ -1,5 +1,5 @@
 // End-to-end tests of `clogscope render` and `clogscope measure`: the binary on a small rendered
-// video, its exit codes and one-line errors, and the typed MeasureInputs() behind it.
+// video, its exit codes and one-line errors, and the typed pipeline::MeasureInputs() behind it.
 #include "apps/measure_command.h"
 
 #include <gtest/gtest.h>
@@ -19,6 +19,7 @@
 #include "apps/render_command.h"
 #include "common/atomic_file.h"
 #include "common/csv.h"
+#include "pipeline/measure_inputs.h"
 #include "tests/apps/cli_test_util.h"
 
 namespace clogscope::apps {
@@ -64,7 +65,7 @@ TEST(MeasureCommandTest, VideoEndToEndAgainstTruth) {
              d);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const CsvTable t = ParseCsv(ReadFile((d / "frames.csv").string()), "frames.csv");
-  for (const auto& col : FrameCsvColumns()) EXPECT_GE(t.Column(col), 0) << col;
+  for (const auto& col : pipeline::FrameCsvColumns()) EXPECT_GE(t.Column(col), 0) << col;
   std::ifstream in(d / "v.truth.json");
   const auto truth = nlohmann::json::parse(in);
   ASSERT_EQ(t.rows.size(), 30u);
@@ -501,14 +502,14 @@ TEST(MeasureCommandTest, ManifestModeTakesTheMeasurementOptions) {
 // (those whose width-outlier verdict awaits the following frames), however long the video.
 TEST(MeasureCommandTest, OverlaysDoNotHoldTheVideo) {
   const fs::path d = FreshDir("overlay_memory");
-  MeasureCommandOptions o;
+  pipeline::MeasureInputsOptions o;
   o.inputs = {RenderSmall((d / "v.mp4").string(), 90)};
   o.out_frames = (d / "frames.csv").string();
   o.overlay_dir = (d / "ov").string();
   o.overlay_every = 1;
   for (const bool flags : {true, false}) {
     o.flag_outliers = flags;
-    const MeasureSummary s = MeasureInputs(o);
+    const pipeline::MeasureSummary s = pipeline::MeasureInputs(o);
     EXPECT_EQ(s.frames, 90);
     EXPECT_EQ(s.overlays_written, 90);
     // At most the outlier window's half (25 frames) and the frame in hand; 1 without flags.
@@ -567,7 +568,7 @@ TEST(MeasureCommandTest, AnOversizedFrameInsideAVideoIsSkipped) {
 }
 
 TEST(MeasureCommandTest, BandOptionsResolveFromMicronsOrPixels) {
-  MeasureCommandOptions o;
+  pipeline::MeasureInputsOptions o;
   o.inputs = {"x"};
   o.ResolveBand();
   EXPECT_NEAR(o.strand.band_start_px, 50.0 / 3.0, 1e-12);
@@ -585,10 +586,10 @@ TEST(MeasureCommandTest, BandOptionsResolveFromMicronsOrPixels) {
 
 TEST(MeasureCommandTest, TypedFunctionWritesAtomicallyAndSummarises) {
   const fs::path d = FreshDir("typed");
-  MeasureCommandOptions o;
+  pipeline::MeasureInputsOptions o;
   o.inputs = {RenderSmall((d / "png").string(), 3), (d / "nothing-here").string()};
   o.out_frames = (d / "frames.csv").string();
-  const MeasureSummary s = MeasureInputs(o);
+  const pipeline::MeasureSummary s = pipeline::MeasureInputs(o);
   EXPECT_EQ(s.inputs_ok, 1);
   EXPECT_EQ(s.inputs_failed, 1);
   EXPECT_EQ(s.frames, 3);
