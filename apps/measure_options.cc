@@ -7,7 +7,7 @@
 
 namespace clogscope::apps {
 
-void AddMeasurementOptions(CLI::App& app, MeasureCommandOptions* o, MeasureCliText* text) {
+void AddMeasurementOptions(CLI::App& app, pipeline::MeasureInputsOptions* o, MeasureCliText* text) {
   app.add_option("--scale-um-per-px", o->scale_um_per_px,
                  "Pixel scale; widths in µm need it or --calib");
   app.add_option("--calib", text->calib_path,
@@ -41,7 +41,7 @@ void AddMeasurementOptions(CLI::App& app, MeasureCommandOptions* o, MeasureCliTe
 }
 
 void ApplyMeasurementOptions(const CLI::App& app, const MeasureCliText& text,
-                             MeasureCommandOptions* o) {
+                             pipeline::MeasureInputsOptions* o) {
   if (!text.roi.empty()) o->strand.roi = pipeline::ParseRoi(text.roi);
   if (!text.calib_path.empty()) {
     RequireInputPath("--calib", text.calib_path, PathExpect::kFile);

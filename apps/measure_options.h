@@ -3,7 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <string>
 
-#include "apps/measure_command.h"
+#include "pipeline/measure_inputs.h"
 
 namespace clogscope::apps {
 
@@ -16,11 +16,11 @@ struct MeasureCliText {
 };
 
 // Adds those options to `app`, writing into *o and *text.
-void AddMeasurementOptions(CLI::App& app, MeasureCommandOptions* o, MeasureCliText* text);
+void AddMeasurementOptions(CLI::App& app, pipeline::MeasureInputsOptions* o, MeasureCliText* text);
 
 // After parsing: the ROI, calibration file, polarity, target, contrast and shading into *o (the
 // band stays to ResolveBand). Throws std::invalid_argument naming the option or file.
 void ApplyMeasurementOptions(const CLI::App& app, const MeasureCliText& text,
-                             MeasureCommandOptions* o);
+                             pipeline::MeasureInputsOptions* o);
 
 }  // namespace clogscope::apps

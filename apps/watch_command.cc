@@ -27,7 +27,7 @@ extern "C" void OnWatchSignal(int) {
 
 WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* stop,
                         const WatchObservers& observers) {
-  MeasureCommandOptions m = options.measure;
+  pipeline::MeasureInputsOptions m = options.measure;
   m.ResolveBand();
   watch::LiveWatchOptions live = options.live;
   live.strand = m.strand;

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "apps/measure_command.h"
+#include "pipeline/measure_inputs.h"
 #include "watch/live_watch.h"
 
 namespace clogscope::apps {
@@ -20,7 +20,7 @@ int RunWatch(int argc, char** argv);
 struct WatchCommandOptions {
   // The measurement as `measure` has it (scale or calibration, ROI, band, target, polarity…);
   // its inputs are not used.
-  MeasureCommandOptions measure;
+  pipeline::MeasureInputsOptions measure;
   // Source, its timeouts, the rolling window and thresholds, report interval, duration. Its
   // strand, conversion and extruder are filled from the fields here.
   watch::LiveWatchOptions live;

@@ -24,7 +24,7 @@ def measure(inputs, options=None, *, scale_um_per_px=None, calibration=None,
             overlay_dir=None, overlay_every=0, flag_outliers=True, speed=False,
             speed_options=None, gear_roi=None, gear_centre_px=None, gear_radius_mm=None):
     """Measures every frame of images, folders of images and videos, as
-    ``clogscope measure INPUTS --out-frames`` does (the same function, apps::MeasureInputs).
+    ``clogscope measure INPUTS --out-frames`` does (the same function, pipeline::MeasureInputs).
 
     inputs: a path or a list of paths (images, folders of images, .mp4/.avi/... videos).
     options: MeasureOptions (roi, polarity, target, caliper, limits).

@@ -1,11 +1,12 @@
-// clogscope.measure's core: images, folders and videos measured by the command line's own
-// apps::MeasureInputs, its per-frame table handed back as CSV text (the Python layer reads it
-// into a DataFrame), so the table is the command line's to the byte.
+// clogscope.measure's core: images, folders and videos measured by pipeline::MeasureInputs, the
+// function `clogscope measure INPUTS` calls, its per-frame table handed back as CSV text (the
+// Python layer reads it into a DataFrame), so the table is the command line's to the byte.
+#include "pipeline/measure_inputs.h"
+
 #include <pybind11/stl.h>
 
 #include <sstream>
 
-#include "apps/measure_command.h"
 #include "bindings.h"
 #include "calib/calibration_file.h"
 
@@ -47,7 +48,7 @@ py::tuple MeasureInputsPy(const std::vector<std::string>& inputs,
                           std::optional<std::vector<int>> gear_roi,
                           std::optional<std::pair<double, double>> gear_centre_px,
                           std::optional<double> gear_radius_mm) {
-  apps::MeasureCommandOptions o;
+  pipeline::MeasureInputsOptions o;
   o.inputs = inputs;
   if (options) o.strand = *options;
   o.scale_um_per_px = scale_um_per_px;
@@ -71,10 +72,10 @@ py::tuple MeasureInputsPy(const std::vector<std::string>& inputs,
   if (gear_centre_px) o.gear_centre_px = cv::Point2d(gear_centre_px->first, gear_centre_px->second);
   o.gear_radius_mm = gear_radius_mm;
   std::ostringstream table;
-  apps::MeasureSummary summary;
+  pipeline::MeasureSummary summary;
   {
     py::gil_scoped_release release;
-    summary = apps::MeasureInputs(o, &table);
+    summary = pipeline::MeasureInputs(o, &table);
   }
   return py::make_tuple(table.str(), summary);
 }
@@ -82,16 +83,16 @@ py::tuple MeasureInputsPy(const std::vector<std::string>& inputs,
 }  // namespace
 
 void BindMeasureInputs(py::module_& m) {
-  py::class_<apps::MeasureSummary>(m, "MeasureSummary",
-                                   "What measure() read: inputs, frames, time, errors.")
-      .def_readonly("inputs_ok", &apps::MeasureSummary::inputs_ok)
-      .def_readonly("inputs_failed", &apps::MeasureSummary::inputs_failed,
+  py::class_<pipeline::MeasureSummary>(m, "MeasureSummary",
+                                       "What measure() read: inputs, frames, time, errors.")
+      .def_readonly("inputs_ok", &pipeline::MeasureSummary::inputs_ok)
+      .def_readonly("inputs_failed", &pipeline::MeasureSummary::inputs_failed,
                     "Inputs that could not be opened or measured (see errors).")
-      .def_readonly("frames", &apps::MeasureSummary::frames)
-      .def_readonly("valid_frames", &apps::MeasureSummary::valid_frames)
-      .def_readonly("overlays_written", &apps::MeasureSummary::overlays_written)
-      .def_readonly("seconds", &apps::MeasureSummary::seconds, "Wall-clock time, s.")
-      .def_readonly("errors", &apps::MeasureSummary::errors,
+      .def_readonly("frames", &pipeline::MeasureSummary::frames)
+      .def_readonly("valid_frames", &pipeline::MeasureSummary::valid_frames)
+      .def_readonly("overlays_written", &pipeline::MeasureSummary::overlays_written)
+      .def_readonly("seconds", &pipeline::MeasureSummary::seconds, "Wall-clock time, s.")
+      .def_readonly("errors", &pipeline::MeasureSummary::errors,
                     "One line per input that could not be read.")
       .def("__repr__", [](const py::object& self) {
         return ReprOf(
@@ -105,7 +106,7 @@ void BindMeasureInputs(py::module_& m) {
         py::arg("overlay_dir"), py::arg("overlay_every"), py::arg("flag_outliers"),
         py::arg("speed"), py::arg("speed_options"), py::arg("gear_roi"), py::arg("gear_centre_px"),
         py::arg("gear_radius_mm"),
-        "apps::MeasureInputs with the table as CSV text: (text, MeasureSummary). Use "
+        "pipeline::MeasureInputs with the table as CSV text: (text, MeasureSummary). Use "
         "clogscope.measure.");
 }
 

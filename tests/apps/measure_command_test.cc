@@ -1,5 +1,6 @@
 // End-to-end tests of `clogscope render` and `clogscope measure`: the binary on a small rendered
-// video, its exit codes and one-line errors, and the typed MeasureInputs() behind it.
+// video, its exit codes and one-line errors (the typed pipeline::MeasureInputs behind it:
+// tests/pipeline/measure_inputs_test.cc).
 #include "apps/measure_command.h"
 
 #include <gtest/gtest.h>
@@ -16,9 +17,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
-#include "apps/render_command.h"
 #include "common/atomic_file.h"
 #include "common/csv.h"
+#include "pipeline/measure_inputs.h"
 #include "tests/apps/cli_test_util.h"
 
 namespace clogscope::apps {
@@ -31,25 +32,12 @@ using testing::RunResult;
 
 fs::path FreshDir(const std::string& name) { return testing::FreshDir("clogscope_cli_" + name); }
 
-// A small scene: 640x360 frames, the tip at (320, 100); as render's options (kSmall) and typed.
+// A small scene: 640x360 frames, the tip at (320, 100), as render's options.
 constexpr int kSmallWidthPx = 640, kSmallHeightPx = 360, kSmallTipXPx = 320, kSmallTipYPx = 100;
 const std::string kSmall = "--size " + std::to_string(kSmallWidthPx) + "x" +
                            std::to_string(kSmallHeightPx) + " --tip-x-px " +
                            std::to_string(kSmallTipXPx) + " --tip-y-px " +
                            std::to_string(kSmallTipYPx) + " ";
-
-// The kSmall scene through the typed function: `frames` frames to `out` (a folder or a video).
-std::string RenderSmall(const std::string& out, int frames) {
-  RenderCommandOptions r;
-  r.scene.width_px = kSmallWidthPx;
-  r.scene.height_px = kSmallHeightPx;
-  r.scene.tip_x_px = kSmallTipXPx;
-  r.scene.tip_y_px = kSmallTipYPx;
-  r.frames = frames;
-  r.out = out;
-  RenderToFiles(r);
-  return out;
-}
 
 TEST(MeasureCommandTest, VideoEndToEndAgainstTruth) {
   const fs::path d = FreshDir("e2e");
@@ -64,7 +52,7 @@ TEST(MeasureCommandTest, VideoEndToEndAgainstTruth) {
              d);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const CsvTable t = ParseCsv(ReadFile((d / "frames.csv").string()), "frames.csv");
-  for (const auto& col : FrameCsvColumns()) EXPECT_GE(t.Column(col), 0) << col;
+  for (const auto& col : pipeline::FrameCsvColumns()) EXPECT_GE(t.Column(col), 0) << col;
   std::ifstream in(d / "v.truth.json");
   const auto truth = nlohmann::json::parse(in);
   ASSERT_EQ(t.rows.size(), 30u);
@@ -497,27 +485,6 @@ TEST(MeasureCommandTest, ManifestModeTakesTheMeasurementOptions) {
   }
 }
 
-// Overlays are drawn and written as the frames go by: the frames waiting for theirs stay few
-// (those whose width-outlier verdict awaits the following frames), however long the video.
-TEST(MeasureCommandTest, OverlaysDoNotHoldTheVideo) {
-  const fs::path d = FreshDir("overlay_memory");
-  MeasureCommandOptions o;
-  o.inputs = {RenderSmall((d / "v.mp4").string(), 90)};
-  o.out_frames = (d / "frames.csv").string();
-  o.overlay_dir = (d / "ov").string();
-  o.overlay_every = 1;
-  for (const bool flags : {true, false}) {
-    o.flag_outliers = flags;
-    const MeasureSummary s = MeasureInputs(o);
-    EXPECT_EQ(s.frames, 90);
-    EXPECT_EQ(s.overlays_written, 90);
-    // At most the outlier window's half (25 frames) and the frame in hand; 1 without flags.
-    EXPECT_LE(s.overlay_frames_held_peak, flags ? 26 : 1) << "flags " << flags;
-    EXPECT_GE(s.overlay_frames_held_peak, 1);
-    EXPECT_TRUE(fs::exists(d / "ov" / "v.mp4_000089.png"));
-  }
-}
-
 // One 12000x12000 JPEG inside an MJPEG stream of small frames: that frame is reported (its size in
 // its row) and skipped, the others measured; `watch` goes on too. A stream whose frames together
 // would take too much memory ends with one line naming the right sizes, never an abort.
@@ -564,40 +531,6 @@ TEST(MeasureCommandTest, AnOversizedFrameInsideAVideoIsSkipped) {
             std::string::npos)
       << r.err;
   EXPECT_EQ(r.err.find("terminate"), std::string::npos) << r.err;
-}
-
-TEST(MeasureCommandTest, BandOptionsResolveFromMicronsOrPixels) {
-  MeasureCommandOptions o;
-  o.inputs = {"x"};
-  o.ResolveBand();
-  EXPECT_NEAR(o.strand.band_start_px, 50.0 / 3.0, 1e-12);
-  EXPECT_NEAR(o.strand.band_height_px, 50.0, 1e-12);
-  o.scale_um_per_px = 2.5;
-  o.ResolveBand();
-  EXPECT_NEAR(o.strand.band_start_px, 20.0, 1e-12);
-  EXPECT_NEAR(o.strand.band_height_px, 60.0, 1e-12);
-  o.band.height_px = 30;
-  o.ResolveBand();
-  EXPECT_NEAR(o.strand.band_height_px, 30.0, 1e-12);
-  o.band.height_um = 100;
-  EXPECT_THROW(o.ResolveBand(), std::invalid_argument);
-}
-
-TEST(MeasureCommandTest, TypedFunctionWritesAtomicallyAndSummarises) {
-  const fs::path d = FreshDir("typed");
-  MeasureCommandOptions o;
-  o.inputs = {RenderSmall((d / "png").string(), 3), (d / "nothing-here").string()};
-  o.out_frames = (d / "frames.csv").string();
-  const MeasureSummary s = MeasureInputs(o);
-  EXPECT_EQ(s.inputs_ok, 1);
-  EXPECT_EQ(s.inputs_failed, 1);
-  EXPECT_EQ(s.frames, 3);
-  EXPECT_EQ(s.valid_frames, 3);
-  EXPECT_TRUE(fs::exists(o.out_frames));
-  EXPECT_FALSE(fs::exists(o.out_frames + ".partial"));
-  // Without a scale the µm columns stay empty.
-  const CsvTable t = ParseCsv(ReadFile(o.out_frames), "frames.csv");
-  EXPECT_EQ(t.rows[0][t.Column("width_um")], "");
 }
 
 }  // namespace

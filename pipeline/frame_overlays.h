@@ -7,11 +7,11 @@
 #include <utility>
 #include <vector>
 
-#include "apps/measure_rows.h"
 #include "calib/pixel_scale.h"
+#include "pipeline/frame_rows.h"
 #include "vision/scene/strand_measure.h"
 
-namespace clogscope::apps {
+namespace clogscope::pipeline {
 
 // `measure --overlay` for one input: each frame is drawn and written as soon as its row is final,
 // at once without outlier flags, else once the frames its outlier verdict depends on are in. So
@@ -24,14 +24,14 @@ class OverlayWriter {
   void Add(size_t row, const cv::Mat& image);
   // Writes the frames whose rows are final among `rows`; with `all`, every frame kept (the rows'
   // outlier flags are set by then).
-  void WriteReady(const std::vector<Row>& rows, bool all);
+  void WriteReady(const std::vector<FrameRow>& rows, bool all);
   int written() const { return written_; }
   int held_peak() const { return held_peak_; }
   // The first write that failed (the writer stops there); empty when none did.
   const std::string& error() const { return error_; }
 
  private:
-  void Write(const Row& row, const vision::StrandMeasurement& m, const cv::Mat& image);
+  void Write(const FrameRow& row, const vision::StrandMeasurement& m, const cv::Mat& image);
 
   std::string dir_;
   bool from_video_, flag_outliers_;
@@ -42,4 +42,4 @@ class OverlayWriter {
   std::string error_;
 };
 
-}  // namespace clogscope::apps
+}  // namespace clogscope::pipeline

@@ -1,4 +1,4 @@
-#include "apps/measure_rows.h"
+#include "pipeline/frame_rows.h"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -11,12 +11,12 @@
 #include "common/robust.h"
 #include "pipeline/statistics.h"
 
-namespace clogscope::apps {
+namespace clogscope::pipeline {
 
 namespace fs = std::filesystem;
 
 // "<video file name>_<frame>.png" or "<image stem>.png"; a suffix keeps names of this run unique.
-std::string OverlayName(const Row& r, bool from_video, std::set<std::string>* used) {
+std::string OverlayName(const FrameRow& r, bool from_video, std::set<std::string>* used) {
   const fs::path p(r.source);
   const std::string base =
       from_video ? fmt::format("{}_{:06d}", p.filename().string(), r.frame) : p.stem().string();
@@ -30,7 +30,7 @@ std::string OverlayName(const Row& r, bool from_video, std::set<std::string>* us
 std::string WidthSummary(const std::vector<double>& widths_px,
                          const std::optional<calib::ScaleCalibration>& conv) {
   if (widths_px.empty()) return "";
-  const pipeline::SampleStats st = pipeline::RobustStats(widths_px);
+  const SampleStats st = RobustStats(widths_px);
   std::string out = fmt::format("; width {:.3f} ± {:.3f} px per frame (mean ± {:.3f} px, 95 %)",
                                 st.mean, st.std, st.ci95_half_width);
   if (conv) out += fmt::format(" = {:.2f} µm", conv->ToMicrons(st.mean));
@@ -39,10 +39,10 @@ std::string WidthSummary(const std::vector<double>& widths_px,
   return out;
 }
 
-std::string StraightPartSummary(const std::vector<Row>& rows) {
+std::string StraightPartSummary(const std::vector<FrameRow>& rows) {
   int valid = 0, part = 0;
   std::vector<double> s0, s1;
-  for (const Row& r : rows) {
+  for (const FrameRow& r : rows) {
     if (!r.m.valid()) continue;
     ++valid;
     if (r.m.straight_start_px <= r.m.band_start_px && r.m.straight_end_px >= r.m.band_end_px)
@@ -61,11 +61,11 @@ std::string StraightPartSummary(const std::vector<Row>& rows) {
 // The feed-speed columns of one row: mm/s, its σ (shift and scale), the reason when empty, the
 // baseline, and whether the summary used it.
 std::vector<std::string> SpeedFields(const vision::FeedSpeedSample& v,
-                                     const pipeline::FeedSpeedSummary& summary, size_t row,
+                                     const FeedSpeedSummary& summary, size_t row,
                                      const calib::ScaleCalibration& conv) {
-  const pipeline::SpeedUse use = summary.use.at(row);
-  const bool used = use == pipeline::SpeedUse::kUsed;
-  const std::string left_out = used ? "" : pipeline::SpeedUseName(use);
+  const SpeedUse use = summary.use.at(row);
+  const bool used = use == SpeedUse::kUsed;
+  const std::string left_out = used ? "" : SpeedUseName(use);
   if (!v.valid) return {"", "", vision::SpeedReasonName(v.reason), "", "0", left_out};
   const double mm_per_px = conv.scale_um_per_px * 1e-3;
   const double speed = v.SpeedPxPerS() * mm_per_px;
@@ -79,12 +79,13 @@ std::vector<std::string> SpeedFields(const vision::FeedSpeedSample& v,
           left_out};
 }
 
-GearAndSlip GearAndSlipOf(const Row& r, const calib::ScaleCalibration& conv, double radius_mm) {
+GearAndSlip GearAndSlipOf(const FrameRow& r, const calib::ScaleCalibration& conv,
+                          double radius_mm) {
   return vision::GearAndSlipOf(r.speed, r.gear, conv.scale_um_per_px * 1e-3, radius_mm);
 }
 
 // "; gear 2.00 ± 0.01 mm/s …; slip 10.0 ± 0.5 % per frame pair (mean ± …, 95 %), N of M pairs".
-std::string GearSummary(const std::vector<Row>& rows, const pipeline::FeedSpeedSummary& speeds,
+std::string GearSummary(const std::vector<FrameRow>& rows, const FeedSpeedSummary& speeds,
                         const calib::ScaleCalibration& conv, double radius_mm) {
   std::vector<double> gear, slip;
   for (size_t i = 0; i < rows.size(); ++i) {
@@ -92,7 +93,7 @@ std::string GearSummary(const std::vector<Row>& rows, const pipeline::FeedSpeedS
     if (g.gear_mm_s) gear.push_back(*g.gear_mm_s);
     // A filament speed the feed summary leaves out (a short baseline, an outlier) leaves its
     // slip out too.
-    if (g.slip_pct && speeds.use.at(i) == pipeline::SpeedUse::kUsed) slip.push_back(*g.slip_pct);
+    if (g.slip_pct && speeds.use.at(i) == SpeedUse::kUsed) slip.push_back(*g.slip_pct);
   }
   std::string out;
   for (const auto& [name, unit, values] :
@@ -101,23 +102,23 @@ std::string GearSummary(const std::vector<Row>& rows, const pipeline::FeedSpeedS
       out += fmt::format("; {} in no frame pair", name);
       continue;
     }
-    const pipeline::SampleStats st = pipeline::RobustStats(*values);
+    const SampleStats st = RobustStats(*values);
     out += fmt::format("; {} {:.4f} ± {:.4f} {} per frame pair (mean ± {:.4f}, 95 %), {} pairs",
                        name, st.mean, st.std, unit, st.ci95_half_width, values->size());
   }
   return out;
 }
 
-pipeline::FeedSpeedSummary SummariseSpeeds(const std::vector<Row>& rows) {
+FeedSpeedSummary SummariseSpeeds(const std::vector<FrameRow>& rows) {
   std::vector<vision::FeedSpeedSample> samples;
   samples.reserve(rows.size());
-  for (const Row& r : rows) samples.push_back(r.speed);
-  return pipeline::SummariseFeedSpeeds(samples);
+  for (const FrameRow& r : rows) samples.push_back(r.speed);
+  return SummariseFeedSpeeds(samples);
 }
 
 // "; feed speed 0.8001 ± 0.0102 mm/s per row (mean ± 0.0027 mm/s, 95 %), 45 of 60 pairs used (15
 // with a short baseline), baselines up to 6 frames".
-std::string SpeedSummary(const pipeline::FeedSpeedSummary& s, const calib::ScaleCalibration& conv) {
+std::string SpeedSummary(const FeedSpeedSummary& s, const calib::ScaleCalibration& conv) {
   if (s.used == 0)
     return s.pairs ? fmt::format("; feed speed in none of {} frame pairs", s.pairs) : "";
   const double mm_per_px = conv.scale_um_per_px * 1e-3;
@@ -136,4 +137,4 @@ std::string SpeedSummary(const pipeline::FeedSpeedSummary& s, const calib::Scale
       s.baseline_frames);
 }
 
-}  // namespace clogscope::apps
+}  // namespace clogscope::pipeline

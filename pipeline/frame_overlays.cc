@@ -1,4 +1,4 @@
-#include "apps/measure_overlays.h"
+#include "pipeline/frame_overlays.h"
 
 #include <algorithm>
 #include <filesystem>
@@ -6,7 +6,7 @@
 #include "vision/io/video_io.h"
 #include "vision/overlay/overlay.h"
 
-namespace clogscope::apps {
+namespace clogscope::pipeline {
 
 OverlayWriter::OverlayWriter(std::string dir, bool from_video, bool flag_outliers,
                              std::optional<calib::ScaleCalibration> conversion,
@@ -23,7 +23,7 @@ void OverlayWriter::Add(size_t row, const cv::Mat& image) {
   held_peak_ = std::max(held_peak_, static_cast<int>(held_.size()));
 }
 
-void OverlayWriter::WriteReady(const std::vector<Row>& rows, bool all) {
+void OverlayWriter::WriteReady(const std::vector<FrameRow>& rows, bool all) {
   size_t done = 0;
   for (; done < held_.size() && error_.empty(); ++done) {
     const size_t row = held_[done].first;
@@ -45,7 +45,7 @@ void OverlayWriter::WriteReady(const std::vector<Row>& rows, bool all) {
   if (!error_.empty()) held_.clear();
 }
 
-void OverlayWriter::Write(const Row& row, const vision::StrandMeasurement& m,
+void OverlayWriter::Write(const FrameRow& row, const vision::StrandMeasurement& m,
                           const cv::Mat& image) {
   const std::string name =
       (std::filesystem::path(dir_) / OverlayName(row, from_video_, names_)).string();
@@ -60,4 +60,4 @@ void OverlayWriter::Write(const Row& row, const vision::StrandMeasurement& m,
   }
 }
 
-}  // namespace clogscope::apps
+}  // namespace clogscope::pipeline
