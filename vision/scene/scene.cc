@@ -7,7 +7,6 @@
 #include <cmath>
 #include <numeric>
 #include <opencv2/imgproc.hpp>
-#include <optional>
 
 #include "common/robust.h"
 #include "vision/scene/edge_segments.h"
@@ -602,30 +601,34 @@ std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const P
                      Describe(b), Describe(c));
 }
 
-namespace {
-
-// The chosen pair's outsides when both are strand-like pairs of the other polarity that share its
-// edges, hold up and score as well as it: then the chosen pair is as much a gap between two
-// objects (or a stripe at the background's level inside one) as an object between two gaps. The
-// wider silhouette around all three is ruled out for the background showing inside it, so
-// nothing else would stop a dark strand's bright stripe from being measured as the strand.
-std::optional<std::pair<const PairCandidate*, const PairCandidate*>> OtherPolarityFlanks(
-    const SceneResult& r, const SceneOptions& o) {
-  const PairCandidate& b = r.candidates[r.chosen];
-  if (b.polarity == Polarity::kMixed) return std::nullopt;
+// A dark strand's stripe at the background's level leaves two dark bars with a bright gap, and
+// the silhouette around all three is ruled out for the background showing inside it: the gap's
+// neighbours are of the other polarity, so ContestPairs sees no rivals, and nothing else would
+// stop the gap from being measured as the strand.
+std::string FlankedDetail(const SceneResult& r, int index, const SceneOptions& o) {
+  const PairCandidate& b = r.candidates[index];
+  if (b.polarity == Polarity::kMixed) return "";
   const PairCandidate* flank[2] = {nullptr, nullptr};
-  for (const auto& [index, g] : r.runners_up) {
-    const PairCandidate& c = r.candidates[index];
+  const auto consider = [&](int other) {
+    if (other < 0 || other == index) return;
+    const PairCandidate& c = r.candidates[other];
     if (c.polarity == b.polarity || c.polarity == Polarity::kMixed ||
         c.score < o.ambiguity_ratio * b.score ||
         std::abs(c.axis.dx * b.axis.dy - c.axis.dy * b.axis.dx) >= kParallelSine)
-      continue;
+      return;
     if (c.right == b.left) flank[0] = &c;
     if (c.left == b.right) flank[1] = &c;
-  }
-  if (!flank[0] || !flank[1]) return std::nullopt;
-  return std::make_pair(flank[0], flank[1]);
+  };
+  consider(r.chosen);
+  for (const auto& runner_up : r.runners_up) consider(runner_up.first);
+  if (!flank[0] || !flank[1]) return "";
+  return fmt::format(
+      "{} lies between two strand-like objects of the other polarity, {} and {}: a stripe in one "
+      "strand or a gap between two",
+      Describe(b), Describe(*flank[0]), Describe(*flank[1]));
 }
+
+namespace {
 
 // Follows the best candidates of one channel on its full-resolution image; the first that holds
 // up is chosen (or the frame is ambiguous, or nothing holds up: r.status says which, and why).
@@ -695,12 +698,9 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
     r.runners_up.emplace_back(i, g);
   }
   if (r.chosen >= 0) {
-    if (const auto flanks = OtherPolarityFlanks(r, o)) {
+    if (std::string flanked = FlankedDetail(r, r.chosen, o); !flanked.empty()) {
       r.status = FrameStatus::kAmbiguous;
-      r.detail = fmt::format(
-          "{} lies between two strand-like objects of the other polarity, {} and {}: a stripe in "
-          "one strand or a gap between two",
-          Describe(r.candidates[r.chosen]), Describe(*flanks->first), Describe(*flanks->second));
+      r.detail = std::move(flanked);
       return;
     }
     r.status = FrameStatus::kValid;

@@ -79,9 +79,9 @@ struct StrandGeometry {
   bool has_tip = false;
   // Strand: the widest width between the tip and the straight part (die swell), px.
   double tip_width_px = 0;
-  int tip_face_sides = 0;  // strand: on how many sides the nozzle's face shows at the tip (tip.h)
+  int tip_face_sides = 0;    // strand: on how many sides the nozzle's face shows at the tip (tip.h)
   double tip_sigma_px = -1;  // strand: the tip's doubt along the axis; < 0 unconfirmed (tip.h)
-  bool precise = false;    // edge lines from fitted calipers (tracking), not from the gradient
+  bool precise = false;      // edge lines from fitted calipers (tracking), not from the gradient
   // Edge model per side: −1 decide from the calipers, 0 plain blurred step, 1 shaded (tracking
   // keeps the first frame's decision).
   int shading_left = -1, shading_right = -1;
@@ -128,6 +128,10 @@ inline bool Ambiguous(PairContest c) {
 }
 // The `ambiguous` detail for a kSideBySide or kSimilarScore contest.
 std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const PairCandidate& c);
+// The `ambiguous` detail when candidate `index` lies between two pairs of the other polarity that
+// held up (r.chosen and r.runners_up), share its edges, are parallel to it and score as well: a
+// stripe in one strand or a gap between two objects. Empty when it does not.
+std::string FlankedDetail(const SceneResult& r, int index, const SceneOptions& options);
 
 // Finds the strand in one or more single-channel 8/16-bit views of the same ROI (grey, or a
 // colour frame's luma and channels): the channel whose best pair scores highest is used. Contrast

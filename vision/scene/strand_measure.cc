@@ -163,6 +163,12 @@ StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOption
         m.detail = AmbiguityDetail(contest, next, *rival);
         break;
       }
+      if (std::string flanked = FlankedDetail(scene, index, scene_options); !flanked.empty()) {
+        next.Judge(PairVerdict::kAsLikely, "a stripe or a gap as much as a strand");
+        m.status = FrameStatus::kAmbiguous;
+        m.detail = std::move(flanked);
+        break;
+      }
       StrandMeasurement alt =
           MeasureInScene(channel, data_max, FrameStatus::kValid, "", g, roi, opt);
       if (!alt.valid()) {
