@@ -1,15 +1,18 @@
-// clogscope_bench adversarial [SCENES_PER_CLASS] [--first-seed N] [--noise-scale F] [--list]:
+// clogscope_bench adversarial [SCENES_PER_CLASS] [--first-seed N] [--noise-scale F] [--list]
+//                             [--frames-tsv PATH]:
 // the adversarial matrix (issue 22): every trouble class rendered by synthetic/adversarial.cc,
 // 4 frames a scene, measured with the default options; valid %, confident-wrong %, bias and σ by
 // class. Seeds from N (default 1: the slow test's scenes; another N gives scenes no one tuned
 // for); every scene's noise times F (default 1; below 1 shows biases the noise hid). --list
-// prints every frame that was confidently wrong, with its scene.
+// prints every frame that was confidently wrong, with its scene; --frames-tsv writes every frame
+// (class, seed, frame, status, width, σ, truth, scene) for analysis.
 #include <fmt/format.h>
 
 #include <chrono>
 #include <cstdlib>
 #include <string>
 
+#include "common/atomic_file.h"
 #include "synthetic/adversarial_matrix.h"
 #include "vision/scene/frame_status.h"
 
@@ -17,12 +20,15 @@ void BenchAdversarial(int argc, char** argv) {
   namespace syn = clogscope::synthetic;
   syn::MatrixOptions o;
   bool list = false;
+  std::string tsv_path;
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--list")
       list = true;
     else if (a == "--first-seed" && i + 1 < argc)
       o.first_seed = std::max(1L, std::atol(argv[++i]));
+    else if (a == "--frames-tsv" && i + 1 < argc)
+      tsv_path = argv[++i];
     else if (a == "--noise-scale" && i + 1 < argc)
       o.noise_scale = std::max(0.0, std::atof(argv[++i]));
     else
@@ -40,6 +46,18 @@ void BenchAdversarial(int argc, char** argv) {
       "there is no strand). Bias and σ over the other valid frames.\n\n",
       syn::kWrongPx, 100 * syn::kWrongFraction);
   fmt::print("{}", syn::MatrixTable(r));
+  if (!tsv_path.empty()) {
+    std::string tsv = "class\tseed\tframe\tstatus\twidth_px\tsigma_px\ttruth_px\twrong\tscene\n";
+    for (const auto& f : r.frames) {
+      tsv += fmt::format("{}\t{}\t{}\t{}\t{:.4f}\t{:.4f}\t{:.4f}\t{}\t{}\n",
+                         syn::TroubleClassName(f.trouble), f.seed, f.frame,
+                         f.status == clogscope::vision::FrameStatus::kValid
+                             ? "valid"
+                             : clogscope::vision::FrameStatusName(f.status),
+                         f.width_px, f.sigma_px, f.truth_px, f.wrong ? 1 : 0, f.scene);
+    }
+    clogscope::WriteFileAtomically(tsv_path, tsv);
+  }
   if (!list) return;
   fmt::print("\n### Confidently wrong frames\n");
   for (const auto& f : r.frames) {
