@@ -20,6 +20,12 @@ constexpr double kMinFallbackScoreRatio = 0.5;  // of the chosen pair's score
 constexpr double kMinFallbackScoreFactor = 3.0;    // times the scene's minimum score
 constexpr double kStraightPartMarginCalipers = 6;  // tracking a filament: calipers beside its part
 
+// Statuses of one channel's measurement that another channel of the same pair may not share:
+// its noise, its blur, its sampling (not which object it is).
+bool LumaMayMeasure(FrameStatus s) {
+  return s == FrameStatus::kValid || s == FrameStatus::kImprecise || s == FrameStatus::kOccluded;
+}
+
 // Statuses that say the pair was not the strand, rather than that the frame is poor.
 bool RejectsPair(FrameStatus s) {
   return s == FrameStatus::kNoStrand || s == FrameStatus::kOccluded ||
@@ -181,6 +187,20 @@ StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOption
       scene.geometry = g;
       m = std::move(alt);
       break;
+    }
+  }
+  // A colour frame's width is luma's wherever luma measures it. Compressed colour (JPEG, MJPEG,
+  // H.264: 4:2:0) keeps luma at full resolution and coarsely quantised chroma at half, which every
+  // single colour channel mixes in (red came out 0.3 px narrow where luma and green held, at 2
+  // to 3σ); a Bayer camera's luma is mostly green, sampled twice as densely as red or blue. The
+  // channel that found the strand is measured only where luma cannot be: an orange strand on a
+  // blue ground shows no luma edge.
+  if (channels.size() > 1 && scene.channel != 0 && scene.chosen >= 0 && LumaMayMeasure(m.status)) {
+    StrandMeasurement luma =
+        MeasureInScene(channels[0], data_max, FrameStatus::kValid, "", scene.geometry, roi, opt);
+    if (luma.valid()) {
+      scene.channel = 0;
+      m = std::move(luma);
     }
   }
   // A colour channel clipped at the strand's edges flattens their profile and biases the fit:

@@ -89,7 +89,8 @@ struct StrandMeasurement {
 
 // Measures the strand width in one frame (8- or 16-bit; grey, BGR or BGRA; 16-bit frames holding
 // 10- or 12-bit data are judged against their data range). The strand is found by its edges (see
-// scene.h); for colour frames the channel with the best edge pair is measured. Expected failures
+// scene.h); a colour frame's strand is found in the channel with the best edge pair and measured
+// in luma, or in that channel where luma cannot measure it. Expected failures
 // come back as a status with a reason; throws std::invalid_argument for frames of another pixel
 // type or options that do not validate.
 StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions& options);
