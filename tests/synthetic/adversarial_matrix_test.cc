@@ -23,15 +23,20 @@ TEST(AdversarialMatrixTest, FewConfidentlyWrongWidthsAndNoneWithoutAStrand) {
   SCOPED_TRACE(MatrixTable(r) + "confidently wrong:" + wrong);
   // No width where there is no strand, ever.
   EXPECT_EQ(r.classes[static_cast<int>(TroubleClass::kNoStrand)].valid, 0);
-  // Confidently wrong: 2 of 1200 frames when this was written, 1 of them beyond 4σ (a lit
-  // strand in a Bayer frame, 0.3-0.4 px off at 3-4σ); 3 before the tip was read on the object's
+  // Confidently wrong: 4 of 1200 frames when this was written, all beyond 4σ: the four frames of
+  // one lit strand in a Bayer frame through H.264 (seed 1), whose luma comes out 0.37-0.42 px
+  // narrow (0.45 px in the codec's own Y plane; right through PNG, and at CRF 12 and 18). Red,
+  // measured there before colour frames were measured in luma, was 0.28-0.36 px narrow: 2 of the
+  // four frames were wrong then, the other two inside the tolerance by 0.02 px. (On seeds
+  // 101-125 the same change took the wrong frames from 3 to 1, and from 24 to 20 over the four
+  // matrices with the noise × 1 and × 0.3.) 3 before the tip was read on the object's
   // own end (a swell whose tip the nozzle's face put 2 px low); 7 before lit cylinders that
   // disagree with the per-edge fits carried that as doubt, 32 before the σ carried the edge
   // model's doubt and imprecise widths were refused, 120 before the object model's first round.
   // The renders are the same from run to run (H.264 on one thread).
-  EXPECT_LE(r.all.wrong, 2);
-  EXPECT_LE(r.all.wrong_beyond_sigma, 1);
-  // What that costs: valid widths on 674 of the 1000 measurable strand frames when this was
+  EXPECT_LE(r.all.wrong, 4);
+  EXPECT_LE(r.all.wrong_beyond_sigma, 4);
+  // What that costs: valid widths on 677 of the 1000 measurable strand frames when this was
   // written (the saturated and nozzle-alone classes are refused by design).
   const int measurable = r.all.frames -
                          r.classes[static_cast<int>(TroubleClass::kSaturated)].frames -
