@@ -251,8 +251,8 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
         break;
       }
       if (!live) continue;  // a file's clock is its own: no frame, no time
-      state.SetSourceUp(reader.up);
       const double t = Seconds(Clock::now() - started);
+      state.SetSourceUp(reader.up, t);
       const bool changed = state.Tick(t);
       after_update(changed, t, [&] { board->PublishState(state.status(), clog, counters); });
       continue;
@@ -285,7 +285,6 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
       m.detail = frame.error;
     }
     const double t = live ? Seconds(frame.arrival - started) : frame.time_s;
-    state.SetSourceUp(true);
     const bool changed = state.Add(t, view, m.width_px);
     ++counters.frames_total;
     counters.frames_valid_total += view == FrameView::kStrand;

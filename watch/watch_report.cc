@@ -127,7 +127,7 @@ std::string PrometheusText(const WatchStatus& s, const std::optional<ClogIndex>&
   out +=
       "# HELP clogscope_level Current alert level (1 for the current one).\n"
       "# TYPE clogscope_level gauge\n";
-  for (WatchLevel l : {WatchLevel::kOk, WatchLevel::kWarn, WatchLevel::kClog,
+  for (WatchLevel l : {WatchLevel::kStarting, WatchLevel::kOk, WatchLevel::kWarn, WatchLevel::kClog,
                        WatchLevel::kNotExtruding, WatchLevel::kNoView}) {
     out += fmt::format("clogscope_level{{level=\"{}\"}} {}\n", WatchLevelName(l),
                        l == s.level ? 1 : 0);
