@@ -54,22 +54,28 @@ struct Reader {
                                       stop);
   }
 
-  // Ends with the queue closed, however it ends (an exception reaches RunLiveWatch's caller).
+  // Ends with the queue closed, however it ends. Nothing thrown leaves this thread: a source that
+  // cannot go on (its frames would take too much memory) or anything else that throws here ends
+  // the watch with the reason, which the measuring thread reports after its stop line.
   void Run() {
     CloseOnExit<vision::InputFrame> close(queue);
+    try {
+      Loop();
+    } catch (const std::exception& e) {
+      error = fmt::format("{}: {}", options.source, e.what());
+      ended_because = "the source failed";
+    } catch (...) {
+      error = options.source + ": an unknown error while reading";
+      ended_because = "the source failed";
+    }
+    if (ended_because.empty()) ended_because = "stopped";
+  }
+
+  void Loop() {
     vision::InputFrame frame;
     std::string why;
     while (!stop->load()) {
-      vision::FrameRead r;
-      try {
-        r = source->Read(&frame, &why);
-      } catch (const std::exception& e) {
-        // A source that cannot go on (its frames would take too much memory): the watch ends
-        // with the reason; nothing thrown may leave this thread.
-        error = fmt::format("{}: {}", options.source, e.what());
-        ended_because = "the source failed";
-        break;
-      }
+      const vision::FrameRead r = source->Read(&frame, &why);
       if (r == vision::FrameRead::kFrame) {
         if (!queue->Push(std::move(frame))) break;
         frame = vision::InputFrame{};
@@ -88,7 +94,8 @@ struct Reader {
       while (!source && Wait(wait_s)) {
         try {
           source = vision::OpenLiveSource(options.source, options.source_options, stop);
-        } catch (const std::invalid_argument& e) {
+        } catch (const std::exception& e) {
+          // Not there yet (refused, or the device's driver threw): try again later.
           Warn(fmt::format("{} (next try in {:g} s)", e.what(),
                            std::min(2 * wait_s, options.reconnect_max_s)));
           wait_s = std::min(2 * wait_s, options.reconnect_max_s);
@@ -99,8 +106,54 @@ struct Reader {
       up = true;
       Warn(options.source + ": reconnected");
     }
-    if (ended_because.empty()) ended_because = "stopped";
   }
+};
+
+// Measures each frame, tracking the strand, and says what it showed. A frame that cannot be
+// measured is a frame without a view, with the reason why, never a stop.
+class FrameMeasurer {
+ public:
+  explicit FrameMeasurer(const vision::StrandMeasureOptions& options)
+      : tracker_(options), memory_(options.target) {}
+
+  // The frame's view and measurement; *refused says why a frame was not measured (undecodable,
+  // damaged, not the first frame's size, or the measurement threw), else empty.
+  FrameView Measure(const vision::InputFrame& frame, vision::StrandMeasurement* m,
+                    std::string* refused) {
+    *m = vision::StrandMeasurement{};
+    refused->clear();
+    const cv::Size size = frame.image.size();
+    if (frame.image.empty()) {
+      *refused = frame.error.empty() ? "undecodable frame" : frame.error;
+    } else if (!first_size_) {
+      first_size_ = size;
+    } else if (size != *first_size_) {
+      // The pixel scale, ROI and band hold for the first frame's size only.
+      *refused = fmt::format("the frame is {}×{}, the watch started on {}×{}", size.width,
+                             size.height, first_size_->width, first_size_->height);
+    }
+    if (refused->empty()) {
+      try {
+        *m = tracker_.Measure(frame.image);
+        if (m->valid()) {
+          memory_.Remember(frame.image, *m);
+          return FrameView::kStrand;
+        }
+        return memory_.SeesNozzle(frame.image) ? FrameView::kNozzleOnly : FrameView::kNothing;
+      } catch (const std::exception& e) {
+        *m = vision::StrandMeasurement{};
+        *refused = std::string("cannot be measured: ") + e.what();
+      }
+    }
+    m->status = vision::FrameStatus::kUnreadable;
+    m->detail = *refused;
+    return FrameView::kNothing;
+  }
+
+ private:
+  vision::StrandTracker tracker_;
+  vision::SceneMemory memory_;
+  std::optional<cv::Size> first_size_;
 };
 
 // The median and 95th percentile of the recent latencies.
@@ -178,8 +231,7 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
   std::string why;
   if (!options.Validate(&why)) throw std::invalid_argument(why);
   WatchState state(options.watch, options.conversion);
-  vision::StrandTracker tracker(options.strand);
-  vision::SceneMemory memory(options.strand.target);
+  FrameMeasurer measurer(options.strand);
   const auto started = Clock::now();
 
   Reader reader{options, events, std::move(source), nullptr, stop, {true}, {0}, {}, {}};
@@ -201,7 +253,7 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
   LatencyLog latency;
   std::optional<ClogIndex> clog;
   std::optional<double> next_report_s;
-  bool warned_measure = false;
+  bool refusing = false;  // the last frame was refused
   const auto emit = [&](const std::string& event) {
     if (events.on_line) events.on_line(StatusJson(state.status(), clog, counters, event));
   };
@@ -234,72 +286,65 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
   };
 
   vision::InputFrame frame;
-  while (true) {
-    bool ended = false;
-    if (options.duration_s > 0 && Seconds(Clock::now() - started) >= options.duration_s) {
-      summary.ended_because = "--duration-s reached";
-      break;
-    }
-    if (stop->load()) {
-      summary.ended_because = "stopped";
-      break;
-    }
-    if (!queue.PopFor(&frame, std::chrono::milliseconds(100), &ended)) {
-      if (ended) {
-        summary.ended_because = reader.ended_because;
-        summary.error = reader.error;
+  try {
+    while (true) {
+      bool ended = false;
+      if (options.duration_s > 0 && Seconds(Clock::now() - started) >= options.duration_s) {
+        summary.ended_because = "--duration-s reached";
         break;
       }
-      if (!live) continue;  // a file's clock is its own: no frame, no time
-      state.SetSourceUp(reader.up);
-      const double t = Seconds(Clock::now() - started);
-      const bool changed = state.Tick(t);
-      after_update(changed, t, [&] { board->PublishState(state.status(), clog, counters); });
-      continue;
-    }
-    // A file read as fast as it decodes is read ahead by design: its frames' wait in the queue is
-    // no latency anyone sees, so theirs counts from here.
-    if (!live && !options.source_options.realtime) frame.arrival = Clock::now();
-    // Measure; a frame that cannot be measured is a frame without a view, never a stop.
-    vision::StrandMeasurement m;
-    FrameView view = FrameView::kNothing;
-    if (!frame.image.empty()) {
-      try {
-        m = tracker.Measure(frame.image);
-        if (m.valid()) {
-          view = FrameView::kStrand;
-          memory.Remember(frame.image, m);
-        } else if (memory.SeesNozzle(frame.image)) {
-          view = FrameView::kNozzleOnly;
-        }
-      } catch (const std::exception& e) {
-        m = vision::StrandMeasurement{};
-        m.detail = e.what();
-        if (!warned_measure && events.on_warning)
-          events.on_warning(
-              fmt::format("{}: frame {} not measured: {}", options.source, frame.index, e.what()));
-        warned_measure = true;
+      if (stop->load()) {
+        summary.ended_because = "stopped";
+        break;
       }
-    } else {
-      m.status = vision::FrameStatus::kUnreadable;
-      m.detail = frame.error;
+      if (!queue.PopFor(&frame, std::chrono::milliseconds(100), &ended)) {
+        if (ended) {
+          summary.ended_because = reader.ended_because;
+          summary.error = reader.error;
+          break;
+        }
+        if (!live) continue;  // a file's clock is its own: no frame, no time
+        const double t = Seconds(Clock::now() - started);
+        state.SetSourceUp(reader.up, t);
+        const bool changed = state.Tick(t);
+        after_update(changed, t, [&] { board->PublishState(state.status(), clog, counters); });
+        continue;
+      }
+      // A file read as fast as it decodes is read ahead by design: its frames' wait in the queue is
+      // no latency anyone sees, so theirs counts from here.
+      if (!live && !options.source_options.realtime) frame.arrival = Clock::now();
+      vision::StrandMeasurement m;
+      std::string refused;
+      const FrameView view = measurer.Measure(frame, &m, &refused);
+      if (!refused.empty()) {
+        ++counters.frames_refused_total;
+        // The first of a run of refused frames is told, the rest counted: a stream of garbage must
+        // not flood the log.
+        if (!refusing && events.on_warning)
+          events.on_warning(
+              fmt::format("{}: frame {} not measured: {}", options.source, frame.index, refused));
+      }
+      refusing = !refused.empty();
+      const double t = live ? Seconds(frame.arrival - started) : frame.time_s;
+      const bool changed = state.Add(t, view, m.width_px);
+      ++counters.frames_total;
+      counters.frames_valid_total += view == FrameView::kStrand;
+      after_update(changed, t, [&] {
+        board->Publish({state.status(), clog, counters, std::move(frame.image), std::move(m),
+                        counters.frames_total});
+      });
+      // Arrival (decoded, in hand) to the state published: what a reader of /status waits for.
+      latency.Add(1e3 * Seconds(Clock::now() - frame.arrival));
+      frame = vision::InputFrame{};
     }
-    const double t = live ? Seconds(frame.arrival - started) : frame.time_s;
-    state.SetSourceUp(true);
-    const bool changed = state.Add(t, view, m.width_px);
-    ++counters.frames_total;
-    counters.frames_valid_total += view == FrameView::kStrand;
-    after_update(changed, t, [&] {
-      board->Publish({state.status(), clog, counters, std::move(frame.image), std::move(m),
-                      counters.frames_total});
-    });
-    // Arrival (decoded, in hand) to the state published: what a reader of /status waits for.
-    latency.Add(1e3 * Seconds(Clock::now() - frame.arrival));
-    frame = vision::InputFrame{};
+  } catch (const std::exception& e) {
+    // Whatever failed on this thread, the watch ends with a stop line and the reason.
+    summary.ended_because = "the watch failed";
+    summary.error = fmt::format("{}: the watch failed: {}", options.source, e.what());
   }
   stop->store(true);  // the reader stops too
   queue.Cancel();     // and a reader waiting for room wakes
-  reading.Join();     // an error that escaped the reader reaches the caller
+  reading.Join();     // the reader catches what it throws: nothing to rethrow
   update_counters();
   emit("stop");
   summary.frames = counters.frames_total;

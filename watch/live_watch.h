@@ -70,7 +70,7 @@ struct LiveWatchEvents {
 struct LiveWatchSummary {
   long long frames = 0, valid_frames = 0, skipped_frames = 0, reconnects = 0;
   int level_changes = 0;
-  WatchLevel final_level = WatchLevel::kOk;
+  WatchLevel final_level = WatchLevel::kStarting;
   std::string ended_because;  // "the file ended", "stopped", "--duration-s reached"
   std::string error;          // the one line of a source that failed mid-way, or empty
   double latency_median_ms = 0, latency_p95_ms = 0, latency_max_ms = 0;

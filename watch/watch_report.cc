@@ -107,13 +107,16 @@ std::string StatusJson(const WatchStatus& s, const std::optional<ClogIndex>& clo
   j["clog_index"] = ci;
   j["counters"] = {{"frames_total", c.frames_total},
                    {"frames_valid_total", c.frames_valid_total},
+                   {"frames_refused_total", c.frames_refused_total},
                    {"frames_skipped_total", c.frames_skipped_total},
                    {"reconnects_total", c.reconnects_total},
                    {"alerts_total", c.alerts_total},
                    {"latency_median_ms", Round(c.latency_median_ms, 3)},
                    {"latency_max_ms", Round(c.latency_max_ms, 3)},
                    {"uptime_s", Round(c.uptime_s, 3)}};
-  return j.dump();
+  // Text from outside (a source's name, a decoder's words) may not be UTF-8: replaced, never a
+  // throw.
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 std::string PrometheusText(const WatchStatus& s, const std::optional<ClogIndex>& clog,
@@ -127,7 +130,7 @@ std::string PrometheusText(const WatchStatus& s, const std::optional<ClogIndex>&
   out +=
       "# HELP clogscope_level Current alert level (1 for the current one).\n"
       "# TYPE clogscope_level gauge\n";
-  for (WatchLevel l : {WatchLevel::kOk, WatchLevel::kWarn, WatchLevel::kClog,
+  for (WatchLevel l : {WatchLevel::kStarting, WatchLevel::kOk, WatchLevel::kWarn, WatchLevel::kClog,
                        WatchLevel::kNotExtruding, WatchLevel::kNoView}) {
     out += fmt::format("clogscope_level{{level=\"{}\"}} {}\n", WatchLevelName(l),
                        l == s.level ? 1 : 0);
@@ -161,6 +164,9 @@ std::string PrometheusText(const WatchStatus& s, const std::optional<ClogIndex>&
   }
   metric("frames_total", "counter", "Frames received.", c.frames_total);
   metric("frames_valid_total", "counter", "Frames with a width.", c.frames_valid_total);
+  metric("frames_refused_total", "counter",
+         "Frames not measured: undecodable, damaged, too large, or not the first frame's size.",
+         c.frames_refused_total);
   metric("frames_skipped_total", "counter", "Frames skipped because measuring fell behind.",
          c.frames_skipped_total);
   metric("reconnects_total", "counter", "Times the source was reopened.", c.reconnects_total);

@@ -26,8 +26,10 @@ std::optional<ClogIndex> ComputeClogIndex(const model::ExtruderParams& params, d
 struct WatchCounters {
   std::string source;
   std::string source_kind;
-  long long frames_total = 0;          // frames received
-  long long frames_valid_total = 0;    // with a width
+  long long frames_total = 0;        // frames received
+  long long frames_valid_total = 0;  // with a width
+  // Not measured: undecodable, damaged, too large, or not the first frame's size.
+  long long frames_refused_total = 0;
   long long frames_skipped_total = 0;  // dropped because measurement fell behind a live source
   long long reconnects_total = 0;
   long long alerts_total = 0;    // level changes

@@ -31,6 +31,8 @@ bool Held(const std::optional<double>& since, double time_s, double hold_s) {
 
 const char* WatchLevelName(WatchLevel level) {
   switch (level) {
+    case WatchLevel::kStarting:
+      return "starting";
     case WatchLevel::kOk:
       return "ok";
     case WatchLevel::kWarn:
@@ -162,8 +164,35 @@ WatchState::MeanCi WatchState::RobustMean(const std::vector<double>& widths_px) 
   return out;
 }
 
+void WatchState::SetSourceUp(bool up, double time_s) {
+  if (up == source_up_) return;
+  source_up_ = up;
+  if (last_time_s_ && time_s < *last_time_s_) time_s = *last_time_s_;
+  if (!up) {
+    // A source is declared down after it fell silent (a read timeout): it was down from its last
+    // frame on, and that silence is the outage's, not frames the nozzle failed to show.
+    down_since_s_ = last_frame_s_ ? std::min(*last_frame_s_, time_s) : time_s;
+  } else if (down_since_s_) {
+    down_spans_s_.emplace_back(*down_since_s_, time_s);
+    down_since_s_.reset();
+  }
+}
+
+double WatchState::DownSecondsWithin(double from_s, double to_s) const {
+  const auto overlap = [&](double a, double b) {
+    return std::max(0.0, std::min(b, to_s) - std::max(a, from_s));
+  };
+  double down_s = down_since_s_ ? overlap(*down_since_s_, to_s) : 0.0;
+  for (const auto& [a, b] : down_spans_s_) down_s += overlap(a, b);
+  return down_s;
+}
+
 bool WatchState::Add(double time_s, FrameView view, double width_px) {
   if (last_time_s_ && time_s < *last_time_s_) time_s = *last_time_s_;  // a clock step back
+  SetSourceUp(true, time_s);
+  if (!started_) first_time_s_ = time_s;
+  started_ = true;
+  last_frame_s_ = time_s;
   window_.push_back({time_s, view, width_px});
   if (view == FrameView::kStrand && !status_.baseline_ready) {
     if (baseline_first_s_ < 0) baseline_first_s_ = time_s;
@@ -198,8 +227,10 @@ void WatchState::UpdateStatistics(double t) {
   while (!window_.empty() && (window_.front().time_s < t - options_.window_s ||
                               static_cast<int>(window_.size()) > options_.max_window_frames))
     window_.pop_front();
+  while (!down_spans_s_.empty() && down_spans_s_.front().second < t - options_.window_s)
+    down_spans_s_.pop_front();
   s.time_s = t;
-  s.source_up = source_up_;
+  s.source_up = started_ && source_up_;
   s.frames = static_cast<int>(window_.size());
   s.valid_frames = s.nozzle_only_frames = 0;
   std::vector<double> widths, recent, intervals;
@@ -218,10 +249,12 @@ void WatchState::UpdateStatistics(double t) {
   }
   s.frame_rate_hz = rate_hz_;
   // Frames the window should hold at the rate seen, so that frames that stop coming count as
-  // frames without a strand (the window is shorter at the start of the watch).
-  if (!first_time_s_) first_time_s_ = t;
-  const double span = std::min(options_.window_s, t - *first_time_s_);
-  expected_frames_ = std::max(static_cast<double>(s.frames), rate_hz_ * span);
+  // frames without a strand (the window is shorter at the start of the watch). While the source
+  // is down nothing is expected: that time says no_view through source_up alone, and a window that
+  // expected frames of it would still count them missing long after the source is back.
+  const double from_s = first_time_s_ ? std::max(t - options_.window_s, *first_time_s_) : t;
+  const double up_s = std::max(0.0, t - from_s - DownSecondsWithin(from_s, t));
+  expected_frames_ = std::max(static_cast<double>(s.frames), rate_hz_ * up_s);
   s.valid_fraction = expected_frames_ > 0 ? s.valid_frames / expected_frames_ : 0.0;
 
   const MeanCi w = RobustMean(widths);
@@ -268,8 +301,11 @@ WatchLevel WatchState::Decide(double t) {
   const int expected = static_cast<int>(std::lround(expected_frames_));
   const bool view_bad = !source_up_ || expected == 0 ||
                         WilsonInterval(s.valid_frames, expected).second < o.min_valid_fraction;
-  const int without = s.frames - s.valid_frames;
-  const bool nozzle_seen = source_up_ && s.frames > 0 && 2 * s.nozzle_only_frames >= without;
+  // Not extruding needs the nozzle seen in most frames without a strand, frames missing included:
+  // a window of strand frames and a silence is no evidence of a nozzle that stopped.
+  const int without = std::max(expected, s.frames) - s.valid_frames;
+  const bool nozzle_seen =
+      source_up_ && s.nozzle_only_frames > 0 && 2 * s.nozzle_only_frames >= without;
   Track(&since_no_view_, view_bad && !nozzle_seen, t);
   Track(&since_not_extruding_, view_bad && nozzle_seen, t);
   Track(&since_view_back_,
@@ -284,6 +320,7 @@ WatchLevel WatchState::Decide(double t) {
   Track(&since_warn_exit_,
         s.has_recent && s.recent_drift_pct >= o.warn_drift_pct + o.hysteresis_pct, t);
 
+  if (!started_) return WatchLevel::kStarting;
   const WatchLevel now = s.level;
   const double hold = o.hold_s;
   if (Held(since_no_view_, t, hold)) return WatchLevel::kNoView;
@@ -291,10 +328,14 @@ WatchLevel WatchState::Decide(double t) {
   if ((now == WatchLevel::kNoView || now == WatchLevel::kNotExtruding) &&
       !Held(since_view_back_, t, hold))
     return now;
+  // A view that returns goes back to the drift level it left: the alert window is still filling,
+  // and judging it afresh would pass through ok on the way back to a warn or clog.
+  const WatchLevel drift = drift_level_;
   if (Held(since_clog_, t, hold)) return WatchLevel::kClog;
-  if (now == WatchLevel::kClog && !Held(since_clog_exit_, t, hold)) return WatchLevel::kClog;
+  if (drift == WatchLevel::kClog && !Held(since_clog_exit_, t, hold)) return WatchLevel::kClog;
   if (Held(since_warn_, t, hold)) return WatchLevel::kWarn;
-  if ((now == WatchLevel::kClog || now == WatchLevel::kWarn) && !Held(since_warn_exit_, t, hold))
+  if ((drift == WatchLevel::kClog || drift == WatchLevel::kWarn) &&
+      !Held(since_warn_exit_, t, hold))
     return WatchLevel::kWarn;
   return WatchLevel::kOk;
 }
@@ -307,6 +348,8 @@ std::string WatchState::Reason() const {
                                  s.recent_drift_pct, s.recent_drift_ci95_pct, o.alert_window_s)
                    : "";
   switch (s.level) {
+    case WatchLevel::kStarting:
+      return "waiting for the first frame";
     case WatchLevel::kNoView:
       if (!s.source_up) return "the source is down (reconnecting)";
       return fmt::format("a strand in {:.0f} % of the last {:g} s and the nozzle not recognised",
@@ -335,13 +378,16 @@ bool WatchState::Evaluate(double t) {
   last_time_s_ = t;
   UpdateStatistics(t);
   const WatchLevel next = Decide(t);
-  const bool changed = next != status_.level;
-  if (changed) {
+  // The first level is not a change: nothing that was known changed (no `level` line, no alert).
+  const bool changed = next != status_.level && status_.level != WatchLevel::kStarting;
+  if (next != status_.level) {
     status_.previous_level = status_.level;
     status_.level = next;
     status_.level_since_s = t;
-    ++status_.level_changes;
+    status_.level_changes += changed;
   }
+  if (next == WatchLevel::kOk || next == WatchLevel::kWarn || next == WatchLevel::kClog)
+    drift_level_ = next;
   status_.reason = Reason();
   return changed;
 }

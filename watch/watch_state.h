@@ -13,9 +13,10 @@ namespace clogscope::watch {
 
 // What a live watch says about the nozzle.
 enum class WatchLevel {
-  kOk,    // the strand is seen and its diameter holds (or the baseline is still being taken)
-  kWarn,  // the diameter has fallen past the warn threshold
-  kClog,  // past the clog threshold
+  kStarting,  // no frame yet (the source is opening or has not delivered): nothing is known
+  kOk,        // the strand is seen and its diameter holds (or the baseline is still being taken)
+  kWarn,      // the diameter has fallen past the warn threshold
+  kClog,      // past the clog threshold
   kNotExtruding,  // the nozzle is in view but no strand leaves it
   kNoView,        // nothing recognisable (covered, moved, dark) or no frames (source down)
 };
@@ -46,12 +47,12 @@ struct WatchOptions {
 // The rolling state after the latest frame (or tick).
 struct WatchStatus {
   double time_s = 0;
-  WatchLevel level = WatchLevel::kOk;
-  WatchLevel previous_level = WatchLevel::kOk;
+  WatchLevel level = WatchLevel::kStarting;
+  WatchLevel previous_level = WatchLevel::kStarting;
   double level_since_s = 0;
-  int level_changes = 0;
-  std::string reason;  // why the watch is at this level, one line
-  bool source_up = true;
+  int level_changes = 0;  // leaving kStarting is not one (nothing changed that was known)
+  std::string reason = "waiting for the first frame";  // why the watch is at this level
+  bool source_up = false;  // false until the first frame, and while the source is down
 
   // Frames in the window.
   int frames = 0, valid_frames = 0, nozzle_only_frames = 0;
@@ -84,12 +85,16 @@ struct WatchStatus {
 };
 
 // Rolling statistics and alert levels of a live watch: a pure state machine fed with one sample per
-// frame, in time order, and ticks while no frames arrive. A level is entered only when its
+// frame, in time order, and ticks while no frames arrive. It is kStarting until the first frame,
+// which sets the first level without counting a change. A level is entered only when its
 // condition held for hold_s: for warn and clog, the whole 95 % CI of the alert window's drift is
 // past the threshold; for not_extruding and no_view, the upper bound of the valid fraction's Wilson
 // interval is below min_valid_fraction (or the source is down). A drift level is left when the
 // alert window's mean drift has been back above threshold + hysteresis for hold_s; a view level
-// when the valid fraction has been above min + view_hysteresis for hold_s.
+// when the valid fraction has been above min + view_hysteresis for hold_s, back to the drift level
+// it left (ok, warn or clog). Frames missing while the source is up count as frames without a
+// view, never as nozzle-only ones; the time the source is down (from its last frame to its return)
+// is no part of the frames the window expects.
 class WatchState {
  public:
   // conversion: widths in px to µm ((w − b)·s with its σ); nullopt: px only (no µm fields, and a
@@ -101,8 +106,8 @@ class WatchState {
   // No frame: time passes (ages the window, lets held conditions mature). Returns true when the
   // level changed.
   bool Tick(double time_s);
-  // The source is down (reconnecting) or back.
-  void SetSourceUp(bool up) { source_up_ = up; }
+  // The source is down (reconnecting) or back, at time_s. A frame (Add) says it is up.
+  void SetSourceUp(bool up, double time_s);
 
   const WatchStatus& status() const { return status_; }
   const WatchOptions& options() const { return options_; }
@@ -124,6 +129,7 @@ class WatchState {
   WatchLevel Decide(double time_s);
   std::string Reason() const;
   double ToUm(double px) const;
+  double DownSecondsWithin(double from_s, double to_s) const;
 
   WatchOptions options_;
   std::optional<calib::ScaleCalibration> conversion_;
@@ -132,7 +138,11 @@ class WatchState {
   double baseline_first_s_ = -1;
   double baseline_half_px_ = 0;  // the baseline mean's 95 % half-width (0 when given)
   bool source_up_ = true;
-  std::optional<double> last_time_s_, first_time_s_;
+  bool started_ = false;                                // a frame has arrived
+  std::optional<double> down_since_s_;                  // the source is down since (its last frame)
+  std::deque<std::pair<double, double>> down_spans_s_;  // outages ended, within the window
+  WatchLevel drift_level_ = WatchLevel::kOk;  // the last of ok, warn, clog: where a view returns
+  std::optional<double> last_time_s_, first_time_s_, last_frame_s_;
   double rate_hz_ = 0;          // frame rate seen (kept while frames stop coming)
   double expected_frames_ = 0;  // frames the window should hold at that rate
   // When each condition began to hold continuously (nullopt: it does not hold now).

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -42,6 +43,16 @@ LiveWatchOptions Options() {
   return o;
 }
 
+// A watch of `source` to its end; the JSON of its last line (the stop line) in *last.
+LiveWatchSummary WatchToTheEnd(const LiveWatchOptions& o, LiveWatchEvents events,
+                               std::unique_ptr<vision::FrameSource> source, nlohmann::json* last) {
+  std::atomic<bool> stop{false};
+  events.on_line = [&](const std::string& line) { *last = nlohmann::json::parse(line); };
+  const LiveWatchSummary s = RunLiveWatch(o, events, nullptr, &stop, std::move(source));
+  EXPECT_TRUE(stop);
+  return s;
+}
+
 TEST(LiveWatchTest, AFilesFramesAreAllTakenThroughTheQueue) {
   std::atomic<bool> stop{false};
   const LiveWatchSummary s = RunLiveWatch(Options(), {}, nullptr, &stop,
@@ -61,12 +72,42 @@ TEST(LiveWatchTest, ASourceThatFailsEndsTheWatchWithItsReason) {
   EXPECT_EQ(s.error, "scripted: decoder gave up");
 }
 
-TEST(LiveWatchTest, AnErrorEscapingTheReaderReachesTheCaller) {
-  std::atomic<bool> stop{false};
-  EXPECT_THROW(RunLiveWatch(Options(), {}, nullptr, &stop,
-                            std::make_unique<ScriptedSource>(3, Ending::kNotAnException)),
-               int);
-  EXPECT_TRUE(stop);
+// Whatever the reader throws, the watch ends with its stop line and the reason (exit 1 in the
+// command), never std::terminate.
+TEST(LiveWatchTest, AnythingThrownInTheReaderEndsTheWatchWithAStopLine) {
+  nlohmann::json last;
+  const LiveWatchSummary s = WatchToTheEnd(
+      Options(), {}, std::make_unique<ScriptedSource>(3, Ending::kNotAnException), &last);
+  EXPECT_EQ(s.ended_because, "the source failed");
+  EXPECT_EQ(s.error, "scripted: an unknown error while reading");
+  EXPECT_EQ(last["event"], "stop");
+}
+
+// An error on the measuring thread (here the level-change callback) ends the watch the same way.
+TEST(LiveWatchTest, AnErrorOnTheMeasuringThreadEndsTheWatchWithAStopLine) {
+  LiveWatchEvents events;
+  events.on_level_change = [](const WatchStatus&, const std::optional<ClogIndex>&) {
+    throw std::runtime_error("the alert could not be told");
+  };
+  // Frames without pixels: no_view once that held 2 s, and the callback throws.
+  nlohmann::json last;
+  const LiveWatchSummary s =
+      WatchToTheEnd(Options(), events, std::make_unique<ScriptedSource>(500, Ending::kEnd), &last);
+  EXPECT_EQ(s.ended_because, "the watch failed");
+  EXPECT_EQ(s.error, "scripted: the watch failed: the alert could not be told");
+  EXPECT_EQ(last["event"], "stop");
+}
+
+// A source's name that is not UTF-8 (a path in Latin-1) cannot stop the JSON lines.
+TEST(LiveWatchTest, ASourceNameThatIsNotUtf8StillGivesJsonLines) {
+  LiveWatchOptions o = Options();
+  o.source = "caf\xe9";
+  nlohmann::json last;
+  const LiveWatchSummary s =
+      WatchToTheEnd(o, {}, std::make_unique<ScriptedSource>(3, Ending::kEnd), &last);
+  EXPECT_EQ(s.ended_because, "the file ended");
+  EXPECT_EQ(last["event"], "stop");
+  EXPECT_EQ(last["source"], "caf\xef\xbf\xbd");  // U+FFFD in place of the stray byte
 }
 
 // A level change is told once the board (what /status, /metrics and /frame.jpg serve) shows it:

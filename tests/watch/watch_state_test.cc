@@ -45,6 +45,21 @@ struct Simulation {
         levels.emplace_back(t, state.status().level);
     }
   }
+  // Time passing without frames, ticked every 0.1 s as the live loop does: `stall_s` of silence
+  // while the source still counts as up (its read timeout running), then `down_s` with it down
+  // (reconnecting). Returns the time it is back.
+  double Outage(double t0, double stall_s, double down_s) {
+    double t = t0;
+    const auto tick_until = [&](double end) {
+      for (; t < end - 1e-9; t += 0.1)
+        if (state.Tick(t)) levels.emplace_back(t, state.status().level);
+    };
+    tick_until(t0 + stall_s);
+    state.SetSourceUp(false, t);
+    tick_until(t0 + stall_s + down_s);
+    state.SetSourceUp(true, t);
+    return t;
+  }
   std::optional<double> FirstTimeAt(WatchLevel level) const {
     for (const auto& [t, l] : levels)
       if (l == level) return t;
@@ -210,7 +225,7 @@ TEST(WatchStateTest, NotExtrudingWhenOnlyTheNozzleIsSeenAndNoViewWhenNothingIs) 
 TEST(WatchStateTest, ASourceThatGoesDownIsNoViewAfterTheHold) {
   Simulation sim;
   sim.Run(0, 30, [](double) { return Strand(400); });
-  sim.state.SetSourceUp(false);
+  sim.state.SetSourceUp(false, 30.0);
   EXPECT_FALSE(sim.state.Tick(31.0));
   EXPECT_FALSE(sim.state.Tick(32.9));
   EXPECT_TRUE(sim.state.Tick(33.1));
@@ -219,8 +234,85 @@ TEST(WatchStateTest, ASourceThatGoesDownIsNoViewAfterTheHold) {
   // Frames that simply stop coming (no word from the source) count as missing frames.
   Simulation quiet;
   quiet.Run(0, 30, [](double) { return Strand(400); });
-  for (double t = 30; t < 45; t += 0.2) quiet.state.Tick(t);
+  for (double t = 30; t < 45; t += 0.2)
+    if (quiet.state.Tick(t)) quiet.levels.emplace_back(t, quiet.state.status().level);
   EXPECT_EQ(quiet.state.status().level, WatchLevel::kNoView);
+  // …frames without a view: a silence after strand frames shows no nozzle that stopped.
+  EXPECT_FALSE(quiet.FirstTimeAt(WatchLevel::kNotExtruding).has_value());
+}
+
+// An outage (a stream closed, or silent until its read timeout, then reopened with back-off) says
+// no_view once it lasted hold_s, and the strand frames after it bring back the level from before:
+// nothing else, however long it was. The window then holds strand frames from before and after;
+// the time between is the outage's, not frames missing from a nozzle in view.
+TEST(WatchStateTest, AnOutageInventsNoLevelChange) {
+  for (const double stall_s : {0.0, 5.0}) {
+    for (const double down_s : {1.0, 4.0, 15.0, 30.0}) {
+      SCOPED_TRACE(testing::Message() << "silent " << stall_s << " s, down " << down_s << " s");
+      Simulation sim;
+      sim.Run(0, 30, [](double) { return Strand(400); });
+      ASSERT_TRUE(sim.levels.empty());
+      const double back_s = sim.Outage(30, stall_s, down_s);
+      sim.Run(back_s, back_s + 20, [](double) { return Strand(400); });
+      EXPECT_EQ(sim.state.status().level, WatchLevel::kOk);
+      std::vector<WatchLevel> seen;
+      for (const auto& [t, level] : sim.levels) seen.push_back(level);
+      if (down_s < sim.state.options().hold_s) {
+        EXPECT_TRUE(seen.empty()) << WatchLevelName(seen[0]) << " at " << sim.levels[0].first;
+        continue;
+      }
+      ASSERT_EQ(seen, (std::vector<WatchLevel>{WatchLevel::kNoView, WatchLevel::kOk}))
+          << WatchLevelName(seen[0]) << " at " << sim.levels[0].first << " s, then "
+          << (seen.size() > 1 ? WatchLevelName(seen[1]) : "-") << " at "
+          << (seen.size() > 1 ? sim.levels[1].first : 0) << " s";
+      // Back to ok once the returning view held hold_s (plus a frame).
+      EXPECT_LE(sim.levels[1].first, back_s + sim.state.options().hold_s + 0.1);
+    }
+  }
+}
+
+// A narrowed strand that was at warn before an outage is at warn after it: the view's return does
+// not pass through ok while the alert window refills.
+TEST(WatchStateTest, AWarnOutlivesAnOutage) {
+  Simulation sim;
+  sim.Run(0, 30, [](double) { return Strand(400); });
+  sim.Run(30, 50, [](double) { return Strand(388); });  // −3 %
+  ASSERT_EQ(sim.state.status().level, WatchLevel::kWarn);
+  const size_t before = sim.levels.size();
+  const double back_s = sim.Outage(50, 0, 10);
+  sim.Run(back_s, back_s + 20, [](double) { return Strand(388); });
+  std::vector<WatchLevel> after;
+  for (size_t i = before; i < sim.levels.size(); ++i) after.push_back(sim.levels[i].second);
+  EXPECT_EQ(after, (std::vector<WatchLevel>{WatchLevel::kNoView, WatchLevel::kWarn}));
+}
+
+// Before the first frame nothing is known: the level is `starting` and the source not up (the
+// state /status and /metrics serve while a source opens); the first frame sets the first level
+// without a level change (no `level` line, no --on-alert).
+TEST(WatchStateTest, StartingUntilTheFirstFrame) {
+  WatchState state(WatchOptions{}, pipeline::PlainScale(kScale));
+  const auto metrics = [&] { return PrometheusText(state.status(), std::nullopt, {}); };
+  EXPECT_EQ(state.status().level, WatchLevel::kStarting);
+  EXPECT_FALSE(state.status().source_up);
+  state.SetSourceUp(true, 0.0);  // opened, nothing delivered yet
+  for (double t = 0; t < 12; t += 0.1) EXPECT_FALSE(state.Tick(t));
+  EXPECT_EQ(state.status().level, WatchLevel::kStarting);
+  EXPECT_FALSE(state.status().source_up);
+  EXPECT_EQ(state.status().reason, "waiting for the first frame");
+  const auto j = nlohmann::json::parse(StatusJson(state.status(), std::nullopt, {}, "status"));
+  EXPECT_EQ(j["level"], "starting");
+  EXPECT_EQ(j["source_up"], false);
+  EXPECT_NE(metrics().find("clogscope_level{level=\"starting\"} 1\n"), std::string::npos);
+  EXPECT_NE(metrics().find("clogscope_level{level=\"ok\"} 0\n"), std::string::npos);
+  EXPECT_NE(metrics().find("clogscope_source_up 0\n"), std::string::npos) << metrics();
+
+  EXPECT_FALSE(state.Add(12.0, FrameView::kStrand, 400 / kScale));
+  EXPECT_EQ(state.status().level, WatchLevel::kOk);
+  EXPECT_EQ(state.status().previous_level, WatchLevel::kStarting);
+  EXPECT_EQ(state.status().level_changes, 0);
+  EXPECT_TRUE(state.status().source_up);
+  EXPECT_NE(metrics().find("clogscope_level{level=\"starting\"} 0\n"), std::string::npos);
+  EXPECT_NE(metrics().find("clogscope_source_up 1\n"), std::string::npos);
 }
 
 TEST(WatchStateTest, AGivenBaselineIsUsedFromTheFirstFrame) {

@@ -10,7 +10,7 @@ namespace {
 
 class Bytes {
  public:
-  explicit Bytes(const std::string& s) : s_(s) {}
+  explicit Bytes(std::string_view s) : s_(s) {}
   size_t size() const { return s_.size(); }
   bool Has(size_t i, size_t n) const { return i <= s_.size() && n <= s_.size() - i; }
   unsigned At(size_t i) const { return static_cast<unsigned char>(s_[i]); }
@@ -27,7 +27,7 @@ class Bytes {
   }
 
  private:
-  const std::string& s_;
+  std::string_view s_;
 };
 
 ImageHeader Png(const Bytes& b) {
@@ -96,7 +96,7 @@ ImageHeader Bmp(const Bytes& b) {
   return h;
 }
 
-ImageHeader Pnm(const std::string& s) {
+ImageHeader Pnm(std::string_view s) {
   ImageHeader h{"pnm"};
   long long values[2] = {0, 0};
   size_t i = 2;
@@ -126,7 +126,7 @@ ImageHeader Pnm(const std::string& s) {
 
 }  // namespace
 
-ImageHeader ParseImageHeader(const std::string& bytes) {
+ImageHeader ParseImageHeader(std::string_view bytes) {
   const Bytes b(bytes);
   if (b.Starts("\x89PNG\r\n\x1a\n", 8)) return Png(b);
   if (b.size() >= 3 && b.At(0) == 0xFF && b.At(1) == 0xD8 && b.At(2) == 0xFF) return Jpeg(b);
@@ -137,6 +137,15 @@ ImageHeader ParseImageHeader(const std::string& bytes) {
       std::isspace(static_cast<unsigned char>(bytes[2])))
     return Pnm(bytes);
   return ImageHeader();
+}
+
+bool JpegEndsWhole(std::string_view bytes) {
+  size_t end = bytes.size();
+  // Padding after the marker: zeros (AVI chunks, drivers) or a line end (multipart streams).
+  while (end > 0 && (bytes[end - 1] == '\0' || bytes[end - 1] == '\r' || bytes[end - 1] == '\n'))
+    --end;
+  return end >= 4 && static_cast<unsigned char>(bytes[end - 2]) == 0xFF &&
+         static_cast<unsigned char>(bytes[end - 1]) == 0xD9;
 }
 
 }  // namespace clogscope::vision

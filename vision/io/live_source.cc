@@ -85,9 +85,24 @@ class DecodedSource : public FrameSource {
                                    stop_);
       if (!waited || Stopped(stop_)) return FrameRead::kStopped;
     }
+    if (!f.skipped_reason.empty()) {
+      // The decoder lost the frame before this one (it was too large): that frame is delivered
+      // first, without pixels, and this one on the next read.
+      DecodedFrame lost;
+      lost.index = f.index;
+      lost.time_s = f.time_s;
+      lost.corrupt = true;
+      lost.damage = std::move(f.skipped_reason);
+      f.skipped_reason.clear();
+      pending_ = std::move(f);
+      f = std::move(lost);
+    }
     out->arrival = Clock::now();
+    // A frame the decoder refused or reported damaged is delivered without pixels: what it
+    // concealed would be measured as the strand.
+    if (f.corrupt) f.grey.release();
     out->image = std::move(f.grey);
-    out->error = out->image.empty() ? "undecodable frame" : "";
+    out->error = !out->image.empty() ? "" : f.damage.empty() ? "undecodable frame" : f.damage;
     out->time_s = kind_ == SourceKind::kVideo ? f.time_s : SecondsSince(opened_);
     out->index = index_++;
     out->source = path_;

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "common/atomic_file.h"
+#include "vision/io/image_header.h"
 #include "vision/io/video_io.h"
 
 extern "C" {
@@ -43,6 +44,8 @@ struct VideoDecoder::Impl {
   AVFrame* frame = nullptr;
   SwsContext* sws = nullptr;  // only for formats without a luma plane (RGB, palette)
   int stream = -1;
+  bool jpeg = false;                  // Motion JPEG: every frame stands alone
+  int64_t sent_pts = AV_NOPTS_VALUE;  // of the last packet sent to the decoder
   double time_base = 0;
   int64_t start_pts = 0;
   bool flushing = false;
@@ -149,6 +152,22 @@ int CountedGetBuffer(AVCodecContext* codec, AVFrame* frame, int flags) {
   return 0;
 }
 
+// Why a Motion JPEG packet is refused before decoding, or empty. Its header's size is checked
+// before the decoder allocates a frame for it; a JPEG cut short would be concealed (the missing
+// rows filled in) and measured.
+std::string JpegPacketProblem(const AVPacket& packet) {
+  const std::string_view bytes(reinterpret_cast<const char*>(packet.data), packet.size);
+  const ImageHeader header = ParseImageHeader(bytes);
+  if (header.format == "jpeg") {
+    if (header.width_px <= 0 || header.height_px <= 0)
+      return "not a JPEG frame (no frame header before its data)";
+    if (std::string big = FrameSizeProblem(header.width_px, header.height_px); !big.empty())
+      return big;
+  }
+  if (!JpegEndsWhole(bytes)) return "a JPEG cut short (no end-of-image marker)";
+  return std::string();
+}
+
 }  // namespace
 
 VideoDecoder::VideoDecoder(const std::string& path, int threads)
@@ -205,6 +224,9 @@ VideoDecoder::VideoDecoder(const std::string& path, const VideoDecoderOptions& o
   d.memory = std::make_shared<FrameMemory>();
   d.codec->opaque = &d.memory;
   d.codec->get_buffer2 = CountedGetBuffer;
+  d.jpeg = codec->id == AV_CODEC_ID_MJPEG;
+  // A damaged JPEG is an error, not a picture with its gaps concealed.
+  if (d.jpeg) d.codec->err_recognition |= AV_EF_EXPLODE;
   err = avcodec_open2(d.codec, codec, nullptr);
   if (err < 0) throw std::invalid_argument(path + ": cannot open decoder (" + AvError(err) + ")");
   d.packet = av_packet_alloc();
@@ -232,6 +254,45 @@ int VideoDecoder::height() const { return impl_->codec->height; }
 
 bool VideoDecoder::Read(DecodedFrame* out) {
   Impl& d = *impl_;
+  // Frame number and time from a timestamp: the index from the timestamp, so frames lost to damage
+  // leave a visible gap (clamped: a timestamp of 1e12 s must not overflow the frame number).
+  const auto time_of = [&](int64_t pts) {
+    return pts != AV_NOPTS_VALUE ? (pts - d.start_pts) * d.time_base
+                                 : (fps_ > 0 ? next_index_ / fps_ : 0.0);
+  };
+  const auto stamp = [&](int64_t pts) {
+    const double t = time_of(pts);
+    const double from_time = fps_ > 0 && std::isfinite(t) ? std::round(t * fps_) : -1.0;
+    out->index = from_time > next_index_
+                     ? static_cast<int>(std::min(from_time, static_cast<double>(kMaxFrameIndex)))
+                     : next_index_;
+    next_index_ = out->index + 1;
+    out->time_s = t;
+  };
+  // A Motion JPEG frame refused: returned without pixels, with the reason (false: it lies before
+  // the time sought, and is dropped as a decoded one would be).
+  const auto refuse = [&](std::string why, int64_t pts) {
+    ++corrupt_packets_;
+    if (skip_before_s_ >= 0 && time_of(pts) < skip_before_s_ - 1e-6) return false;
+    skip_before_s_ = -1;
+    out->grey.release();
+    stamp(pts);
+    out->corrupt = true;
+    out->damage = std::move(why);
+    out->skipped_reason = std::move(skipped_reason_);
+    skipped_reason_.clear();
+    return true;
+  };
+  // What the decoder's error on a JPEG means: a frame too large for the memory cap, or damage.
+  const auto jpeg_error = [&](int err) {
+    // (Over the cap at a measurable size: the loop's check below ends the stream with the reason.)
+    const std::string big = FrameSizeProblem(d.memory->refused_width, d.memory->refused_height);
+    if (d.memory->over && !big.empty()) {
+      d.memory->over = false;
+      return big;
+    }
+    return "a damaged JPEG (" + AvError(err) + ")";
+  };
   while (!d.finished) {
     if (d.memory->over) {
       const FrameMemory& m = *d.memory;
@@ -254,9 +315,7 @@ bool VideoDecoder::Read(DecodedFrame* out) {
       const int64_t pts = d.frame->best_effort_timestamp != AV_NOPTS_VALUE
                               ? d.frame->best_effort_timestamp
                               : d.frame->pts;
-      const double t = pts != AV_NOPTS_VALUE ? (pts - d.start_pts) * d.time_base
-                                             : (fps_ > 0 ? next_index_ / fps_ : 0.0);
-      if (skip_before_s_ >= 0 && t < skip_before_s_ - 1e-6) {
+      if (skip_before_s_ >= 0 && time_of(pts) < skip_before_s_ - 1e-6) {
         av_frame_unref(d.frame);
         continue;
       }
@@ -284,18 +343,14 @@ bool VideoDecoder::Read(DecodedFrame* out) {
         int dst_stride[4] = {static_cast<int>(out->grey.step), 0, 0, 0};
         sws_scale(d.sws, d.frame->data, d.frame->linesize, 0, h, dst, dst_stride);
       }
-      // Index from the timestamp, so frames lost to damage leave a visible gap.
-      // (Clamped: a timestamp of 1e12 s must not overflow the frame number.)
-      const double from_time = fps_ > 0 && std::isfinite(t) ? std::round(t * fps_) : -1.0;
-      out->index = from_time > next_index_
-                       ? static_cast<int>(std::min(from_time, static_cast<double>(kMaxFrameIndex)))
-                       : next_index_;
-      next_index_ = out->index + 1;
-      out->time_s = t;
+      stamp(pts);
       out->skipped_reason = std::move(skipped_reason_);
       skipped_reason_.clear();
       out->corrupt = (d.frame->flags & AV_FRAME_FLAG_CORRUPT) != 0 ||
                      d.frame->decode_error_flags != 0 || out->grey.empty();
+      out->damage = !out->corrupt       ? ""
+                    : out->grey.empty() ? FrameSizeProblem(w, h)
+                                        : "the decoder reported damage";
       av_frame_unref(d.frame);
       return true;
     }
@@ -304,8 +359,9 @@ bool VideoDecoder::Read(DecodedFrame* out) {
       break;
     }
     if (err != AVERROR(EAGAIN)) {
-      // A frame the decoder could not reconstruct: count it and go on.
-      ++corrupt_packets_;
+      // A frame the decoder could not reconstruct: count it and go on (a JPEG: say so).
+      if (d.jpeg && refuse(jpeg_error(err), d.sent_pts)) return true;
+      if (!d.jpeg) ++corrupt_packets_;
       continue;
     }
     if (d.flushing) {
@@ -325,10 +381,19 @@ bool VideoDecoder::Read(DecodedFrame* out) {
         av_packet_unref(d.packet);
         continue;
       }
+      if (d.jpeg) {
+        d.sent_pts = d.packet->pts;
+        if (std::string why = JpegPacketProblem(*d.packet); !why.empty()) {
+          av_packet_unref(d.packet);
+          if (refuse(std::move(why), d.sent_pts)) return true;
+          continue;
+        }
+      }
       err = avcodec_send_packet(d.codec, d.packet);
       av_packet_unref(d.packet);
       if (err < 0 && err != AVERROR(EAGAIN)) {
-        ++corrupt_packets_;
+        if (d.jpeg && refuse(jpeg_error(err), d.sent_pts)) return true;
+        if (!d.jpeg) ++corrupt_packets_;
         continue;
       }
       break;

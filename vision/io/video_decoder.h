@@ -14,6 +14,9 @@ struct DecodedFrame {
   int index = 0;      // frame number: from the timestamp at constant frame rate, else decode order
   double time_s = 0;  // presentation time from the stream start
   bool corrupt = false;  // the decoder reported damage in this frame's data
+  // Why grey is empty (or damaged), when known: a JPEG refused before decoding (cut short, too
+  // large, without a frame header) or rejected by the decoder.
+  std::string damage;
   // Why the frame before this one was not decoded, when the decoder knows (it was too large).
   std::string skipped_reason;
 };
@@ -41,7 +44,10 @@ class VideoDecoder {
   VideoDecoder& operator=(const VideoDecoder&) = delete;
 
   // Next frame in presentation order; false at the end of the stream. A packet the decoder rejects
-  // is skipped and counted in corrupt_packets().
+  // is skipped and counted in corrupt_packets(). Motion JPEG, whose frames stand alone, instead
+  // returns each frame it refuses (empty grey, corrupt, the reason in damage): a JPEG cut short,
+  // declaring a frame over kMaxFramePixels (refused from its header, before any decoding), or
+  // with damaged data (the decoder stops at the first error rather than conceal it).
   bool Read(DecodedFrame* frame);
   // Positions the stream so that the next Read() returns the first frame at or after time_s
   // (decodes forward from the preceding key frame). Returns false when the container cannot seek.

@@ -61,5 +61,21 @@ TEST(ImageHeaderTest, OtherFormatsAndCutHeaders) {
   EXPECT_EQ(ParseImageHeader("P5\n# no size").width_px, 0);
 }
 
+// A JPEG as OpenCV writes it ends with its end-of-image marker, padding after it allowed; cut
+// short (even by the marker alone) it does not.
+TEST(ImageHeaderTest, AJpegCutShortHasNoEnd) {
+  std::vector<uchar> bytes;
+  cv::Mat img(120, 160, CV_8UC1);
+  cv::randu(img, 0, 200);
+  ASSERT_TRUE(cv::imencode(".jpg", img, bytes));
+  const std::string jpeg(bytes.begin(), bytes.end());
+  EXPECT_TRUE(JpegEndsWhole(jpeg));
+  EXPECT_TRUE(JpegEndsWhole(jpeg + std::string(3, '\0')));
+  EXPECT_TRUE(JpegEndsWhole(jpeg + "\r\n"));
+  EXPECT_FALSE(JpegEndsWhole(jpeg.substr(0, jpeg.size() - 2)));
+  EXPECT_FALSE(JpegEndsWhole(jpeg.substr(0, jpeg.size() / 2)));
+  EXPECT_FALSE(JpegEndsWhole(""));
+}
+
 }  // namespace
 }  // namespace clogscope::vision
