@@ -38,9 +38,11 @@ constexpr double kMinMadPx = 0.02;
 void Summarise(StepResult* r, const ExperimentOptions& o) {
   std::vector<double> widths;
   std::vector<FrameRecord*> valid;
+  FrameSigmas sigmas;
   for (auto& f : r->frames) {
     if (f.m.valid()) {
       widths.push_back(f.m.width_px);
+      sigmas.Add(f.m.width_sigma_px, f.m.model_sigma_px);
       valid.push_back(&f);
     }
   }
@@ -50,7 +52,7 @@ void Summarise(StepResult* r, const ExperimentOptions& o) {
     if (r->detail.empty()) r->detail = "no valid frame";
     return;
   }
-  const SampleStats st = RobustStats(widths, o.outlier_mad_k, kMinMadPx);
+  const WidthStats st = RobustWidthStats(widths, sigmas, o.outlier_mad_k, kMinMadPx);
   for (size_t i = 0; i < valid.size(); ++i) valid[i]->used = st.used[i];
   r->n_used = st.n_used;
   r->n_rejected = st.n_rejected;
@@ -68,6 +70,9 @@ void Summarise(StepResult* r, const ExperimentOptions& o) {
   if (r->status == model::StepStatus::kTooFewFrames) {
     r->detail = fmt::format("{} valid of {} asked ({} frames examined)", r->n_valid, o.samples,
                             r->n_examined);
+  }
+  if (st.frames_repeat) {
+    r->detail += (r->detail.empty() ? "" : "; ") + RepeatDetail(st);
   }
   for (auto& f : r->frames) f.fields = FrameFields(f.source, f.frame, f.time_s, f.m, o.conversion);
 }
@@ -88,11 +93,11 @@ bool ExperimentOptions::Validate(std::string* why) const {
   return false;
 }
 
-double MeanCi95Um(const SampleStats& st, const calib::ScaleCalibration& c, double* cal_sigma_um) {
+double MeanCi95Um(const WidthStats& st, const calib::ScaleCalibration& c, double* cal_sigma_um) {
   *cal_sigma_um = std::hypot((st.mean - c.edge_bias_px) * c.scale_sigma_um_per_px,
                              c.scale_um_per_px * c.edge_bias_sigma_px);
-  const double t = st.n_used >= 2 ? StudentT975(st.n_used - 1) : NAN;
-  return std::hypot(t * st.sem * c.scale_um_per_px, kZ95 * *cal_sigma_um);
+  const double own = st.n_used >= 2 ? st.ci95_half_width : NAN;
+  return std::hypot(own * c.scale_um_per_px, kZ95 * *cal_sigma_um);
 }
 
 calib::ScaleCalibration PlainScale(double scale) {

@@ -88,10 +88,11 @@ std::vector<std::string> FrameFields(const std::string& source, int frame, doubl
                                      const vision::StrandMeasurement& m,
                                      const std::optional<calib::ScaleCalibration>& conversion);
 
-// The 95 % half-width (µm) of the mean width of `st`: t(0.975, n−1)·SEM and 1.96 × the
-// calibration's share (scale and edge-bias σ at that width, the same for every frame) in
-// quadrature; that share goes to *cal_sigma_um. NaN with fewer than two widths.
-double MeanCi95Um(const SampleStats& st, const calib::ScaleCalibration& c, double* cal_sigma_um);
+// The 95 % half-width (µm) of the mean width of `st`: its own (t(0.975, n−1)·SEM, or one frame's
+// noise when the frames repeat, and 1.96 × the frames' model doubt) and 1.96 × the calibration's
+// share (scale and edge-bias σ at that width, the same for every frame) in quadrature; that share
+// goes to *cal_sigma_um. NaN with fewer than two widths.
+double MeanCi95Um(const WidthStats& st, const calib::ScaleCalibration& c, double* cal_sigma_um);
 
 // The diameter table's precision: µm to 3 decimals, temperatures to 2. The predictor is given the
 // values as the table holds them (TableValue), so `run` and `predict --diameters` agree to the

@@ -94,6 +94,7 @@ FeedstockResult MeasureFeedstock(const std::string& video, double start_s, doubl
   const double mm_per_px = conversion ? conversion->scale_um_per_px * 1e-3 : 0.0;
   vision::StrandTracker strand(o.strand);
   std::vector<double> widths, speeds, gears, slips;
+  FrameSigmas sigmas;  // the widths' own σ
   if (a > vision::kSeekAheadS) dec->SeekToTime(a);
   vision::InputFrame f;
   f.time_s = 0;  // before the first frame: the stream's start
@@ -114,7 +115,10 @@ FeedstockResult MeasureFeedstock(const std::string& video, double start_s, doubl
       const vision::StrandMeasurement m = strand.Measure(f.image);
       if (in_pair == 0) {
         ++r.n_pairs;
-        if (m.valid()) widths.push_back(m.width_px);
+        if (m.valid()) {
+          widths.push_back(m.width_px);
+          sigmas.Add(m.width_sigma_px, m.model_sigma_px);
+        }
       }
       const vision::FeedSpeedSample v = feed.Next(f.image, f.time_s, m);
       vision::GearSpeedSample g;
@@ -138,7 +142,7 @@ FeedstockResult MeasureFeedstock(const std::string& video, double start_s, doubl
     r.detail = fmt::format("{}: no valid filament width in {} frame pairs", video, r.n_pairs);
     return r;
   }
-  const SampleStats st = RobustStats(widths);
+  const WidthStats st = RobustWidthStats(widths, sigmas);
   r.diameter_px = st.mean;
   r.diameter_std_px = st.std;
   if (conversion) {

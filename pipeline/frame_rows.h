@@ -33,8 +33,9 @@ struct FrameRow {
 std::string OverlayName(const FrameRow& r, bool from_video, std::set<std::string>* used);
 
 // "; width 139.570 ± 0.104 px per frame (mean ± 0.012 px, 95 %)[ = … µm]", from the valid
-// frames after the steps' own outlier rejection; empty without valid frames.
-std::string WidthSummary(const std::vector<double>& widths_px,
+// rows after the steps' own outlier rejection, the mean's interval as a step's
+// (RobustWidthStats: the model's doubt, frames that repeat); empty without valid rows.
+std::string WidthSummary(const std::vector<FrameRow>& rows,
                          const std::optional<calib::ScaleCalibration>& conv);
 
 // For a filament whose edges are rough (knurl or gear marks) over part of its stretch on some

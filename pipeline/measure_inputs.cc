@@ -225,7 +225,7 @@ MeasureSummary MeasureInputs(MeasureInputsOptions o, std::ostream* table_out) {
     summary.valid_frames += valid;
     spdlog::info("{}: {} of {} frames valid ({:.0f} frames/s){}", input, valid, rows.size(),
                  rows.size() / std::max(secs, 1e-9),
-                 WidthSummary(widths_px, conv) + (o.feed_speed ? SpeedSummary(speeds, *conv) : "") +
+                 WidthSummary(rows, conv) + (o.feed_speed ? SpeedSummary(speeds, *conv) : "") +
                      (o.gear_roi ? GearSummary(rows, speeds, *conv, *o.gear_radius_mm) : ""));
     if (const std::string part = StraightPartSummary(rows); !part.empty())
       spdlog::info("{}: {}", input, part);

@@ -45,6 +45,59 @@ TEST(StatisticsTest, RobustStatsRejectsOnlyTheOutliers) {
   EXPECT_EQ(flat.n_rejected, 0);
 }
 
+// The share of simulated steps whose 95 % interval covers the true width: each step is 50 frames
+// with a shared error (drawn from N(0, shared_px)), each frame's own noise (N(0, noise_px)) and,
+// when `repeat`, every frame a copy of the first one's noise; the frames report their σ as a
+// measurement does (the whole, and the model's part).
+double Coverage(double shared_px, double noise_px, bool repeat, double reported_model_px,
+                bool* flagged_all) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  constexpr double kTruePx = 50.0;
+  constexpr int kSteps = 2000, kFrames = 50;
+  int covered = 0;
+  *flagged_all = true;
+  for (int s = 0; s < kSteps; ++s) {
+    const double shared = shared_px * unit(rng);
+    const double first = noise_px * unit(rng);
+    std::vector<double> widths;
+    FrameSigmas sigmas;
+    for (int f = 0; f < kFrames; ++f) {
+      // A codec's copies still differ in the last bits of their fit.
+      const double noise = repeat ? first + 1e-4 * unit(rng) : noise_px * unit(rng);
+      widths.push_back(kTruePx + shared + noise);
+      sigmas.Add(std::hypot(noise_px, reported_model_px), reported_model_px);
+    }
+    const WidthStats st = RobustWidthStats(widths, sigmas);
+    *flagged_all = *flagged_all && st.frames_repeat == repeat;
+    covered += std::abs(st.mean - kTruePx) <= st.ci95_half_width;
+  }
+  return static_cast<double>(covered) / kSteps;
+}
+
+TEST(StatisticsTest, AStepsIntervalCoversTheWidthWhenFramesAreIndependent) {
+  bool flagged = false;
+  EXPECT_NEAR(Coverage(0.0, 0.07, false, 0.0, &flagged), 0.95, 0.015);
+  EXPECT_TRUE(flagged);  // none taken for repeats
+}
+
+TEST(StatisticsTest, AStepsIntervalCoversAnErrorEveryFrameShares) {
+  // The model's doubt (a shading or structure the frames share) does not average down: the
+  // scatter alone covered 30 % of such steps.
+  bool flagged = false;
+  EXPECT_NEAR(Coverage(0.05, 0.07, false, 0.05, &flagged), 0.95, 0.02);
+  EXPECT_TRUE(flagged);
+}
+
+TEST(StatisticsTest, AStepOfRepeatedFramesCountsAsOneFrame) {
+  // Fifty copies of one frame (a still scene through H.264, whose skipped blocks repeat one
+  // frame's noise): their scatter is nothing, their mean one frame's error. The scatter alone
+  // covered 0.03 % of such steps.
+  bool flagged = false;
+  EXPECT_NEAR(Coverage(0.0, 0.07, true, 0.0, &flagged), 0.95, 0.015);
+  EXPECT_TRUE(flagged);  // every step said so
+}
+
 TEST(StatisticsTest, HoldsFromATemperatureLog) {
   // 220 for 60 s, ramp down to 210 over 20 s, 210 for 60 s, ramp, 200 for 10 s (too short).
   std::vector<TemperatureSample> log;
