@@ -119,7 +119,14 @@ InspectReport InspectInput(const InspectCommandOptions& o) {
       "searched {} in {}, gradient noise {:.2f} grey levels/px\n",
       roi == rep.frame_rect ? "the whole frame"
                             : fmt::format("ROI {},{},{},{}", roi.x, roi.y, roi.width, roi.height),
-      img.channels() == 1 ? "grey" : kChannelNames[rep.scene.channel], rep.scene.gradient_noise);
+      img.channels() == 1
+          ? "grey"
+          : fmt::format(
+                "{}{}", kChannelNames[rep.scene.channel],
+                rep.scene.measured_channel == rep.scene.channel
+                    ? ""
+                    : fmt::format(" (measured in {})", kChannelNames[rep.scene.measured_channel])),
+      rep.scene.gradient_noise);
   t += fmt::format("target {}{}\n", vision::MeasureTargetName(rep.target),
                    o.target_given ? ""
                                   : " (chosen: a tip is " +

@@ -744,7 +744,7 @@ SceneResult FindScene(const std::vector<cv::Mat>& channels, const SceneOptions& 
     const Detection d = DetectEdgePoints(channels[ch], o);
     const std::vector<Piece> pieces = StraightPieces(d, o.max_tilt_deg);
     SceneResult r;
-    r.channel = ch;
+    r.channel = r.measured_channel = ch;
     r.gradient_noise = d.noise / d.factor;
     for (const Piece& p : pieces) {
       EdgeSegment s = ToSegment(p, d);

@@ -96,8 +96,9 @@ struct StrandGeometry {
 struct SceneResult {
   FrameStatus status = FrameStatus::kNoStrand;  // kValid when a pair was chosen
   std::string detail;                           // why not, naming the best candidate
-  int channel = 0;                              // which of the prepared channels was used
-  double gradient_noise = 0;                    // grey levels per px
+  int channel = 0;            // which of the prepared channels the chosen pair was found in
+  int measured_channel = 0;   // which one measured it (luma where it can: strand_measure.h)
+  double gradient_noise = 0;  // grey levels per px
   std::vector<EdgeSegment> edges;
   std::vector<PairCandidate> candidates;  // best first
   int chosen = -1;

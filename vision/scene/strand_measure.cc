@@ -129,7 +129,7 @@ StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOption
   const double data_max = DataMax(frame(roi));
   const SceneOptions scene_options = SceneOptionsFor(opt, data_max);
   SceneResult scene = FindScene(channels, scene_options);
-  const cv::Mat& channel = channels[scene.channel];
+  const cv::Mat& channel = channels[scene.channel];  // measured in, until luma takes over
   StrandMeasurement m =
       MeasureInScene(channel, data_max, scene.status, scene.detail, scene.geometry, roi, opt);
   // The calipers see more than the pair search: when they reject the chosen pair (its width
@@ -199,7 +199,7 @@ StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOption
     StrandMeasurement luma =
         MeasureInScene(channels[0], data_max, FrameStatus::kValid, "", scene.geometry, roi, opt);
     if (luma.valid()) {
-      scene.channel = 0;
+      scene.measured_channel = 0;
       m = std::move(luma);
     }
   }
@@ -209,11 +209,11 @@ StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOption
   if (m.status == FrameStatus::kSaturated && channels.size() > 1 && scene.chosen >= 0) {
     for (size_t k = 1; k <= channels.size(); ++k) {
       const size_t c = k % channels.size();  // 1, 2, 3, then 0 (luma)
-      if (static_cast<int>(c) == scene.channel) continue;
+      if (static_cast<int>(c) == scene.measured_channel) continue;
       StrandMeasurement alt =
           MeasureInScene(channels[c], data_max, FrameStatus::kValid, "", scene.geometry, roi, opt);
       if (!alt.valid()) continue;
-      scene.channel = static_cast<int>(c);
+      scene.measured_channel = static_cast<int>(c);
       m = std::move(alt);
       break;
     }

@@ -45,7 +45,7 @@ StrandMeasurement StrandTracker::Detect(const cv::Mat& frame) {
 bool StrandTracker::Follow(const cv::Mat& frame, StrandMeasurement* out) {
   const cv::Rect roi = ResolveRoi(frame, options_);
   if (frame.size() != frame_size_) return false;
-  const cv::Mat channel = SearchChannel(frame, roi, scene_.channel);
+  const cv::Mat channel = SearchChannel(frame, roi, scene_.measured_channel);
   const double data_max = DataMax(frame(roi));
   StrandGeometry g = scene_.geometry;
   if (options_.target == MeasureTarget::kStrand) {
