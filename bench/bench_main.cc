@@ -1,6 +1,9 @@
 // clogscope_bench: the speed and accuracy figures quoted in issue closing notes.
 //   clogscope_bench [measure|accuracy|video|experiment|lag|speed|speed-codec [FIRST_SEED]|watch|
-//                    adversarial [SCENES_PER_CLASS] [--list]|all]   (default all)
+//                    adversarial [SCENES_PER_CLASS] [--list]|filament VIDEO|all] [--pi]
+//                    (default all)
+// --pi adds, beside every frames/s of `measure` and `video`, what a Raspberry Pi 5 and 4 would
+// give on one core (this machine's figure ÷ 3 and ÷ 4) and whether that keeps up with 30 frames/s.
 // Prints Markdown tables. Timings are wall-clock on this machine; run on an idle machine.
 #include <fmt/format.h>
 
@@ -12,11 +15,13 @@
 #include <filesystem>
 #include <opencv2/core.hpp>
 #include <opencv2/videoio.hpp>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <tuple>
 #include <vector>
 
+#include "common/spawn.h"
 #include "model/lag_fit.h"
 #include "pipeline/experiment.h"
 #include "pipeline/speed_summary.h"
@@ -42,11 +47,64 @@ double Seconds(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double>(b - a).count();
 }
 
+// Runs a program (the ffmpeg CLI) without a shell, its output discarded; true when it exited 0.
+bool RunQuietly(std::vector<std::string> argv) {
+  clogscope::SpawnOptions o;
+  o.argv = std::move(argv);
+  o.stdout_path = o.stderr_path = "/dev/null";
+  std::string why;
+  const pid_t pid = clogscope::Spawn(o, &why);
+  return pid > 0 && clogscope::WaitForExit(pid, &why);
+}
+
+// Words of a fixed argument string of ours ("-c:v mjpeg -q:v 8"): no quoting to honour.
+std::vector<std::string> Words(const std::string& text) {
+  std::vector<std::string> out;
+  std::istringstream in(text);
+  for (std::string w; in >> w;) out.push_back(w);
+  return out;
+}
+
+// `--pi`: each frames/s figure also as a Raspberry Pi's single core would give it. The factors
+// are issue 26's estimate of a Pi's core against this machine's (a third for a Pi 5, a quarter for
+// a Pi 4), not a measurement: run clogscope_bench on the Pi to know.
+struct PiModel {
+  const char* name;
+  double slower;
+};
+constexpr PiModel kPis[] = {{"Pi 5", 3.0}, {"Pi 4", 4.0}};
+constexpr double kCameraFps = 30.0;  // the camera a budget line is judged against
+bool g_pi_columns = false;
+
+std::string PiHeader() {
+  std::string h, rule;
+  if (!g_pi_columns) return "";
+  for (const PiModel& m : kPis) {
+    h += fmt::format(" {} (÷{:g}) |", m.name, m.slower);
+    rule += "---|";
+  }
+  return h + "\n" + rule;
+}
+// The Pi columns of a row: frames/s there, and whether a 30 frames/s camera is kept up with.
+std::string PiCells(double fps) {
+  std::string out;
+  if (!g_pi_columns) return out;
+  for (const PiModel& m : kPis) {
+    const double pi_fps = fps / m.slower;
+    out += fmt::format(" {:.0f} ({}) |", pi_fps,
+                       pi_fps >= kCameraFps ? "keeps up at 30/s" : "falls behind at 30/s");
+  }
+  return out;
+}
+
 // Single-core throughput of MeasureStrand on 720p frames.
 void BenchMeasure() {
+  const std::string pi = PiHeader();
+  const size_t cut = pi.find('\n');
   fmt::print(
-      "\n## Measurement alone, 1280x720, one core\n\n| frames | frames/s | ms/frame "
-      "|\n|---|---|---|\n");
+      "\n## Measurement alone, 1280x720, one core\n\n| frames | frames/s | ms/frame |{}\n"
+      "|---|---|---|{}\n",
+      pi.substr(0, cut), cut == std::string::npos ? "" : pi.substr(cut + 1));
   for (bool colour : {false, true}) {
     SceneParams p;
     p.colour = colour;
@@ -64,8 +122,9 @@ void BenchMeasure() {
           valid += (tracked ? tracker.Measure(f) : MeasureStrand(f, opt)).valid(), ++n;
       }
       const double s = Seconds(t0, Clock::now());
-      fmt::print("| {}, {} ({} of {} valid) | {:.0f} | {:.3f} |\n", colour ? "colour BGR" : "grey",
-                 tracked ? "tracked" : "found afresh", valid, n, n / s, 1000 * s / n);
+      fmt::print("| {}, {} ({} of {} valid) | {:.0f} | {:.3f} |{}\n",
+                 colour ? "colour BGR" : "grey", tracked ? "tracked" : "found afresh", valid, n,
+                 n / s, 1000 * s / n, PiCells(n / s));
     }
   }
 }
@@ -219,21 +278,29 @@ void BenchVideo() {
   fmt::print(
       "\n## Video: 250 frames 1280x720 H.264 (OpenCV/libx264, crf 23), 2 cores, median of {}\n\n",
       kRounds);
-  fmt::print("| pass | frames/s |\n|---|---|\n");
-  fmt::print("| decode only, OpenCV VideoCapture (to BGR) | {:.0f} |\n", median(cv_fps));
-  fmt::print("| decode only, clogscope reader (luma) | {:.0f} |\n", decode_fps);
-  fmt::print("| decode + measure (clogscope pipeline, as `measure`) | {:.0f} |\n", measure_fps);
+  const std::string pi = PiHeader();
+  const size_t cut = pi.find('\n');
+  fmt::print("| pass | frames/s |{}\n|---|---|{}\n", pi.substr(0, cut),
+             cut == std::string::npos ? "" : pi.substr(cut + 1));
+  fmt::print("| decode only, OpenCV VideoCapture (to BGR) | {:.0f} |{}\n", median(cv_fps),
+             PiCells(median(cv_fps)));
+  fmt::print("| decode only, clogscope reader (luma) | {:.0f} |{}\n", decode_fps,
+             PiCells(decode_fps));
+  fmt::print("| decode + measure (clogscope pipeline, as `measure`) | {:.0f} |{}\n", measure_fps,
+             PiCells(measure_fps));
   fmt::print(
       "\nmeasure / decode-only throughput: **{:.2f}** (against OpenCV's reader: {:.2f}); width "
       "error on these frames: mean {:+.4f} px, std {:.4f} px ({} valid of {})\n",
       measure_fps / decode_fps, measure_fps / median(cv_fps), mean, sd, valid, n);
   // ffmpeg's own decode, start-up subtracted (a 1-frame run measures it).
-  auto ffmpeg_secs = [&](const std::string& frames) {
-    const std::string cmd = "ffmpeg -v error -i " + path + frames + " -f null - 2>/dev/null";
+  auto ffmpeg_secs = [&](std::vector<std::string> frames) {
+    std::vector<std::string> argv = {"ffmpeg", "-nostdin", "-v", "error", "-i", path};
+    argv.insert(argv.end(), frames.begin(), frames.end());
+    argv.insert(argv.end(), {"-f", "null", "-"});
     const auto t0 = Clock::now();
-    return std::system(cmd.c_str()) == 0 ? Seconds(t0, Clock::now()) : -1.0;
+    return RunQuietly(argv) ? Seconds(t0, Clock::now()) : -1.0;
   };
-  const double all = ffmpeg_secs(""), one = ffmpeg_secs(" -frames:v 1");
+  const double all = ffmpeg_secs({}), one = ffmpeg_secs({"-frames:v", "1"});
   if (all > 0 && one > 0 && all > one) {
     fmt::print("ffmpeg -f null decode of the same file (start-up subtracted): {:.0f} frames/s\n",
                249 / (all - one));
@@ -280,10 +347,10 @@ void BenchExperiment() {
     }
     return std::make_pair(n, Seconds(t0, Clock::now()));
   };
-  std::string ff_cmd = "ffmpeg -v error";
-  for (const auto& v : videos) ff_cmd += " -i " + v;
-  for (size_t i = 0; i < videos.size(); ++i) ff_cmd += fmt::format(" -map {}:v -f null -", i);
-  ff_cmd += " 2>/dev/null";
+  std::vector<std::string> ff_argv = {"ffmpeg", "-nostdin", "-v", "error"};
+  for (const auto& v : videos) ff_argv.insert(ff_argv.end(), {"-i", v});
+  for (size_t i = 0; i < videos.size(); ++i)
+    ff_argv.insert(ff_argv.end(), {"-map", fmt::format("{}:v", i), "-f", "null", "-"});
   auto run_pipeline = [&](int jobs) {
     clogscope::pipeline::ExperimentOptions o;
     o.samples = 50;
@@ -310,7 +377,7 @@ void BenchExperiment() {
     ours_all.push_back(decode_all(0).second);
     ours_one.push_back(decode_all(1).second);
     const auto t0 = Clock::now();
-    if (std::system(ff_cmd.c_str()) == 0) ff.push_back(Seconds(t0, Clock::now()));
+    if (RunQuietly(ff_argv)) ff.push_back(Seconds(t0, Clock::now()));
     double s2 = 0, s1 = 0;
     std::tie(s2, examined, worst) = run_pipeline(2);
     pipe2.push_back(s2);
@@ -521,9 +588,12 @@ std::string RenderFeed(const SpeedCodec& codec, double speed_mm_s, uint64_t seed
   const fs::path frames_dir = dir / "png";
   fs::remove_all(frames_dir);
   clogscope::synthetic::RenderSequence(p, frames, 30, frames_dir.string(), "");
-  const std::string cmd = fmt::format("ffmpeg -v error -y -framerate 30 -i {}/frame_%06d.png {} {}",
-                                      frames_dir.string(), codec.ffmpeg_args, video);
-  if (std::system(cmd.c_str()) != 0) throw std::runtime_error("failed: " + cmd);
+  std::vector<std::string> argv = {"ffmpeg", "-nostdin", "-v",
+                                   "error",  "-y",       "-framerate",
+                                   "30",     "-i",       (frames_dir / "frame_%06d.png").string()};
+  for (std::string& w : Words(codec.ffmpeg_args)) argv.push_back(std::move(w));
+  argv.push_back(video);
+  if (!RunQuietly(argv)) throw std::runtime_error(video + ": ffmpeg could not encode it");
   fs::remove_all(frames_dir);
   return video;
 }
@@ -621,17 +691,65 @@ void BenchFeedSpeedCodec(int first_seed) {
 
 }  // namespace
 
+// The filament path (`measure --target filament`) on a video of one's own (issue 26 quotes
+// Greeff's, ../shared/real/greeff/): tracked frames per second on one core, as `measure` reads it.
+void BenchFilament(const std::string& path) {
+  namespace vision = clogscope::vision;
+  cv::setNumThreads(1);
+  StrandMeasureOptions opt;
+  opt.target = vision::MeasureTarget::kFilament;
+  const vision::BandPx band = vision::DefaultBand(opt.target, 1.0);
+  opt.band_start_px = band.start_px;
+  opt.band_height_px = band.height_px;
+  constexpr int kRounds = 3;
+  std::vector<double> fps;
+  int n = 0, valid = 0;
+  double sum = 0;
+  for (int r = 0; r < kRounds; ++r) {
+    auto src = vision::FrameSource::Open(path);
+    valid = 0;
+    sum = 0;
+    const auto t0 = Clock::now();
+    n = vision::MeasureFrames(*src, opt, [&](vision::InputFrame&, vision::StrandMeasurement& m) {
+      if (!m.valid()) return;
+      ++valid;
+      sum += m.width_px;
+    });
+    fps.push_back(n / Seconds(t0, Clock::now()));
+  }
+  std::sort(fps.begin(), fps.end());
+  const std::string pi = PiHeader();
+  const size_t cut = pi.find('\n');
+  fmt::print("\n## Filament path on {} (decode + measure, one core, median of {})\n\n", path,
+             kRounds);
+  fmt::print("| frames | frames/s |{}\n|---|---|{}\n", pi.substr(0, cut),
+             cut == std::string::npos ? "" : pi.substr(cut + 1));
+  fmt::print("| {} of {} valid, mean width {:.3f} px | {:.0f} |{}\n", valid, n,
+             valid ? sum / valid : 0.0, fps[kRounds / 2], PiCells(fps[kRounds / 2]));
+}
+
 void BenchWatch();                             // watch_bench.cc
 void BenchAdversarial(int argc, char** argv);  // adversarial_bench.cc
 
 int main(int argc, char** argv) {
+  // --pi may stand anywhere; the rest is positional.
+  std::vector<char*> args;
+  for (int i = 0; i < argc; ++i) {
+    if (i > 0 && std::string(argv[i]) == "--pi")
+      g_pi_columns = true;
+    else
+      args.push_back(argv[i]);
+  }
+  argc = static_cast<int>(args.size());
+  argv = args.data();
   const std::string what = argc > 1 ? argv[1] : "all";
   if (what != "all" && what != "measure" && what != "accuracy" && what != "video" &&
       what != "experiment" && what != "lag" && what != "speed" && what != "speed-codec" &&
-      what != "watch" && what != "adversarial") {
+      what != "watch" && what != "adversarial" && !(what == "filament" && argc > 2)) {
     std::fprintf(stderr,
                  "usage: clogscope_bench [measure|accuracy|video|experiment|lag|speed|speed-codec "
-                 "[FIRST_SEED]|watch|adversarial [SCENES_PER_CLASS] [--list]|all]\n");
+                 "[FIRST_SEED]|watch|adversarial [SCENES_PER_CLASS] [--list]|filament VIDEO|all] "
+                 "[--pi]\n");
     return 2;
   }
   fmt::print("# clogscope benchmarks ({} hardware threads)\n", std::thread::hardware_concurrency());
@@ -649,5 +767,6 @@ int main(int argc, char** argv) {
     BenchFeedSpeedCodec(what == "speed-codec" && argc > 2 ? std::atoi(argv[2]) : 1);
   if (what == "all" || what == "watch") BenchWatch();
   if (what == "all" || what == "adversarial") BenchAdversarial(argc, argv);
+  if (what == "filament") BenchFilament(argv[2]);
   return 0;
 }
