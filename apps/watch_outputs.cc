@@ -16,6 +16,7 @@
 
 #include "common/csv.h"
 #include "common/spawn.h"
+#include "vision/io/source_name.h"
 #include "vision/overlay/overlay.h"
 
 extern char** environ;
@@ -66,7 +67,7 @@ bool AlertCommand::Run(const watch::WatchStatus& s, const std::optional<watch::C
   add("BASELINE_UM", s.baseline_ready ? CsvNumber(s.baseline_um, 3) : "");
   add("BACK_PRESSURE_RATIO", clog ? CsvNumber(clog->back_pressure_ratio, 5) : "");
   add("VIBRATION_INCREASE_PCT", clog ? CsvNumber(clog->vibration_increase_pct, 3) : "");
-  add("SOURCE", source);
+  add("SOURCE", vision::RedactCredentials(source));  // a child may log it: no password
   add("STATUS_JSON", status_json);
   SpawnOptions run;
   run.argv = {"/bin/sh", "-c", command_};

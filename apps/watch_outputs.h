@@ -25,8 +25,8 @@ class LineLog {
 
 // --on-alert: runs `sh -c COMMAND` on every level change without waiting for it, the state in
 // CLOGSCOPE_* environment variables (LEVEL, PREVIOUS_LEVEL, TIME_S, REASON, DIAMETER_UM,
-// DRIFT_PCT, DRIFT_CI95_PCT, BASELINE_UM, BACK_PRESSURE_RATIO, VIBRATION_INCREASE_PCT, SOURCE,
-// STATUS_JSON).
+// DRIFT_PCT, DRIFT_CI95_PCT, BASELINE_UM, BACK_PRESSURE_RATIO, VIBRATION_INCREASE_PCT, SOURCE
+// with a URL's password hidden, STATUS_JSON).
 class AlertCommand {
  public:
   explicit AlertCommand(std::string command) : command_(std::move(command)) {}

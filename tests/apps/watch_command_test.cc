@@ -20,6 +20,7 @@
 #include <sstream>
 #include <thread>
 
+#include "apps/watch_outputs.h"
 #include "synthetic/synthetic.h"
 #include "tests/apps/cli_test_util.h"
 
@@ -255,6 +256,28 @@ TEST_F(WatchCommandTest, AnHttpMjpegStreamFromFfmpegIsWatchedAndServed) {
   std::cout << "stream: " << report.summary.frames << " frames, latency median "
             << report.summary.latency_median_ms << " ms, p95 " << report.summary.latency_p95_ms
             << " ms, warn at " << warn_t << " s\n";
+}
+
+// A camera's password is in no message: the error that ends the watch names the URL without it,
+// and the alert command's CLOGSCOPE_SOURCE too.
+TEST_F(WatchCommandTest, ACameraPasswordIsShownNowhere) {
+  const testing::RunResult r = RunCli(
+      "watch http://admin:s3cret@127.0.0.1:" + std::to_string(FreePort()) + "/x --open-timeout-s 2",
+      *dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("http://admin:***@127.0.0.1:"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("s3cret"), std::string::npos) << r.err;
+
+  const fs::path env = *dir_ / "alert_env.txt";
+  std::string why;
+  {
+    AlertCommand alert("printf %s \"$CLOGSCOPE_SOURCE\" > " + env.string());
+    watch::WatchStatus s;
+    ASSERT_TRUE(alert.Run(s, std::nullopt, "rtsp://admin:s3cret@cam.local/stream1", "{}", &why))
+        << why;
+    EXPECT_TRUE(alert.Reap(/*wait=*/true).empty());
+  }
+  EXPECT_EQ(ReadFile(env.string()), "rtsp://admin:***@cam.local/stream1");
 }
 
 TEST_F(WatchCommandTest, BadInputGetsOneLineNamingTheProblem) {
