@@ -1,6 +1,5 @@
 #pragma once
 
-#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -40,22 +39,6 @@ class AlertCommand {
  private:
   std::string command_;
   std::vector<int> running_;  // pids
-};
-
-// --http HOST:PORT: /status (JSON), /metrics (Prometheus text), /frame.jpg (the latest overlay).
-class WatchHttpServer {
- public:
-  // Binds at once: throws std::invalid_argument naming --http when the address is malformed or the
-  // port cannot be bound (in use, no permission). Serves on its own threads from then on.
-  WatchHttpServer(const std::string& host_port, const watch::WatchBoard* board,
-                  std::optional<calib::ScaleCalibration> conversion);
-  ~WatchHttpServer();  // stops serving
-  int port() const { return port_; }
-
- private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
-  int port_ = 0;
 };
 
 }  // namespace clogscope::apps
