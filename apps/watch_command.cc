@@ -58,6 +58,7 @@ WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* s
   WatchReport report;
   report.http_port = http ? http->port() : 0;
   if (http) {
+    live.http_url = http->url();
     spdlog::info("serving /status, /metrics and /frame.jpg on {}{}", http->url(),
                  http_options.token.empty() ? "" : " (a bearer token for all but /metrics)");
     if (!http->loopback_only() && http_options.token.empty())

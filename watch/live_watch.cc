@@ -243,6 +243,7 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
   reader.queue = &queue;
   WatchCounters counters;
   counters.source = vision::RedactCredentials(options.source);
+  counters.http_url = options.http_url;
   counters.source_kind = vision::SourceKindName(reader.source->kind());
   Workers reading(1, [&](int) { reader.Run(); });
   // However this function ends (an event callback may throw), the reader is told to stop and woken

@@ -274,7 +274,7 @@ size_t WaitForText(const fs::path& file, const std::string& text, double timeout
 
 // Ctrl-C ends the watch within 2 s whatever its HTTP clients do: half a request sent and then
 // nothing, or a picture asked for and never read. The port the server chose (--http HOST:0) is
-// told on standard error, and the test takes it from there.
+// told on standard error and in the JSON lines, and the test takes it from there.
 TEST_F(WatchCommandTest, SigintEndsTheWatchWithinTwoSecondsWhateverClientsDo) {
   const fs::path log = *dir_ / "sigint.jsonl", err = *dir_ / "sigint.err";
   fs::remove(log);
@@ -291,8 +291,9 @@ TEST_F(WatchCommandTest, SigintEndsTheWatchWithinTwoSecondsWhateverClientsDo) {
   if (at == std::string::npos) kill(pid, SIGKILL);
   ASSERT_NE(at, std::string::npos) << ReadFile(err.string());
   const int port = std::stoi(ReadFile(err.string()).substr(at + serving.size()));
-  // The watch is measuring.
-  ASSERT_NE(WaitForText(log, "\"event\":\"status\"", 60), std::string::npos)
+  const std::string url = "http://127.0.0.1:" + std::to_string(port);
+  // The first JSON line says where /status is.
+  ASSERT_NE(WaitForText(log, "\"http\":\"" + url + "\"", 60), std::string::npos)
       << ReadFile(log.string());
 
   std::vector<testing::TestSocket> slow;

@@ -110,10 +110,12 @@ TEST(LiveWatchTest, ASourceNameThatIsNotUtf8StillGivesJsonLines) {
   EXPECT_EQ(last["source"], "caf\xef\xbf\xbd");  // U+FFFD in place of the stray byte
 }
 
-// A camera's password is in no line, warning or error of the watch.
+// A camera's password is in no line, warning or error of the watch; where /status is served is in
+// every line.
 TEST(LiveWatchTest, ACameraPasswordIsShownInNoLineWarningOrError) {
   LiveWatchOptions o = Options();
   o.source = "rtsp://admin:s3cret@cam.local/stream1?token=abc123";
+  o.http_url = "http://127.0.0.1:8090";
   std::vector<std::string> told;  // every line and warning
   LiveWatchEvents events;
   events.on_warning = [&](const std::string& message) { told.push_back(message); };
@@ -130,6 +132,7 @@ TEST(LiveWatchTest, ACameraPasswordIsShownInNoLineWarningOrError) {
   EXPECT_EQ(s.error, "rtsp://admin:***@cam.local/stream1?token=***: decoder gave up");
   const nlohmann::json last = nlohmann::json::parse(told[told.size() - 2]);
   EXPECT_EQ(last["source"], "rtsp://admin:***@cam.local/stream1?token=***");
+  EXPECT_EQ(last["http"], "http://127.0.0.1:8090");
 }
 
 // A level change is told once the board (what /status, /metrics and /frame.jpg serve) shows it:
