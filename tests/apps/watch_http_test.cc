@@ -37,6 +37,14 @@ double SecondsSince(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
+// Under AddressSanitizer freed memory waits in a quarantine instead of being reused: resident
+// memory then says nothing about what a request keeps.
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kRssMeansSomething = false;
+#else
+constexpr bool kRssMeansSomething = true;
+#endif
+
 long RssKb() {
   std::ifstream status("/proc/self/status");
   for (std::string line; std::getline(status, line);)
@@ -154,7 +162,9 @@ TEST_F(WatchHttpTest, HostileRequestsAreRefusedWithinBoundedMemory) {
   const auto check = [&](const char* what, std::pair<int, size_t> got, std::set<int> statuses) {
     const long grew_kb = RssKb() - base_kb;
     worst_kb = std::max(worst_kb, grew_kb);
-    EXPECT_LT(grew_kb, 16 * 1024) << what;
+    if (kRssMeansSomething) {
+      EXPECT_LT(grew_kb, 16 * 1024) << what;
+    }
     EXPECT_LT(got.second, size_t{8} << 20) << what << ": the server kept reading";
     EXPECT_TRUE(statuses.count(got.first)) << what << ": " << got.first;
   };
