@@ -70,7 +70,7 @@ void PrintUsage() {
       "  clogscope thermal --material pla --fan-velocity-m-s 0.3\n"
       "  clogscope drive --roller 3 --pinch-force-n 80 --feed-force-n 20\n"
       "  clogscope watch http://printer.local/webcam/?action=stream --calib calib.yaml --http "
-      "0.0.0.0:8090\n"
+      "8090\n"
       "  clogscope lag --frames frames.csv --commanded profile.csv --out lag/\n"
       "\nEnvironment: CLOGSCOPE_LOG=debug|info|warn|error sets the log level (default info).\n");
 }

@@ -9,6 +9,7 @@
 
 #include "apps/cli_util.h"
 #include "apps/measure_options.h"
+#include "apps/watch_http.h"
 #include "apps/watch_outputs.h"
 #include "model/prediction_run.h"
 #include "pipeline/experiment.h"
@@ -42,15 +43,30 @@ WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* s
   std::string why;
   if (!live.Validate(&why)) throw std::invalid_argument(why);
 
+  if (!options.http_token_file.empty() && options.http.empty())
+    throw std::invalid_argument("--http-token-file goes with --http");
+  WatchHttpOptions http_options;
+  http_options.address = options.http;
+  if (!options.http_token_file.empty()) http_options.token = ReadHttpToken(options.http_token_file);
+
   LineLog log(options.log_path);
   watch::WatchBoard board;
   std::optional<WatchHttpServer> http;
-  if (!options.http.empty()) http.emplace(options.http, &board, live.conversion);
+  if (!options.http.empty()) http.emplace(http_options, &board, live.conversion);
   std::optional<AlertCommand> alert;
   if (!options.on_alert.empty()) alert.emplace(options.on_alert);
   WatchReport report;
   report.http_port = http ? http->port() : 0;
-  if (http) spdlog::info("serving /status, /metrics and /frame.jpg on {}", options.http);
+  if (http) {
+    live.http_url = http->url();
+    spdlog::info("serving /status, /metrics and /frame.jpg on {}{}", http->url(),
+                 http_options.token.empty() ? "" : " (a bearer token for all but /metrics)");
+    if (!http->loopback_only() && http_options.token.empty())
+      spdlog::warn(
+          "--http {}: reachable from other machines, with no --http-token-file: whoever reaches "
+          "the port sees the camera's frames and the state",
+          options.http);
+  }
   if (observers.on_started) observers.on_started(report.http_port);
 
   watch::LiveWatchEvents events;
@@ -137,14 +153,24 @@ int RunWatch(int argc, char** argv) {
   app.add_option("--log", o.log_path, "Append the JSON lines here (default: standard output)");
   app.add_option("--report-s", live.report_every_s,
                  "A status line every this-many seconds (default: --window-s)");
-  app.add_option("--http", o.http, "HOST:PORT to serve /status, /metrics and /frame.jpg");
+  app.add_option("--http", o.http,
+                 "[HOST:]PORT to serve /status, /metrics and /frame.jpg: a port alone is "
+                 "127.0.0.1, this machine only; 0.0.0.0:PORT lets every network that reaches "
+                 "this machine see the camera's frames and the state, unencrypted: add "
+                 "--http-token-file, or keep it on a trusted network");
+  app.add_option("--http-token-file", o.http_token_file,
+                 "A file holding a bearer token (one line, at least 16 characters): every path "
+                 "but /metrics then asks for 'Authorization: Bearer TOKEN'");
   app.add_option("--on-alert", o.on_alert,
                  "Shell command run on every level change (state in CLOGSCOPE_* variables)");
   app.add_option("--duration-s", live.duration_s, "Stop after this long (default: until Ctrl-C)");
   app.footer(
       "Examples:\n"
       "  clogscope watch http://printer.local/webcam/?action=stream --calib calib.yaml \\\n"
-      "      --http 0.0.0.0:8090 --log watch.jsonl\n"
+      "      --http 8090 --log watch.jsonl             # served to this machine only\n"
+      "  head -c 24 /dev/urandom | base64 > token && chmod 600 token\n"
+      "  clogscope watch /dev/video0 --scale-um-per-px 3 --http 0.0.0.0:8090 \\\n"
+      "      --http-token-file token                   # to the network, behind a token\n"
       "  clogscope watch /dev/video0 --scale-um-per-px 3 --extruder direct-pla --temperature-c "
       "210\n"
       "  clogscope watch replay.mp4 --realtime --scale-um-per-px 3 --on-alert \\\n"

@@ -28,13 +28,14 @@ struct WatchCommandOptions {
   std::vector<std::string> set;         // "name=value" overrides of the extruder
   std::optional<double> temperature_c;  // the nozzle's; default the extruder's reference
   std::string log_path;                 // JSON lines appended here; empty: standard output
-  std::string http;                     // HOST:PORT for /status, /metrics, /frame.jpg
+  std::string http;                     // [HOST:]PORT for /status, /metrics, /frame.jpg
+  std::string http_token_file;          // the bearer token the server asks for; empty: none
   std::string on_alert;                 // shell command run on every level change
 };
 
 struct WatchReport {
   watch::LiveWatchSummary summary;
-  int http_port = 0;  // the bound port (useful with --http HOST:0)
+  int http_port = 0;  // the bound port (the real one for --http HOST:0)
   std::vector<std::string> alert_failures;
 };
 

@@ -2,21 +2,18 @@
 
 #include <fcntl.h>
 #include <fmt/format.h>
-#include <httplib.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <chrono>
-#include <cmath>
 #include <cstring>
-#include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <thread>
 
 #include "common/csv.h"
 #include "common/spawn.h"
-#include "vision/overlay/overlay.h"
+#include "vision/io/source_name.h"
 
 extern char** environ;
 
@@ -66,7 +63,7 @@ bool AlertCommand::Run(const watch::WatchStatus& s, const std::optional<watch::C
   add("BASELINE_UM", s.baseline_ready ? CsvNumber(s.baseline_um, 3) : "");
   add("BACK_PRESSURE_RATIO", clog ? CsvNumber(clog->back_pressure_ratio, 5) : "");
   add("VIBRATION_INCREASE_PCT", clog ? CsvNumber(clog->vibration_increase_pct, 3) : "");
-  add("SOURCE", source);
+  add("SOURCE", vision::RedactCredentials(source));  // a child may log it: no password
   add("STATUS_JSON", status_json);
   SpawnOptions run;
   run.argv = {"/bin/sh", "-c", command_};
@@ -103,71 +100,5 @@ std::vector<std::string> AlertCommand::Reap(bool wait) {
 }
 
 AlertCommand::~AlertCommand() { Reap(/*wait=*/true); }
-
-struct WatchHttpServer::Impl {
-  httplib::Server server;
-  std::thread thread;
-};
-
-WatchHttpServer::WatchHttpServer(const std::string& host_port, const watch::WatchBoard* board,
-                                 std::optional<calib::ScaleCalibration> conversion)
-    : impl_(std::make_unique<Impl>()) {
-  const size_t colon = host_port.rfind(':');
-  int port = -1;
-  if (colon != std::string::npos) {
-    try {
-      size_t used = 0;
-      port = std::stoi(host_port.substr(colon + 1), &used);
-      if (used != host_port.size() - colon - 1) port = -1;
-    } catch (const std::exception&) {
-      port = -1;
-    }
-  }
-  if (colon == std::string::npos || colon == 0 || port < 0 || port > 65535)
-    throw std::invalid_argument("--http '" + host_port +
-                                "': expected HOST:PORT, e.g. 0.0.0.0:8090");
-  const std::string host = host_port.substr(0, colon);
-  httplib::Server& srv = impl_->server;
-  srv.Get("/status", [board](const httplib::Request&, httplib::Response& res) {
-    const watch::WatchSnapshot s = board->Read();
-    res.set_content(watch::StatusJson(s.status, s.clog, s.counters, "status") + "\n",
-                    "application/json");
-  });
-  srv.Get("/metrics", [board](const httplib::Request&, httplib::Response& res) {
-    const watch::WatchSnapshot s = board->Read();
-    res.set_content(watch::PrometheusText(s.status, s.clog, s.counters),
-                    "text/plain; version=0.0.4; charset=utf-8");
-  });
-  srv.Get("/frame.jpg", [board, conversion](const httplib::Request&, httplib::Response& res) {
-    const watch::WatchSnapshot s = board->Read();
-    if (s.frame.empty()) {
-      res.status = 503;
-      res.set_content("no frame yet\n", "text/plain");
-      return;
-    }
-    // Drawn on request: the measuring thread never pays for a picture nobody looks at.
-    std::vector<uchar> jpeg;
-    cv::imencode(
-        ".jpg",
-        vision::DrawOverlay(s.frame, s.measurement, conversion ? conversion->scale_um_per_px : 0.0,
-                            conversion ? conversion->edge_bias_px : 0.0),
-        jpeg, {cv::IMWRITE_JPEG_QUALITY, 85});
-    res.set_content(reinterpret_cast<const char*>(jpeg.data()), jpeg.size(), "image/jpeg");
-  });
-  srv.Get("/", [](const httplib::Request&, httplib::Response& res) {
-    res.set_content("clogscope watch: /status /metrics /frame.jpg\n", "text/plain");
-  });
-  port_ = port == 0 ? srv.bind_to_any_port(host) : (srv.bind_to_port(host, port) ? port : -1);
-  if (port_ <= 0) {
-    throw std::invalid_argument(fmt::format(
-        "--http {}: cannot listen there (port in use, no permission, or unknown host)", host_port));
-  }
-  impl_->thread = std::thread([this] { impl_->server.listen_after_bind(); });
-}
-
-WatchHttpServer::~WatchHttpServer() {
-  impl_->server.stop();
-  if (impl_->thread.joinable()) impl_->thread.join();
-}
 
 }  // namespace clogscope::apps

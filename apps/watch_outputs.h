@@ -1,6 +1,5 @@
 #pragma once
 
-#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -25,8 +24,8 @@ class LineLog {
 
 // --on-alert: runs `sh -c COMMAND` on every level change without waiting for it, the state in
 // CLOGSCOPE_* environment variables (LEVEL, PREVIOUS_LEVEL, TIME_S, REASON, DIAMETER_UM,
-// DRIFT_PCT, DRIFT_CI95_PCT, BASELINE_UM, BACK_PRESSURE_RATIO, VIBRATION_INCREASE_PCT, SOURCE,
-// STATUS_JSON).
+// DRIFT_PCT, DRIFT_CI95_PCT, BASELINE_UM, BACK_PRESSURE_RATIO, VIBRATION_INCREASE_PCT, SOURCE
+// with a URL's password hidden, STATUS_JSON).
 class AlertCommand {
  public:
   explicit AlertCommand(std::string command) : command_(std::move(command)) {}
@@ -40,22 +39,6 @@ class AlertCommand {
  private:
   std::string command_;
   std::vector<int> running_;  // pids
-};
-
-// --http HOST:PORT: /status (JSON), /metrics (Prometheus text), /frame.jpg (the latest overlay).
-class WatchHttpServer {
- public:
-  // Binds at once: throws std::invalid_argument naming --http when the address is malformed or the
-  // port cannot be bound (in use, no permission). Serves on its own threads from then on.
-  WatchHttpServer(const std::string& host_port, const watch::WatchBoard* board,
-                  std::optional<calib::ScaleCalibration> conversion);
-  ~WatchHttpServer();  // stops serving
-  int port() const { return port_; }
-
- private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
-  int port_ = 0;
 };
 
 }  // namespace clogscope::apps

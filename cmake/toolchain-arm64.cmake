@@ -36,7 +36,7 @@ set(CMAKE_FIND_ROOT_PATH_MODE_LIBRARY ONLY)
 set(CMAKE_FIND_ROOT_PATH_MODE_INCLUDE ONLY)
 set(CMAKE_FIND_ROOT_PATH_MODE_PACKAGE ONLY)
 
-# pkg-config (libav*, cpp-httplib) reads the target's .pc files and prefixes their paths with the
+# pkg-config (libav*, libmicrohttpd) reads the target's .pc files and prefixes their paths with the
 # sysroot.
 set(ENV{PKG_CONFIG_SYSROOT_DIR} "${CLOGSCOPE_ARM64_SYSROOT}")
 set(ENV{PKG_CONFIG_LIBDIR}

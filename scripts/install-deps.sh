@@ -17,7 +17,7 @@ packages=(
   libavformat-dev libavcodec-dev libavutil-dev libswscale-dev  # video decoding straight to luma
   ffmpeg                 # codec libraries for OpenCV's FFmpeg backend; ffmpeg CLI for decode benchmarks
   gnuplot-nox            # plots (optional at run time)
-  libcpp-httplib-dev     # `watch --http`: /status, /metrics, /frame.jpg
+  libmicrohttpd-dev      # `watch --http`: a server made to face a network (epoll, per-client limits); cpp-httplib 0.11 held a thread per slow client
   python3-dev            # the Python module (python/): Debian's Python 3.11 headers
   pybind11-dev           # the Python module's bindings (headers and CMake config)
   python3-numpy          # the Python module: frames in and out as NumPy arrays

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "common/work_queue.h"
+#include "vision/io/source_name.h"
 #include "vision/scene/scene_memory.h"
 #include "vision/scene/track.h"
 
@@ -47,6 +48,7 @@ struct Reader {
   void Warn(const std::string& message) const {
     if (events.on_warning) events.on_warning(message);
   }
+  std::string Shown() const { return vision::RedactCredentials(options.source); }
 
   bool Wait(double seconds) const {
     return vision::SleepUnlessStopped(Clock::now() + std::chrono::duration_cast<Clock::duration>(
@@ -62,10 +64,10 @@ struct Reader {
     try {
       Loop();
     } catch (const std::exception& e) {
-      error = fmt::format("{}: {}", options.source, e.what());
+      error = fmt::format("{}: {}", Shown(), e.what());
       ended_because = "the source failed";
     } catch (...) {
-      error = options.source + ": an unknown error while reading";
+      error = Shown() + ": an unknown error while reading";
       ended_because = "the source failed";
     }
     if (ended_because.empty()) ended_because = "stopped";
@@ -88,7 +90,7 @@ struct Reader {
       if (r == vision::FrameRead::kStopped) break;
       // Dropped: reopen with back-off until it comes back or the watch stops.
       up = false;
-      Warn(fmt::format("{}: {}; reconnecting", options.source, why));
+      Warn(fmt::format("{}: {}; reconnecting", Shown(), why));
       source.reset();
       double wait_s = options.reconnect_initial_s;
       while (!source && Wait(wait_s)) {
@@ -104,7 +106,7 @@ struct Reader {
       if (!source) break;
       ++reconnects;
       up = true;
-      Warn(options.source + ": reconnected");
+      Warn(Shown() + ": reconnected");
     }
   }
 };
@@ -240,7 +242,8 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
       2, live || options.source_options.realtime ? QueueFull::kDropOldest : QueueFull::kWait);
   reader.queue = &queue;
   WatchCounters counters;
-  counters.source = options.source;
+  counters.source = vision::RedactCredentials(options.source);
+  counters.http_url = options.http_url;
   counters.source_kind = vision::SourceKindName(reader.source->kind());
   Workers reading(1, [&](int) { reader.Run(); });
   // However this function ends (an event callback may throw), the reader is told to stop and woken
@@ -322,7 +325,7 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
         // not flood the log.
         if (!refusing && events.on_warning)
           events.on_warning(
-              fmt::format("{}: frame {} not measured: {}", options.source, frame.index, refused));
+              fmt::format("{}: frame {} not measured: {}", counters.source, frame.index, refused));
       }
       refusing = !refused.empty();
       const double t = live ? Seconds(frame.arrival - started) : frame.time_s;
@@ -340,7 +343,7 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
   } catch (const std::exception& e) {
     // Whatever failed on this thread, the watch ends with a stop line and the reason.
     summary.ended_because = "the watch failed";
-    summary.error = fmt::format("{}: the watch failed: {}", options.source, e.what());
+    summary.error = fmt::format("{}: the watch failed: {}", counters.source, e.what());
   }
   stop->store(true);  // the reader stops too
   queue.Cancel();     // and a reader waiting for room wakes

@@ -61,6 +61,7 @@ std::string StatusJson(const WatchStatus& s, const std::optional<ClogIndex>& clo
   j["source"] = c.source;
   j["source_kind"] = c.source_kind;
   j["source_up"] = s.source_up;
+  if (!c.http_url.empty()) j["http"] = c.http_url;
   j["window"] = {{"frames", s.frames},
                  {"valid_frames", s.valid_frames},
                  {"nozzle_only_frames", s.nozzle_only_frames},

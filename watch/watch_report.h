@@ -24,8 +24,9 @@ std::optional<ClogIndex> ComputeClogIndex(const model::ExtruderParams& params, d
 
 // Counters of the watch run that go with the state.
 struct WatchCounters {
-  std::string source;
+  std::string source;  // as shown: a URL's password hidden (vision::RedactCredentials)
   std::string source_kind;
+  std::string http_url;              // where /status is served, or empty
   long long frames_total = 0;        // frames received
   long long frames_valid_total = 0;  // with a width
   // Not measured: undecodable, damaged, too large, or not the first frame's size.

@@ -5,7 +5,6 @@
 
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
-#include <httplib.h>
 #include <netinet/in.h>
 #include <signal.h>
 #include <spawn.h>
@@ -20,8 +19,11 @@
 #include <sstream>
 #include <thread>
 
+#include "apps/watch_outputs.h"
+#include "common/spawn.h"
 #include "synthetic/synthetic.h"
 #include "tests/apps/cli_test_util.h"
+#include "tests/apps/http_test_client.h"
 
 extern char** environ;
 
@@ -209,17 +211,16 @@ TEST_F(WatchCommandTest, AnHttpMjpegStreamFromFfmpegIsWatchedAndServed) {
   observers.on_started = [&](int port) { http_port = port; };
   observers.on_level_change = [&](const watch::WatchStatus& s) {
     ASSERT_NE(http_port, 0) << "no HTTP port reported";
-    httplib::Client client("127.0.0.1", http_port);
-    const auto res = client.Get("/status");
-    ASSERT_TRUE(res && res->status == 200) << "no /status at " << s.time_s << " s";
-    const auto j = nlohmann::json::parse(res->body);
+    const testing::HttpReply res = testing::Get(http_port, "/status");
+    ASSERT_EQ(res.status, 200) << "no /status at " << s.time_s << " s";
+    const auto j = nlohmann::json::parse(res.body);
     EXPECT_EQ(j["level"], watch::WatchLevelName(s.level));
     seen.insert(j["previous_level"].get<std::string>());
     seen.insert(j["level"].get<std::string>());
     if (j["level"] == "warn" && warn_status.is_null()) {
       warn_status = j;
-      if (auto m = client.Get("/metrics")) metrics = m->body;
-      if (auto f = client.Get("/frame.jpg"); f && f->status == 200) jpeg = f->body;
+      metrics = testing::Get(http_port, "/metrics").body;
+      if (const auto f = testing::Get(http_port, "/frame.jpg"); f.status == 200) jpeg = f.body;
     }
   };
   std::atomic<bool> stop{false};
@@ -257,6 +258,95 @@ TEST_F(WatchCommandTest, AnHttpMjpegStreamFromFfmpegIsWatchedAndServed) {
             << " ms, warn at " << warn_t << " s\n";
 }
 
+// Until `file` holds `text` (bounded): the text's position, or npos.
+size_t WaitForText(const fs::path& file, const std::string& text, double timeout_s) {
+  const auto deadline = std::chrono::steady_clock::now() +
+                        std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                            std::chrono::duration<double>(timeout_s));
+  for (;;) {
+    std::ifstream in(file);
+    const std::string content((std::istreambuf_iterator<char>(in)), {});
+    if (const size_t at = content.find(text); at != std::string::npos) return at;
+    if (std::chrono::steady_clock::now() > deadline) return std::string::npos;
+    std::this_thread::yield();
+  }
+}
+
+// Ctrl-C ends the watch within 2 s whatever its HTTP clients do: half a request sent and then
+// nothing, or a picture asked for and never read. The port the server chose (--http HOST:0) is
+// told on standard error and in the JSON lines, and the test takes it from there.
+TEST_F(WatchCommandTest, SigintEndsTheWatchWithinTwoSecondsWhateverClientsDo) {
+  const fs::path log = *dir_ / "sigint.jsonl", err = *dir_ / "sigint.err";
+  fs::remove(log);
+  SpawnOptions run;
+  run.argv = {CLOGSCOPE_BINARY, "watch",       Video(), "--realtime", "--scale-um-per-px", "3",
+              "--http",         "127.0.0.1:0", "--log", log.string(), "--report-s",        "0.5"};
+  run.stderr_path = err.string();
+  run.stdout_path = (*dir_ / "sigint.out").string();
+  std::string why;
+  const pid_t pid = Spawn(run, &why);
+  ASSERT_GT(pid, 0) << why;
+  const std::string serving = "on http://127.0.0.1:";
+  const size_t at = WaitForText(err, serving, 60);
+  if (at == std::string::npos) kill(pid, SIGKILL);
+  ASSERT_NE(at, std::string::npos) << ReadFile(err.string());
+  const int port = std::stoi(ReadFile(err.string()).substr(at + serving.size()));
+  const std::string url = "http://127.0.0.1:" + std::to_string(port);
+  // The first JSON line says where /status is.
+  ASSERT_NE(WaitForText(log, "\"http\":\"" + url + "\"", 60), std::string::npos)
+      << ReadFile(log.string());
+
+  std::vector<testing::TestSocket> slow;
+  for (int i = 0; i < 20; ++i) {
+    slow.emplace_back(port, "127.0.0." + std::to_string(2 + i / 10));
+    slow.back().Send("GET /status HTTP/1.1\r\nHost: t\r\nX-Slow: ");
+  }
+  testing::TestSocket reader(port, "127.0.0.1", /*receive_bytes=*/4096);
+  reader.Send("GET /frame.jpg HTTP/1.1\r\nHost: t\r\n\r\n");
+  EXPECT_EQ(testing::Get(port, "/status").status, 200);  // served while they are held
+
+  const auto t0 = std::chrono::steady_clock::now();
+  kill(pid, SIGINT);
+  int status = 0;
+  pid_t done = 0;
+  while ((done = waitpid(pid, &status, WNOHANG)) == 0 &&
+         std::chrono::steady_clock::now() - t0 < std::chrono::seconds(10))
+    std::this_thread::yield();
+  const double exit_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (done == 0) {
+    kill(pid, SIGKILL);
+    waitpid(pid, &status, 0);
+  }
+  std::cout << "exit after SIGINT with 21 clients held: " << exit_s * 1e3 << " ms\n";
+  ASSERT_EQ(done, pid) << "still running 10 s after SIGINT";
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << ReadFile(err.string());
+  EXPECT_LT(exit_s, 2.0);
+  EXPECT_EQ(Lines(log).back()["event"], "stop");
+}
+
+// A camera's password is in no message: the error that ends the watch names the URL without it,
+// and the alert command's CLOGSCOPE_SOURCE too.
+TEST_F(WatchCommandTest, ACameraPasswordIsShownNowhere) {
+  const testing::RunResult r = RunCli(
+      "watch http://admin:s3cret@127.0.0.1:" + std::to_string(FreePort()) + "/x --open-timeout-s 2",
+      *dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("http://admin:***@127.0.0.1:"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("s3cret"), std::string::npos) << r.err;
+
+  const fs::path env = *dir_ / "alert_env.txt";
+  std::string why;
+  {
+    AlertCommand alert("printf %s \"$CLOGSCOPE_SOURCE\" > " + env.string());
+    watch::WatchStatus s;
+    ASSERT_TRUE(alert.Run(s, std::nullopt, "rtsp://admin:s3cret@cam.local/stream1", "{}", &why))
+        << why;
+    EXPECT_TRUE(alert.Reap(/*wait=*/true).empty());
+  }
+  EXPECT_EQ(ReadFile(env.string()), "rtsp://admin:***@cam.local/stream1");
+}
+
 TEST_F(WatchCommandTest, BadInputGetsOneLineNamingTheProblem) {
   const fs::path d = *dir_;
   const std::string video = TinyVideo();
@@ -284,6 +374,16 @@ TEST_F(WatchCommandTest, BadInputGetsOneLineNamingTheProblem) {
     EXPECT_EQ(r.exit_code, 1);
     EXPECT_NE(r.err.find("--http"), std::string::npos) << r.err;
   }
+  // The token file: missing, or given without --http.
+  r = run("watch " + video + " --http 127.0.0.1:0 --http-token-file /nonexistent/token");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--http-token-file /nonexistent/token"), std::string::npos) << r.err;
+  r = run("watch " + video + " --http-token-file /nonexistent/token");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--http-token-file goes with --http"), std::string::npos) << r.err;
+  r = run("watch " + video + " --http 127.0.0.1:99999");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--http '127.0.0.1:99999'"), std::string::npos) << r.err;
   r = run("watch " + video + " --warn-pct -3 --clog-pct -2");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("--clog-pct"), std::string::npos) << r.err;

@@ -110,6 +110,31 @@ TEST(LiveWatchTest, ASourceNameThatIsNotUtf8StillGivesJsonLines) {
   EXPECT_EQ(last["source"], "caf\xef\xbf\xbd");  // U+FFFD in place of the stray byte
 }
 
+// A camera's password is in no line, warning or error of the watch; where /status is served is in
+// every line.
+TEST(LiveWatchTest, ACameraPasswordIsShownInNoLineWarningOrError) {
+  LiveWatchOptions o = Options();
+  o.source = "rtsp://admin:s3cret@cam.local/stream1?token=abc123";
+  o.http_url = "http://127.0.0.1:8090";
+  std::vector<std::string> told;  // every line and warning
+  LiveWatchEvents events;
+  events.on_warning = [&](const std::string& message) { told.push_back(message); };
+  std::atomic<bool> stop{false};
+  events.on_line = [&](const std::string& line) { told.push_back(line); };
+  const LiveWatchSummary s =
+      RunLiveWatch(o, events, nullptr, &stop, std::make_unique<ScriptedSource>(3, Ending::kError));
+  told.push_back(s.error);
+  ASSERT_GE(told.size(), 3u);
+  for (const std::string& t : told) {
+    EXPECT_EQ(t.find("s3cret"), std::string::npos) << t;
+    EXPECT_EQ(t.find("abc123"), std::string::npos) << t;
+  }
+  EXPECT_EQ(s.error, "rtsp://admin:***@cam.local/stream1?token=***: decoder gave up");
+  const nlohmann::json last = nlohmann::json::parse(told[told.size() - 2]);
+  EXPECT_EQ(last["source"], "rtsp://admin:***@cam.local/stream1?token=***");
+  EXPECT_EQ(last["http"], "http://127.0.0.1:8090");
+}
+
 // A level change is told once the board (what /status, /metrics and /frame.jpg serve) shows it:
 // a reader called then sees the new level, never the one before.
 TEST(LiveWatchTest, ALevelChangeIsToldOnceTheBoardShowsIt) {

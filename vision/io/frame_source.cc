@@ -9,6 +9,7 @@
 
 #include "common/path_check.h"
 #include "vision/io/image_folder.h"
+#include "vision/io/source_name.h"
 #include "vision/io/video_decoder.h"
 #include "vision/io/video_io.h"
 
@@ -45,10 +46,11 @@ class VideoSource : public FrameSource {
   VideoSource(std::string path, const VideoReadOptions& options)
       : FrameSource(std::move(path), SourceKind::kVideo),
         options_(options),
-        decoder_(path_, options.decoder_threads) {}
+        decoder_(path_, options.decoder_threads),
+        shown_(RedactCredentials(path_)) {}
   // For Open(): a video must hold a frame.
   void RequireAFrame() {
-    if (!Fill()) throw std::invalid_argument(path_ + ": video has no frames");
+    if (!Fill()) throw std::invalid_argument(shown_ + ": video has no frames");
   }
   FrameRead Read(InputFrame* frame, std::string* /*why*/) override {
     if (pending_.empty() && !Fill()) return FrameRead::kEnd;
@@ -77,7 +79,7 @@ class VideoSource : public FrameSource {
     if (options_.gap_entries && d.index > next_index_) {
       const int missing = d.index - next_index_;
       InputFrame bad;
-      bad.source = path_;
+      bad.source = shown_;
       bad.index = next_index_;
       bad.time_s = decoder_.fps() > 0 ? next_index_ / decoder_.fps() : -1;
       bad.error = missing == 1 ? "cannot decode frame"
@@ -89,7 +91,7 @@ class VideoSource : public FrameSource {
       pending_.push_back(std::move(bad));
     }
     InputFrame good;
-    good.source = path_;
+    good.source = shown_;
     good.index = d.index;
     good.time_s = d.time_s;
     good.image = std::move(d.grey);
@@ -101,6 +103,7 @@ class VideoSource : public FrameSource {
 
   VideoReadOptions options_;
   VideoDecoder decoder_;
+  std::string shown_;  // the path as messages and frames name it
   int next_index_ = 0;
   bool seeked_ = false;
   std::deque<InputFrame> pending_;

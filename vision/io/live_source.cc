@@ -14,6 +14,7 @@
 
 #include "common/path_check.h"
 #include "vision/io/image_folder.h"
+#include "vision/io/source_name.h"
 #include "vision/io/video_decoder.h"
 #include "vision/io/video_io.h"
 
@@ -34,7 +35,11 @@ class DecodedSource : public FrameSource {
  public:
   DecodedSource(const std::string& source, SourceKind kind, const LiveSourceOptions& options,
                 const std::atomic<bool>* stop)
-      : FrameSource(source, kind), options_(options), stop_(stop), opened_(Clock::now()) {
+      : FrameSource(source, kind),
+        options_(options),
+        stop_(stop),
+        opened_(Clock::now()),
+        shown_(RedactCredentials(source)) {
     VideoDecoderOptions d;
     d.stop = stop;
     if (kind == SourceKind::kStream) {
@@ -48,9 +53,9 @@ class DecodedSource : public FrameSource {
       // that never delivers is refused like one that cannot be opened.
       DecodedFrame f;
       if (!decoder_->Read(&f)) {
-        if (Stopped(stop)) throw std::invalid_argument(source + ": stopped while opening");
+        if (Stopped(stop)) throw std::invalid_argument(shown_ + ": stopped while opening");
         throw std::invalid_argument(
-            fmt::format("{}: opened, but no frame within {:g} s (--open-timeout-s)", source,
+            fmt::format("{}: opened, but no frame within {:g} s (--open-timeout-s)", shown_,
                         std::max(options.open_timeout_s, options.read_timeout_s)));
       }
       pending_ = std::move(f);
@@ -105,7 +110,7 @@ class DecodedSource : public FrameSource {
     out->error = !out->image.empty() ? "" : f.damage.empty() ? "undecodable frame" : f.damage;
     out->time_s = kind_ == SourceKind::kVideo ? f.time_s : SecondsSince(opened_);
     out->index = index_++;
-    out->source = path_;
+    out->source = shown_;
     return FrameRead::kFrame;
   }
 
@@ -113,6 +118,7 @@ class DecodedSource : public FrameSource {
   LiveSourceOptions options_;
   const std::atomic<bool>* stop_;
   Clock::time_point opened_;
+  std::string shown_;  // the source as messages and frames name it
   std::unique_ptr<VideoDecoder> decoder_;
   std::optional<DecodedFrame> pending_;
   std::optional<double> first_time_s_;
@@ -313,7 +319,7 @@ std::unique_ptr<FrameSource> OpenLiveSource(const std::string& source,
       RequireInputPath("", source, PathExpect::kFile);
       return std::make_unique<DecodedSource>(source, SourceKind::kVideo, options, stop);
   }
-  throw std::invalid_argument(source + ": unknown kind of source");
+  throw std::invalid_argument(RedactCredentials(source) + ": unknown kind of source");
 }
 
 }  // namespace clogscope::vision

@@ -12,6 +12,7 @@
 
 #include "common/atomic_file.h"
 #include "vision/io/image_header.h"
+#include "vision/io/source_name.h"
 #include "vision/io/video_io.h"
 
 extern "C" {
@@ -176,10 +177,11 @@ VideoDecoder::VideoDecoder(const std::string& path, int threads)
 VideoDecoder::VideoDecoder(const std::string& path, const VideoDecoderOptions& options)
     : impl_(std::make_unique<Impl>()), path_(path) {
   av_log_set_level(AV_LOG_QUIET);
+  const std::string shown = RedactCredentials(path);  // a URL's password is never in a message
   std::string why;
   const bool url = path.find("://") != std::string::npos;
   if (!url && !IsRegularFile(path, &why))
-    throw std::invalid_argument(path + ": " + why);  // a FIFO would block FFmpeg's open
+    throw std::invalid_argument(shown + ": " + why);  // a FIFO would block FFmpeg's open
   Impl& d = *impl_;
   if (url) avformat_network_init();
   d.format = avformat_alloc_context();
@@ -196,11 +198,11 @@ VideoDecoder::VideoDecoder(const std::string& path, const VideoDecoderOptions& o
   int err = avformat_open_input(&d.format, path.c_str(), nullptr, &open_options);
   av_dict_free(&open_options);
   const auto opening_failed = [&](const std::string& what) {
-    if (d.interrupted && d.stop && d.stop->load()) return path + ": stopped while opening";
+    if (d.interrupted && d.stop && d.stop->load()) return shown + ": stopped while opening";
     if (d.interrupted)
-      return fmt::format("{}: no stream within {:g} s (--open-timeout-s)", path,
+      return fmt::format("{}: no stream within {:g} s (--open-timeout-s)", shown,
                          options.open_timeout_s);
-    return path + ": " + what + " (" + AvError(err) + ")";
+    return shown + ": " + what + " (" + AvError(err) + ")";
   };
   if (err < 0) throw std::invalid_argument(opening_failed("cannot open as video"));
   err = avformat_find_stream_info(d.format, nullptr);
@@ -210,10 +212,10 @@ VideoDecoder::VideoDecoder(const std::string& path, const VideoDecoderOptions& o
   read_timeout_s_ = options.read_timeout_s;
   const AVCodec* codec = nullptr;
   d.stream = av_find_best_stream(d.format, AVMEDIA_TYPE_VIDEO, -1, -1, &codec, 0);
-  if (d.stream < 0 || !codec) throw std::invalid_argument(path + ": no decodable video stream");
+  if (d.stream < 0 || !codec) throw std::invalid_argument(shown + ": no decodable video stream");
   AVStream* st = d.format->streams[d.stream];
   const std::string too_large = FrameSizeProblem(st->codecpar->width, st->codecpar->height);
-  if (!too_large.empty()) throw std::invalid_argument(path + ": " + too_large);
+  if (!too_large.empty()) throw std::invalid_argument(shown + ": " + too_large);
   d.codec = avcodec_alloc_context3(codec);
   avcodec_parameters_to_context(d.codec, st->codecpar);
   // Frame threads each keep their own pool of frame buffers: large frames decode on one thread.
@@ -228,7 +230,7 @@ VideoDecoder::VideoDecoder(const std::string& path, const VideoDecoderOptions& o
   // A damaged JPEG is an error, not a picture with its gaps concealed.
   if (d.jpeg) d.codec->err_recognition |= AV_EF_EXPLODE;
   err = avcodec_open2(d.codec, codec, nullptr);
-  if (err < 0) throw std::invalid_argument(path + ": cannot open decoder (" + AvError(err) + ")");
+  if (err < 0) throw std::invalid_argument(shown + ": cannot open decoder (" + AvError(err) + ")");
   d.packet = av_packet_alloc();
   d.frame = av_frame_alloc();
   d.time_base = av_q2d(st->time_base);
