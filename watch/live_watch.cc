@@ -259,6 +259,7 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
   bool refusing = false;  // the last frame was refused
   const auto emit = [&](const std::string& event) {
     if (events.on_line) events.on_line(StatusJson(state.status(), clog, counters, event));
+    if (events.on_report) events.on_report(event, state.status(), clog);
   };
   const auto update_counters = [&] {
     counters.frames_skipped_total = queue.dropped();

@@ -59,6 +59,9 @@ class WatchBoard {
 struct LiveWatchEvents {
   // One JSON line (StatusJson): every report_every_s, on every level change and at the stop.
   std::function<void(const std::string& line)> on_line;
+  // With each of those lines, the state it tells: `event` is "status", "level" or "stop".
+  std::function<void(const std::string& event, const WatchStatus&, const std::optional<ClogIndex>&)>
+      on_report;
   // On every level change, after its line and once the board shows the new state (what /status,
   // /metrics and /frame.jpg serve); the watch waits for it, so the board holds that state
   // meanwhile.

@@ -14,12 +14,14 @@ namespace {
 // JSON has no NaN: a quantity not known yet is null.
 nlohmann::json Number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
 
-double Round(double v, int digits) {
+double Round(double v, int digits) { return RoundDecimals(v, digits); }
+
+}  // namespace
+
+double RoundDecimals(double v, int digits) {
   const double f = std::pow(10.0, digits);
   return std::isfinite(v) ? std::round(v * f) / f : v;
 }
-
-}  // namespace
 
 std::optional<ClogIndex> ComputeClogIndex(const model::ExtruderParams& params, double temperature_c,
                                           const WatchStatus& s, std::string* why) {
@@ -131,8 +133,7 @@ std::string PrometheusText(const WatchStatus& s, const std::optional<ClogIndex>&
   out +=
       "# HELP clogscope_level Current alert level (1 for the current one).\n"
       "# TYPE clogscope_level gauge\n";
-  for (WatchLevel l : {WatchLevel::kStarting, WatchLevel::kOk, WatchLevel::kWarn, WatchLevel::kClog,
-                       WatchLevel::kNotExtruding, WatchLevel::kNoView}) {
+  for (WatchLevel l : kWatchLevels) {
     out += fmt::format("clogscope_level{{level=\"{}\"}} {}\n", WatchLevelName(l),
                        l == s.level ? 1 : 0);
   }

@@ -39,6 +39,9 @@ struct WatchCounters {
   double uptime_s = 0;
 };
 
+// v rounded to `digits` decimals (the JSON outputs' precision); a value that is not finite is kept.
+double RoundDecimals(double v, int digits);
+
 // The rolling state as one line of JSON (no newline): the /status document and the log's lines.
 // `event` is "status" for the periodic line, "level" for a level change, "stop" for the last.
 std::string StatusJson(const WatchStatus& status, const std::optional<ClogIndex>& clog,

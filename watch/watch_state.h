@@ -21,6 +21,10 @@ enum class WatchLevel {
   kNoView,        // nothing recognisable (covered, moved, dark) or no frames (source down)
 };
 const char* WatchLevelName(WatchLevel level);
+// Every level, in the order above (for the outputs that list them all).
+inline constexpr WatchLevel kWatchLevels[] = {WatchLevel::kStarting,     WatchLevel::kOk,
+                                              WatchLevel::kWarn,         WatchLevel::kClog,
+                                              WatchLevel::kNotExtruding, WatchLevel::kNoView};
 
 // What one frame showed.
 enum class FrameView {
