@@ -1,0 +1,21 @@
+#include "watch/frame_jpeg.h"
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "vision/overlay/overlay.h"
+
+namespace clogscope::watch {
+
+std::vector<unsigned char> OverlayJpeg(const WatchSnapshot& s,
+                                       const std::optional<calib::ScaleCalibration>& conversion) {
+  std::vector<unsigned char> jpeg;
+  if (s.frame.empty()) return jpeg;
+  cv::imencode(
+      ".jpg",
+      vision::DrawOverlay(s.frame, s.measurement, conversion ? conversion->scale_um_per_px : 0.0,
+                          conversion ? conversion->edge_bias_px : 0.0),
+      jpeg, {cv::IMWRITE_JPEG_QUALITY, 85});
+  return jpeg;
+}
+
+}  // namespace clogscope::watch

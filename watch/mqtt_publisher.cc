@@ -1,0 +1,425 @@
+#include "watch/mqtt_publisher.h"
+
+#include <fmt/format.h>
+#include <mosquitto.h>
+
+#include <cerrno>
+#include <chrono>
+#include <condition_variable>
+#include <cstring>
+#include <fstream>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+
+#include "vision/io/source_name.h"
+#include "watch/frame_jpeg.h"
+
+namespace clogscope::watch {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+Clock::duration Seconds(double s) {
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+}
+
+// libmosquitto's process-wide set-up, once; never undone (a publisher's thread may outlive a stop
+// that timed out).
+void InitLibrary() {
+  static const int once = mosquitto_lib_init();
+  (void)once;
+}
+
+std::string ErrorText(int rc, int saved_errno) {
+  return rc == MOSQ_ERR_ERRNO ? std::strerror(saved_errno) : mosquitto_strerror(rc);
+}
+
+// A stalled socket is seen within this much of the network loop (its select timeout).
+constexpr int kLoopTimeoutMs = 100;
+// Without an answer this long after the start (a silently dropped SYN), the broker is reported
+// down once; a refusal is reported at once.
+constexpr double kNoAnswerWarnS = 5;
+
+}  // namespace
+
+std::string MqttEndpoint::Shown() const {
+  const bool v6 = host.find(':') != std::string::npos;
+  return fmt::format("mqtt://{}{}{}:{}/{}", v6 ? "[" : "", host, v6 ? "]" : "", port, prefix);
+}
+
+bool ParseMqttUrl(const std::string& url, MqttEndpoint* out, std::string* why) {
+  const std::string shown = vision::RedactCredentials(url);
+  const auto fail = [&](const std::string& problem) {
+    *why = fmt::format("--mqtt '{}': {}", shown, problem);
+    return false;
+  };
+  const std::string scheme = "mqtt://";
+  if (url.rfind("mqtts://", 0) == 0)
+    return fail("mqtts (TLS) is not supported: use mqtt:// on a trusted network or a TLS tunnel");
+  if (url.rfind(scheme, 0) != 0) return fail("expected mqtt://HOST[:PORT][/PREFIX]");
+  const std::string rest = url.substr(scheme.size());
+  const size_t slash = rest.find('/');
+  const std::string authority = rest.substr(0, slash);
+  std::string prefix = slash == std::string::npos ? "" : rest.substr(slash + 1);
+  if (authority.find('@') != std::string::npos)
+    return fail(
+        "a user or password in the URL shows in `ps` and logs: put 'user:password' in a file for "
+        "--mqtt-credentials-file");
+  MqttEndpoint e;
+  std::string port;
+  if (!authority.empty() && authority[0] == '[') {  // [IPv6]:PORT
+    const size_t close = authority.find(']');
+    if (close == std::string::npos) return fail("an IPv6 address needs its closing ']'");
+    e.host = authority.substr(1, close - 1);
+    const std::string after = authority.substr(close + 1);
+    if (!after.empty() && after[0] != ':') return fail("expected ':PORT' after ']'");
+    if (!after.empty()) port = after.substr(1);
+    if (!after.empty() && port.empty()) return fail("an empty port");
+  } else {
+    const size_t colon = authority.find(':');
+    e.host = authority.substr(0, colon);
+    if (colon != std::string::npos) {
+      port = authority.substr(colon + 1);
+      if (port.empty() || port.find(':') != std::string::npos)
+        return fail("expected HOST:PORT (an IPv6 address goes in brackets)");
+    }
+  }
+  if (e.host.empty()) return fail("no host");
+  if (!port.empty()) {
+    if (port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos ||
+        std::stoi(port) < 1 || std::stoi(port) > 65535)
+      return fail("the port must be a number in [1, 65535]");
+    e.port = std::stoi(port);
+  }
+  while (!prefix.empty() && prefix.back() == '/') prefix.pop_back();
+  if (!prefix.empty()) e.prefix = prefix;
+  if (e.prefix.find_first_of("+#") != std::string::npos)
+    return fail("the topic prefix must not hold the wildcards '+' or '#'");
+  if (e.prefix.front() == '/' || e.prefix.find("//") != std::string::npos)
+    return fail("the topic prefix has an empty level");
+  for (const char c : e.prefix)
+    if (static_cast<unsigned char>(c) < 0x20)
+      return fail("the topic prefix has a control character");
+  *out = e;
+  return true;
+}
+
+bool ReadMqttCredentials(const std::string& path, MqttCredentials* out, std::string* why) {
+  const auto fail = [&](const std::string& problem) {
+    *why = fmt::format("--mqtt-credentials-file {}: {}", path, problem);
+    return false;
+  };
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return fail(fmt::format("cannot be read ({})", std::strerror(errno)));
+  std::string text(4097, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<size_t>(in.gcount()));
+  if (text.size() > 4096) return fail("longer than 4096 bytes: not a 'user:password' line");
+  if (!text.empty() && text.back() == '\n') text.pop_back();
+  if (!text.empty() && text.back() == '\r') text.pop_back();
+  if (text.find_first_of("\r\n") != std::string::npos)
+    return fail("more than one line (expected one 'user:password' line)");
+  const size_t colon = text.find(':');
+  if (text.empty() || colon == std::string::npos || colon == 0)
+    return fail("expected one line 'user:password'");
+  out->user = text.substr(0, colon);
+  out->password = text.substr(colon + 1);
+  return true;
+}
+
+bool MqttOptions::Validate(std::string* why) const {
+  MqttEndpoint endpoint;
+  MqttCredentials credentials;
+  if (url.empty()) {
+    if (credentials_file.empty()) return true;
+    *why = "--mqtt-credentials-file goes with --mqtt";
+    return false;
+  }
+  if (!ParseMqttUrl(url, &endpoint, why)) return false;
+  if (!credentials_file.empty() && !ReadMqttCredentials(credentials_file, &credentials, why))
+    return false;
+  if (discovery_prefix.empty() || discovery_prefix.find_first_of("+#") != std::string::npos)
+    *why = "the Home Assistant discovery prefix must be a topic without wildcards";
+  else if (!(frame_min_interval_s >= 0))
+    *why = "the MQTT picture interval must not be negative";
+  else if (!(reconnect_initial_s >= 1 && reconnect_max_s >= reconnect_initial_s))
+    *why = "MQTT reconnect back-off: initial >= 1 s and max >= initial";
+  else if (!(keepalive_s >= 5 && stop_timeout_s > 0))
+    *why = "MQTT keepalive >= 5 s and stop timeout > 0";
+  else
+    return true;
+  return false;
+}
+
+// Two threads: the network thread runs libmosquitto's loop and reconnects with back-off (our own
+// loop rather than mosquitto_loop_start's: that one ends for good on a failed name lookup or a
+// refused login, and sleeps through its back-off where a stop cannot wake it); the publishing
+// thread sends what Update left and draws the picture. Update only swaps the latest messages in.
+struct MqttPublisher::Impl {
+  Impl(const MqttOptions& o, const MqttEndpoint& e, const WatchBoard* b,
+       std::optional<calib::ScaleCalibration> c, Log l)
+      : options(o),
+        endpoint(e),
+        topics(e.prefix),
+        board(b),
+        conversion(std::move(c)),
+        log(std::move(l)) {}
+
+  MqttOptions options;
+  MqttEndpoint endpoint;
+  std::optional<MqttCredentials> credentials;
+  MqttTopics topics;
+  std::vector<MqttMessage> discovery;
+  const WatchBoard* board;
+  std::optional<calib::ScaleCalibration> conversion;
+  Log log;
+  mosquitto* mosq = nullptr;
+
+  std::mutex mutex;
+  std::condition_variable wake;
+  // Under `mutex`.
+  bool stopping = false;        // the publisher is being destroyed
+  bool network_stop = false;    // the network thread ends
+  bool quiet = false;           // no more log lines (the owner stopped waiting)
+  bool connected = false;       // CONNACK accepted, not lost since
+  bool ever_connected = false;  // once at least
+  bool announce = false;        // (re)connected: availability, discovery and the latest state due
+  bool warned = false;          // a connection problem was told since the last connection
+  std::vector<MqttMessage> latest;  // the latest state's messages
+  bool state_due = false, frame_due = false;
+  Clock::time_point last_frame{};
+  std::optional<int> offline_mid;
+  bool offline_acked = false;
+  bool publisher_done = false, network_done = false;
+  std::thread network_thread, publish_thread;
+
+  void Info(const std::string& m) {
+    if (!quiet && log.info) log.info(m);
+  }
+  void Warn(const std::string& m) {
+    if (!quiet && log.warning) log.warning(m);
+  }
+  // A connection problem, told once until the next connection (the back-off retries quietly).
+  void Problem(const std::string& what) {
+    if (warned || stopping) return;
+    warned = true;
+    Warn(
+        fmt::format("MQTT {}: {}; retrying with back-off ({} s doubling to {} s), the watch "
+                    "goes on",
+                    endpoint.Shown(), what, options.reconnect_initial_s, options.reconnect_max_s));
+  }
+
+  static Impl* Self(void* obj) { return static_cast<Impl*>(obj); }
+  static void OnConnect(mosquitto*, void* obj, int rc) {
+    Impl* self = Self(obj);
+    std::lock_guard<std::mutex> lock(self->mutex);
+    if (rc != 0) {
+      self->Problem(
+          fmt::format("the broker refused the connection: {}", mosquitto_connack_string(rc)));
+      return;
+    }
+    self->Info(fmt::format("MQTT: {} {} (Home Assistant discovery under {}/)",
+                           self->ever_connected ? "connected again to" : "publishing to",
+                           self->endpoint.Shown(), self->options.discovery_prefix));
+    self->connected = self->ever_connected = self->announce = true;
+    self->warned = false;
+    self->wake.notify_all();
+  }
+  static void OnDisconnect(mosquitto*, void* obj, int rc) {
+    const int saved_errno = errno;
+    Impl* self = Self(obj);
+    std::lock_guard<std::mutex> lock(self->mutex);
+    const bool was = self->connected;
+    self->connected = false;
+    if (rc != 0)
+      self->Problem(fmt::format("{} ({})", was ? "the connection was lost" : "cannot connect",
+                                ErrorText(rc, saved_errno)));
+    self->wake.notify_all();
+  }
+  static void OnPublish(mosquitto*, void* obj, int mid) {
+    Impl* self = Self(obj);
+    std::lock_guard<std::mutex> lock(self->mutex);
+    if (self->offline_mid == mid) self->offline_acked = true;
+    self->wake.notify_all();
+  }
+
+  void Send(const MqttMessage& m) {
+    // Not connected any more: dropped; the next connection sends the latest state again.
+    mosquitto_publish(mosq, nullptr, m.topic.c_str(), static_cast<int>(m.payload.size()),
+                      m.payload.data(), m.qos, m.retain);
+  }
+
+  void RunNetwork() {
+    const int first_errno = (errno = 0);
+    int rc =
+        mosquitto_connect_async(mosq, endpoint.host.c_str(), endpoint.port, options.keepalive_s);
+    if (rc != MOSQ_ERR_SUCCESS) {
+      std::lock_guard<std::mutex> lock(mutex);
+      Problem(fmt::format("cannot connect ({})", ErrorText(rc, errno ? errno : first_errno)));
+    }
+    const auto started = Clock::now();
+    int wait_s = options.reconnect_initial_s;
+    std::unique_lock<std::mutex> lock(mutex);
+    while (!network_stop) {
+      if (connected) wait_s = options.reconnect_initial_s;
+      if (!ever_connected && Clock::now() - started > Seconds(kNoAnswerWarnS))
+        Problem(fmt::format("no answer within {:g} s", kNoAnswerWarnS));
+      lock.unlock();
+      if (rc == MOSQ_ERR_SUCCESS) rc = mosquitto_loop(mosq, kLoopTimeoutMs, 1);
+      lock.lock();
+      if (rc == MOSQ_ERR_SUCCESS || network_stop) continue;
+      // Down, refused or lost: wait (a stop wakes it), then try again.
+      wake.wait_for(lock, std::chrono::seconds(wait_s), [&] { return network_stop; });
+      wait_s = std::min(2 * wait_s, options.reconnect_max_s);
+      if (network_stop) break;
+      if (stopping) continue;  // no new connection for a publisher on its way out
+      lock.unlock();
+      errno = 0;
+      rc = mosquitto_reconnect_async(mosq);
+      const int saved_errno = errno;
+      lock.lock();
+      if (rc != MOSQ_ERR_SUCCESS)
+        Problem(fmt::format("cannot connect ({})", ErrorText(rc, saved_errno)));
+    }
+    network_done = true;
+    wake.notify_all();
+  }
+
+  void RunPublisher() {
+    std::unique_lock<std::mutex> lock(mutex);
+    while (!stopping) {
+      const Clock::time_point frame_at = last_frame + Seconds(options.frame_min_interval_s);
+      if (connected && announce) {
+        announce = false;
+        state_due = false;
+        frame_due = true;  // the picture too, once a frame is there
+        const std::vector<MqttMessage> state = latest;
+        lock.unlock();
+        Send({topics.availability, kMqttOnline});
+        for (const MqttMessage& m : discovery) Send(m);
+        for (const MqttMessage& m : state) Send(m);
+        lock.lock();
+      } else if (connected && state_due) {
+        state_due = false;
+        const std::vector<MqttMessage> state = latest;
+        lock.unlock();
+        for (const MqttMessage& m : state) Send(m);
+        lock.lock();
+      } else if (connected && frame_due && Clock::now() >= frame_at) {
+        frame_due = false;
+        lock.unlock();
+        // Drawn here, never on the measuring thread. No frame yet: the next update asks again.
+        const std::vector<unsigned char> jpeg = OverlayJpeg(board->Read(), conversion);
+        if (!jpeg.empty()) Send({topics.frame, std::string(jpeg.begin(), jpeg.end()), /*qos=*/0});
+        lock.lock();
+        if (!jpeg.empty()) last_frame = Clock::now();
+      } else if (connected && frame_due) {
+        wake.wait_until(lock, frame_at);
+      } else {
+        wake.wait(lock);
+      }
+    }
+    // Stopping: "offline" (retained) while still connected, and its acknowledgement awaited, so
+    // that it is there before the disconnection; then a clean disconnection (no last will).
+    const auto deadline = Clock::now() + Seconds(options.stop_timeout_s * 0.7);
+    if (connected) {
+      int mid = 0;
+      const std::string offline = kMqttOffline;
+      lock.unlock();
+      const int rc = mosquitto_publish(mosq, &mid, topics.availability.c_str(),
+                                       static_cast<int>(offline.size()), offline.data(), 1, true);
+      lock.lock();
+      if (rc == MOSQ_ERR_SUCCESS) {
+        offline_mid = mid;
+        wake.wait_until(lock, deadline, [&] { return offline_acked || !connected; });
+      }
+    }
+    lock.unlock();
+    mosquitto_disconnect(mosq);
+    lock.lock();
+    wake.wait_until(lock, deadline + Seconds(options.stop_timeout_s * 0.2),
+                    [&] { return !connected; });
+    network_stop = true;
+    wake.notify_all();
+    wake.wait(lock, [&] { return network_done; });
+    lock.unlock();
+    mosquitto_destroy(mosq);
+    lock.lock();
+    mosq = nullptr;
+    publisher_done = true;
+    wake.notify_all();
+  }
+};
+
+MqttPublisher::MqttPublisher(const MqttOptions& options, const WatchBoard* board,
+                             std::optional<calib::ScaleCalibration> conversion, Log log) {
+  std::string why;
+  if (!options.Validate(&why)) throw std::invalid_argument(why);
+  MqttEndpoint endpoint;
+  ParseMqttUrl(options.url, &endpoint, &why);
+  impl_ = std::make_shared<Impl>(options, endpoint, board, std::move(conversion), std::move(log));
+  Impl& m = *impl_;
+  if (!options.credentials_file.empty()) {
+    m.credentials.emplace();
+    ReadMqttCredentials(options.credentials_file, &*m.credentials, &why);
+  }
+  m.discovery = HaDiscoveryMessages(m.topics, options.discovery_prefix, m.conversion.has_value());
+  InitLibrary();
+  // One client id per prefix: a watch started again takes its predecessor's session over (the
+  // broker sends that one's last will first), so "online" is never overwritten by a stale will.
+  const std::string client_id = "clogscope-" + m.topics.node_id;
+  m.mosq = mosquitto_new(client_id.c_str(), /*clean_session=*/true, &m);
+  if (!m.mosq) throw std::runtime_error("MQTT: cannot create the client (out of memory)");
+  mosquitto_threaded_set(m.mosq, true);
+  mosquitto_connect_callback_set(m.mosq, &Impl::OnConnect);
+  mosquitto_disconnect_callback_set(m.mosq, &Impl::OnDisconnect);
+  mosquitto_publish_callback_set(m.mosq, &Impl::OnPublish);
+  // Set before connecting: the broker publishes it when this client vanishes without a word.
+  mosquitto_will_set(m.mosq, m.topics.availability.c_str(),
+                     static_cast<int>(std::strlen(kMqttOffline)), kMqttOffline, 1, true);
+  if (m.credentials)
+    mosquitto_username_pw_set(m.mosq, m.credentials->user.c_str(), m.credentials->password.c_str());
+  // The threads share the Impl: if a stop gives up on them (a name lookup that hangs), they finish
+  // on their own and the last one frees it.
+  std::shared_ptr<Impl> self = impl_;
+  m.network_thread = std::thread([self] { self->RunNetwork(); });
+  m.publish_thread = std::thread([self] { self->RunPublisher(); });
+}
+
+MqttPublisher::~MqttPublisher() {
+  Impl& m = *impl_;
+  std::unique_lock<std::mutex> lock(m.mutex);
+  m.stopping = true;
+  m.wake.notify_all();
+  const bool done = m.wake.wait_for(lock, Seconds(m.options.stop_timeout_s + 0.3),
+                                    [&] { return m.publisher_done; });
+  if (!done) m.quiet = true;  // the process may be ending: no log line from a thread left behind
+  lock.unlock();
+  if (done) {
+    m.publish_thread.join();
+    m.network_thread.join();
+  } else {
+    m.publish_thread.detach();
+    m.network_thread.detach();
+  }
+}
+
+void MqttPublisher::Update(const WatchStatus& status, const std::optional<ClogIndex>& clog) {
+  std::vector<MqttMessage> messages = MqttStateMessages(impl_->topics, status, clog);
+  {
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    impl_->latest = std::move(messages);
+    impl_->state_due = impl_->frame_due = true;
+  }
+  impl_->wake.notify_all();
+}
+
+const MqttEndpoint& MqttPublisher::endpoint() const { return impl_->endpoint; }
+
+bool MqttPublisher::connected() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return impl_->connected;
+}
+
+}  // namespace clogscope::watch
