@@ -24,6 +24,12 @@ extern "C" void OnWatchSignal(int) {
   if (g_stop_watch.exchange(true)) _exit(130);
 }
 
+// The MQTT publisher's lines, from its own threads: nothing of the watch's stack is captured.
+watch::MqttPublisher::Log MqttLog() {
+  return {[](const std::string& m) { spdlog::info("{}", m); },
+          [](const std::string& m) { spdlog::warn("{}", m); }};
+}
+
 }  // namespace
 
 WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* stop,
@@ -55,6 +61,9 @@ WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* s
   if (!options.http.empty()) http.emplace(http_options, &board, live.conversion);
   std::optional<AlertCommand> alert;
   if (!options.on_alert.empty()) alert.emplace(options.on_alert);
+  std::optional<watch::MqttPublisher> mqtt;
+  if (!options.mqtt.url.empty() || !options.mqtt.credentials_file.empty())
+    mqtt.emplace(options.mqtt, &board, live.conversion, MqttLog());
   WatchReport report;
   report.http_port = http ? http->port() : 0;
   if (http) {
@@ -74,6 +83,10 @@ WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* s
   events.on_line = [&](const std::string& line) {
     log.Write(line);
     last_line = line;
+  };
+  events.on_report = [&](const std::string&, const watch::WatchStatus& s,
+                         const std::optional<watch::ClogIndex>& clog) {
+    if (mqtt) mqtt->Update(s, clog);
   };
   events.on_level_change = [&](const watch::WatchStatus& s,
                                const std::optional<watch::ClogIndex>& clog) {
@@ -163,6 +176,11 @@ int RunWatch(int argc, char** argv) {
                  "but /metrics then asks for 'Authorization: Bearer TOKEN'");
   app.add_option("--on-alert", o.on_alert,
                  "Shell command run on every level change (state in CLOGSCOPE_* variables)");
+  app.add_option("--mqtt", o.mqtt.url,
+                 "mqtt://HOST[:PORT][/PREFIX]: publish the state (retained) to PREFIX/state, "
+                 "/level, /diameter_mm, /availability and /frame, with Home Assistant discovery");
+  app.add_option("--mqtt-credentials-file", o.mqtt.credentials_file,
+                 "A file holding one line 'user:password' for the MQTT broker");
   app.add_option("--duration-s", live.duration_s, "Stop after this long (default: until Ctrl-C)");
   app.footer(
       "Examples:\n"

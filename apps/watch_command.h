@@ -10,6 +10,7 @@
 
 #include "pipeline/measure_inputs.h"
 #include "watch/live_watch.h"
+#include "watch/mqtt_publisher.h"
 
 namespace clogscope::apps {
 
@@ -31,6 +32,7 @@ struct WatchCommandOptions {
   std::string http;                     // [HOST:]PORT for /status, /metrics, /frame.jpg
   std::string http_token_file;          // the bearer token the server asks for; empty: none
   std::string on_alert;                 // shell command run on every level change
+  watch::MqttOptions mqtt;              // --mqtt, --mqtt-credentials-file; no url: none
 };
 
 struct WatchReport {
