@@ -13,14 +13,13 @@
 #include <cerrno>
 #include <cstdarg>
 #include <cstring>
-#include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <utility>
 #include <vector>
 
 #include "common/atomic_file.h"
 #include "common/path_check.h"
-#include "vision/overlay/overlay.h"
+#include "watch/frame_jpeg.h"
 
 namespace clogscope::apps {
 namespace {
@@ -209,12 +208,7 @@ struct WatchHttpServer::Impl {
       if (s.frame.empty()) return Refusal(MHD_HTTP_SERVICE_UNAVAILABLE, "no frame yet");
       // Drawn on request: the measuring thread never pays for a picture nobody looks at. Ranges
       // are not served: the whole picture or nothing.
-      std::vector<uchar> jpeg;
-      cv::imencode(".jpg",
-                   vision::DrawOverlay(s.frame, s.measurement,
-                                       conversion ? conversion->scale_um_per_px : 0.0,
-                                       conversion ? conversion->edge_bias_px : 0.0),
-                   jpeg, {cv::IMWRITE_JPEG_QUALITY, 85});
+      const std::vector<unsigned char> jpeg = watch::OverlayJpeg(s, conversion);
       r.content_type = "image/jpeg";
       r.body.assign(jpeg.begin(), jpeg.end());
     } else if (path == "/") {
