@@ -251,12 +251,14 @@ struct MqttPublisher::Impl {
   }
 
   void RunNetwork() {
-    const int first_errno = (errno = 0);
+    // The name lookup blocks here, on this thread, never the watch's.
+    errno = 0;
     int rc =
         mosquitto_connect_async(mosq, endpoint.host.c_str(), endpoint.port, options.keepalive_s);
+    const int connect_errno = errno;
     if (rc != MOSQ_ERR_SUCCESS) {
       std::lock_guard<std::mutex> lock(mutex);
-      Problem(fmt::format("cannot connect ({})", ErrorText(rc, errno ? errno : first_errno)));
+      Problem(fmt::format("cannot connect ({})", ErrorText(rc, connect_errno)));
     }
     const auto started = Clock::now();
     int wait_s = options.reconnect_initial_s;

@@ -49,12 +49,12 @@ struct MqttOptions {
   bool Validate(std::string* why) const;
 };
 
-// Publishes on its own thread; the broker is reached through libmosquitto's network thread, which
-// reconnects with back-off (1 s doubling to 30 s) when the broker is down at the start or drops
-// later. On every (re)connection: <prefix>/availability "online", the discovery configs, the
-// latest state and picture, all retained; the last will, set before connecting, is "offline"
-// (retained), and a stop publishes "offline" itself. Messages are dropped, not queued, while the
-// broker is away (the latest state is sent when it is back).
+// Publishes on its own thread; libmosquitto's loop runs on another, which reconnects with back-off
+// (1 s doubling to 30 s) when the broker is down at the start, refuses the login or drops later. On
+// every (re)connection: <prefix>/availability "online", the discovery configs, the latest state and
+// picture, all retained; the last will, set before connecting, is "offline" (retained), and a stop
+// publishes "offline" itself. Messages are dropped, not queued, while the broker is away (the
+// latest state is sent when it is back).
 class MqttPublisher {
  public:
   struct Log {
