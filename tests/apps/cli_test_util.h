@@ -8,6 +8,7 @@
 #include <string>
 
 #include "common/atomic_file.h"
+#include "synthetic/synthetic.h"
 #include "tests/scratch_dir.h"
 
 namespace clogscope::apps::testing {
@@ -27,5 +28,18 @@ inline RunResult RunCli(const std::string& args, const std::filesystem::path& di
 
 // An empty folder of the test's own under the system's temporary directory.
 inline std::filesystem::path FreshDir(const std::string& name) { return testutil::FreshDir(name); }
+
+// A watch's camera in the tests: 640×360, the nozzle's tip at (320, 80), the strand's width
+// jittering by 2 µm from frame to frame; widths and events are the test's.
+inline synthetic::SceneParams WatchCameraScene(uint64_t seed) {
+  synthetic::SceneParams s;
+  s.width_px = 640;
+  s.height_px = 360;
+  s.tip_x_px = 320;
+  s.tip_y_px = 80;
+  s.width_jitter_um = 2.0;
+  s.seed = seed;
+  return s;
+}
 
 }  // namespace clogscope::apps::testing

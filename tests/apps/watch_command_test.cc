@@ -33,6 +33,7 @@ namespace {
 namespace fs = std::filesystem;
 using testing::FreshDir;
 using testing::RunCli;
+using testing::WatchCameraScene;
 
 constexpr double kDropAtS = 12.0;  // the strand narrows by 3 % here
 constexpr double kSeconds = 20.0;
@@ -85,15 +86,9 @@ class WatchCommandTest : public ::testing::Test {
   static std::string Video() {
     const fs::path video = *dir_ / "seq.avi";
     if (fs::exists(video)) return video.string();
-    synthetic::SceneParams s;
-    s.width_px = 640;
-    s.height_px = 360;
-    s.tip_x_px = 320;
-    s.tip_y_px = 80;
-    s.width_jitter_um = 2.0;
+    synthetic::SceneParams s = WatchCameraScene(5);
     s.purge_start_s = 3;
     s.occlusion_start_s = {7};
-    s.seed = 5;
     const int frames = static_cast<int>(kSeconds * 25);
     for (int i = 0; i < frames; ++i)
       s.frame_width_um.push_back(i / 25.0 >= kDropAtS ? 388.0 : 400.0);

@@ -260,13 +260,7 @@ class WatchMqttTest : public ::testing::Test {
   static std::string Video() {
     const fs::path video = *dir_ / "clog.avi";
     if (fs::exists(video)) return video.string();
-    synthetic::SceneParams s;
-    s.width_px = 640;
-    s.height_px = 360;
-    s.tip_x_px = 320;
-    s.tip_y_px = 80;
-    s.width_jitter_um = 2.0;
-    s.seed = 7;
+    synthetic::SceneParams s = testing::WatchCameraScene(7);
     for (int i = 0; i < 250; ++i) s.frame_width_um.push_back(i / 25.0 >= 4.0 ? 360.0 : 400.0);
     synthetic::RenderSequence(s, 250, 25, video.string(), (*dir_ / "clog.truth.json").string());
     return video.string();
