@@ -21,6 +21,7 @@
 #include <tuple>
 #include <vector>
 
+#include "bench/pi_budget.h"
 #include "common/spawn.h"
 #include "model/lag_fit.h"
 #include "pipeline/experiment.h"
@@ -36,6 +37,8 @@
 
 namespace {
 
+using clogscope::bench::PiCells;
+using clogscope::bench::TableHead;
 using clogscope::synthetic::FrameTruth;
 using clogscope::synthetic::SceneParams;
 using clogscope::vision::MeasureStrand;
@@ -65,46 +68,10 @@ std::vector<std::string> Words(const std::string& text) {
   return out;
 }
 
-// `--pi`: each frames/s figure also as a Raspberry Pi's single core would give it. The factors
-// are issue 26's estimate of a Pi's core against this machine's (a third for a Pi 5, a quarter for
-// a Pi 4), not a measurement: run clogscope_bench on the Pi to know.
-struct PiModel {
-  const char* name;
-  double slower;
-};
-constexpr PiModel kPis[] = {{"Pi 5", 3.0}, {"Pi 4", 4.0}};
-constexpr double kCameraFps = 30.0;  // the camera a budget line is judged against
-bool g_pi_columns = false;
-
-std::string PiHeader() {
-  std::string h, rule;
-  if (!g_pi_columns) return "";
-  for (const PiModel& m : kPis) {
-    h += fmt::format(" {} (÷{:g}) |", m.name, m.slower);
-    rule += "---|";
-  }
-  return h + "\n" + rule;
-}
-// The Pi columns of a row: frames/s there, and whether a 30 frames/s camera is kept up with.
-std::string PiCells(double fps) {
-  std::string out;
-  if (!g_pi_columns) return out;
-  for (const PiModel& m : kPis) {
-    const double pi_fps = fps / m.slower;
-    out += fmt::format(" {:.0f} ({}) |", pi_fps,
-                       pi_fps >= kCameraFps ? "keeps up at 30/s" : "falls behind at 30/s");
-  }
-  return out;
-}
-
 // Single-core throughput of MeasureStrand on 720p frames.
 void BenchMeasure() {
-  const std::string pi = PiHeader();
-  const size_t cut = pi.find('\n');
-  fmt::print(
-      "\n## Measurement alone, 1280x720, one core\n\n| frames | frames/s | ms/frame |{}\n"
-      "|---|---|---|{}\n",
-      pi.substr(0, cut), cut == std::string::npos ? "" : pi.substr(cut + 1));
+  fmt::print("\n## Measurement alone, 1280x720, one core\n\n{}",
+             TableHead("| frames | frames/s | ms/frame |", "|---|---|---|"));
   for (bool colour : {false, true}) {
     SceneParams p;
     p.colour = colour;
@@ -278,10 +245,7 @@ void BenchVideo() {
   fmt::print(
       "\n## Video: 250 frames 1280x720 H.264 (OpenCV/libx264, crf 23), 2 cores, median of {}\n\n",
       kRounds);
-  const std::string pi = PiHeader();
-  const size_t cut = pi.find('\n');
-  fmt::print("| pass | frames/s |{}\n|---|---|{}\n", pi.substr(0, cut),
-             cut == std::string::npos ? "" : pi.substr(cut + 1));
+  fmt::print("{}", TableHead("| pass | frames/s |", "|---|---|"));
   fmt::print("| decode only, OpenCV VideoCapture (to BGR) | {:.0f} |{}\n", median(cv_fps),
              PiCells(median(cv_fps)));
   fmt::print("| decode only, clogscope reader (luma) | {:.0f} |{}\n", decode_fps,
@@ -691,44 +655,8 @@ void BenchFeedSpeedCodec(int first_seed) {
 
 }  // namespace
 
-// The filament path (`measure --target filament`) on a video of one's own (issue 26 quotes
-// Greeff's, ../shared/real/greeff/): tracked frames per second on one core, as `measure` reads it.
-void BenchFilament(const std::string& path) {
-  namespace vision = clogscope::vision;
-  cv::setNumThreads(1);
-  StrandMeasureOptions opt;
-  opt.target = vision::MeasureTarget::kFilament;
-  const vision::BandPx band = vision::DefaultBand(opt.target, 1.0);
-  opt.band_start_px = band.start_px;
-  opt.band_height_px = band.height_px;
-  constexpr int kRounds = 3;
-  std::vector<double> fps;
-  int n = 0, valid = 0;
-  double sum = 0;
-  for (int r = 0; r < kRounds; ++r) {
-    auto src = vision::FrameSource::Open(path);
-    valid = 0;
-    sum = 0;
-    const auto t0 = Clock::now();
-    n = vision::MeasureFrames(*src, opt, [&](vision::InputFrame&, vision::StrandMeasurement& m) {
-      if (!m.valid()) return;
-      ++valid;
-      sum += m.width_px;
-    });
-    fps.push_back(n / Seconds(t0, Clock::now()));
-  }
-  std::sort(fps.begin(), fps.end());
-  const std::string pi = PiHeader();
-  const size_t cut = pi.find('\n');
-  fmt::print("\n## Filament path on {} (decode + measure, one core, median of {})\n\n", path,
-             kRounds);
-  fmt::print("| frames | frames/s |{}\n|---|---|{}\n", pi.substr(0, cut),
-             cut == std::string::npos ? "" : pi.substr(cut + 1));
-  fmt::print("| {} of {} valid, mean width {:.3f} px | {:.0f} |{}\n", valid, n,
-             valid ? sum / valid : 0.0, fps[kRounds / 2], PiCells(fps[kRounds / 2]));
-}
-
 void BenchWatch();                             // watch_bench.cc
+void BenchFilament(const std::string& video);  // filament_bench.cc
 void BenchAdversarial(int argc, char** argv);  // adversarial_bench.cc
 
 int main(int argc, char** argv) {
@@ -736,7 +664,7 @@ int main(int argc, char** argv) {
   std::vector<char*> args;
   for (int i = 0; i < argc; ++i) {
     if (i > 0 && std::string(argv[i]) == "--pi")
-      g_pi_columns = true;
+      clogscope::bench::EnablePiColumns();
     else
       args.push_back(argv[i]);
   }
