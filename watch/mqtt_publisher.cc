@@ -7,11 +7,11 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstring>
-#include <fstream>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
 
+#include "common/atomic_file.h"
 #include "vision/io/source_name.h"
 #include "watch/frame_jpeg.h"
 
@@ -110,11 +110,9 @@ bool ReadMqttCredentials(const std::string& path, MqttCredentials* out, std::str
     *why = fmt::format("--mqtt-credentials-file {}: {}", path, problem);
     return false;
   };
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return fail(fmt::format("cannot be read ({})", std::strerror(errno)));
-  std::string text(4097, '\0');
-  in.read(text.data(), static_cast<std::streamsize>(text.size()));
-  text.resize(static_cast<size_t>(in.gcount()));
+  // TryReadFile refuses what is not a regular file: a FIFO would block the watch's start.
+  std::string text, problem;
+  if (!TryReadFile(path, &text, &problem)) return fail("cannot be read (" + problem + ")");
   if (text.size() > 4096) return fail("longer than 4096 bytes: not a 'user:password' line");
   if (!text.empty() && text.back() == '\n') text.pop_back();
   if (!text.empty() && text.back() == '\r') text.pop_back();
@@ -130,14 +128,21 @@ bool ReadMqttCredentials(const std::string& path, MqttCredentials* out, std::str
 
 bool MqttOptions::Validate(std::string* why) const {
   MqttEndpoint endpoint;
-  MqttCredentials credentials;
+  std::optional<MqttCredentials> credentials;
+  return Resolve(&endpoint, &credentials, why);
+}
+
+bool MqttOptions::Resolve(MqttEndpoint* endpoint, std::optional<MqttCredentials>* credentials,
+                          std::string* why) const {
+  credentials->reset();
   if (url.empty()) {
     if (credentials_file.empty()) return true;
     *why = "--mqtt-credentials-file goes with --mqtt";
     return false;
   }
-  if (!ParseMqttUrl(url, &endpoint, why)) return false;
-  if (!credentials_file.empty() && !ReadMqttCredentials(credentials_file, &credentials, why))
+  if (!ParseMqttUrl(url, endpoint, why)) return false;
+  if (!credentials_file.empty() &&
+      !ReadMqttCredentials(credentials_file, &credentials->emplace(), why))
     return false;
   if (discovery_prefix.empty() || discovery_prefix.find_first_of("+#") != std::string::npos)
     *why = "the Home Assistant discovery prefix must be a topic without wildcards";
@@ -322,9 +327,17 @@ struct MqttPublisher::Impl {
         wake.wait(lock);
       }
     }
-    // Stopping: "offline" (retained) while still connected, and its acknowledgement awaited, so
-    // that it is there before the disconnection; then a clean disconnection (no last will).
+    // Stopping: the last state (the watch's "stop" report may have come just before the stop, not
+    // yet sent), then "offline" (retained) while still connected, and its acknowledgement awaited,
+    // so that it is there before the disconnection; then a clean disconnection (no last will).
     const auto deadline = Clock::now() + Seconds(options.stop_timeout_s * 0.7);
+    if (connected && state_due) {
+      state_due = false;
+      const std::vector<MqttMessage> state = latest;
+      lock.unlock();
+      for (const MqttMessage& m : state) Send(m);
+      lock.lock();
+    }
     if (connected) {
       int mid = 0;
       const std::string offline = kMqttOffline;
@@ -357,15 +370,12 @@ struct MqttPublisher::Impl {
 MqttPublisher::MqttPublisher(const MqttOptions& options, const WatchBoard* board,
                              std::optional<calib::ScaleCalibration> conversion, Log log) {
   std::string why;
-  if (!options.Validate(&why)) throw std::invalid_argument(why);
   MqttEndpoint endpoint;
-  ParseMqttUrl(options.url, &endpoint, &why);
+  std::optional<MqttCredentials> credentials;
+  if (!options.Resolve(&endpoint, &credentials, &why)) throw std::invalid_argument(why);
   impl_ = std::make_shared<Impl>(options, endpoint, board, std::move(conversion), std::move(log));
   Impl& m = *impl_;
-  if (!options.credentials_file.empty()) {
-    m.credentials.emplace();
-    ReadMqttCredentials(options.credentials_file, &*m.credentials, &why);
-  }
+  m.credentials = std::move(credentials);
   m.discovery = HaDiscoveryMessages(m.topics, options.discovery_prefix, m.conversion.has_value());
   InitLibrary();
   // One client id per prefix: a watch started again takes its predecessor's session over (the
@@ -415,13 +425,6 @@ void MqttPublisher::Update(const WatchStatus& status, const std::optional<ClogIn
     impl_->state_due = impl_->frame_due = true;
   }
   impl_->wake.notify_all();
-}
-
-const MqttEndpoint& MqttPublisher::endpoint() const { return impl_->endpoint; }
-
-bool MqttPublisher::connected() const {
-  std::lock_guard<std::mutex> lock(impl_->mutex);
-  return impl_->connected;
 }
 
 }  // namespace clogscope::watch

@@ -14,14 +14,15 @@
 
 namespace clogscope::watch {
 
+inline constexpr int kMqttDefaultPort = 1883;
+
 // Where --mqtt points: mqtt://HOST[:PORT][/PREFIX], HOST a name, an IPv4 address or [IPv6].
 struct MqttEndpoint {
   std::string host;
-  int port = 1883;
+  int port = kMqttDefaultPort;
   std::string prefix = "clogscope";  // the topics' prefix; no '+', '#' or empty level
   std::string Shown() const;         // "mqtt://host:1883/prefix" (never a password)
 };
-inline constexpr int kMqttDefaultPort = 1883;
 
 // False with a line naming --mqtt in *why when the URL is not mqtt://HOST[:PORT][/PREFIX]: another
 // scheme (mqtts is not supported), credentials in the URL (they belong in
@@ -47,6 +48,10 @@ struct MqttOptions {
   double stop_timeout_s = 1.5;      // a stop waits at most this for the broker (offline, then bye)
   // Checks the URL and reads the credentials file: false with one line naming the option.
   bool Validate(std::string* why) const;
+  // Validate that also hands back the parsed URL and the credentials read (nullopt: anonymous),
+  // so that what is used is what was checked.
+  bool Resolve(MqttEndpoint* endpoint, std::optional<MqttCredentials>* credentials,
+               std::string* why) const;
 };
 
 // Publishes on its own thread; libmosquitto's loop runs on another, which reconnects with back-off
@@ -75,9 +80,6 @@ class MqttPublisher {
   // (the watch's measuring thread calls it). A new picture goes with it, at most one per
   // frame_min_interval_s.
   void Update(const WatchStatus& status, const std::optional<ClogIndex>& clog);
-
-  const MqttEndpoint& endpoint() const;
-  bool connected() const;
 
  private:
   struct Impl;

@@ -14,8 +14,6 @@ namespace {
 // JSON has no NaN: a quantity not known yet is null.
 nlohmann::json Number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
 
-double Round(double v, int digits) { return RoundDecimals(v, digits); }
-
 }  // namespace
 
 double RoundDecimals(double v, int digits) {
@@ -55,10 +53,10 @@ std::string StatusJson(const WatchStatus& s, const std::optional<ClogIndex>& clo
                        const WatchCounters& c, const std::string& event) {
   nlohmann::json j;
   j["event"] = event;
-  j["time_s"] = Round(s.time_s, 3);
+  j["time_s"] = RoundDecimals(s.time_s, 3);
   j["level"] = WatchLevelName(s.level);
   j["previous_level"] = WatchLevelName(s.previous_level);
-  j["level_since_s"] = Round(s.level_since_s, 3);
+  j["level_since_s"] = RoundDecimals(s.level_since_s, 3);
   j["reason"] = s.reason;
   j["source"] = c.source;
   j["source_kind"] = c.source_kind;
@@ -67,45 +65,45 @@ std::string StatusJson(const WatchStatus& s, const std::optional<ClogIndex>& clo
   j["window"] = {{"frames", s.frames},
                  {"valid_frames", s.valid_frames},
                  {"nozzle_only_frames", s.nozzle_only_frames},
-                 {"valid_fraction", Round(s.valid_fraction, 4)},
-                 {"frame_rate_hz", Round(s.frame_rate_hz, 3)}};
+                 {"valid_fraction", RoundDecimals(s.valid_fraction, 4)},
+                 {"frame_rate_hz", RoundDecimals(s.frame_rate_hz, 3)}};
   nlohmann::json d;
   if (s.has_diameter) {
-    d["px"] = Round(s.diameter_px, 4);
-    d["um"] = Number(Round(s.diameter_um, 3));
-    d["ci95_um"] = Number(Round(s.diameter_ci95_um, 3));
-    d["std_um"] = Number(Round(s.diameter_std_um, 3));
+    d["px"] = RoundDecimals(s.diameter_px, 4);
+    d["um"] = Number(RoundDecimals(s.diameter_um, 3));
+    d["ci95_um"] = Number(RoundDecimals(s.diameter_ci95_um, 3));
+    d["std_um"] = Number(RoundDecimals(s.diameter_std_um, 3));
     d["n_used"] = s.n_used;
     d["n_rejected"] = s.n_rejected;
-    d["n_effective"] = Round(s.n_effective, 1);
+    d["n_effective"] = RoundDecimals(s.n_effective, 1);
   }
   j["diameter"] = d;
   nlohmann::json b;
   if (s.baseline_ready) {
     b["source"] = s.baseline_source;
-    b["px"] = Round(s.baseline_px, 4);
-    b["um"] = Number(Round(s.baseline_um, 3));
-    b["ci95_um"] = Number(Round(s.baseline_ci95_um, 3));
+    b["px"] = RoundDecimals(s.baseline_px, 4);
+    b["um"] = Number(RoundDecimals(s.baseline_um, 3));
+    b["ci95_um"] = Number(RoundDecimals(s.baseline_ci95_um, 3));
   }
   j["baseline"] = b;
   nlohmann::json dr;
   if (s.baseline_ready && s.has_diameter) {
-    dr["um"] = Number(Round(s.drift_um, 3));
-    dr["pct"] = Round(s.drift_pct, 4);
-    dr["ci95_pct"] = Round(s.drift_ci95_pct, 4);
+    dr["um"] = Number(RoundDecimals(s.drift_um, 3));
+    dr["pct"] = RoundDecimals(s.drift_pct, 4);
+    dr["ci95_pct"] = RoundDecimals(s.drift_ci95_pct, 4);
   }
   if (s.has_recent) {
-    dr["recent_pct"] = Round(s.recent_drift_pct, 4);
-    dr["recent_ci95_pct"] = Round(s.recent_drift_ci95_pct, 4);
-    dr["recent_um"] = Number(Round(s.recent_diameter_um, 3));
+    dr["recent_pct"] = RoundDecimals(s.recent_drift_pct, 4);
+    dr["recent_ci95_pct"] = RoundDecimals(s.recent_drift_ci95_pct, 4);
+    dr["recent_um"] = Number(RoundDecimals(s.recent_diameter_um, 3));
   }
   j["drift"] = dr;
   nlohmann::json ci;
   if (clog) {
     ci["temperature_c"] = clog->temperature_c;
-    ci["back_pressure_ratio"] = Round(clog->back_pressure_ratio, 5);
-    ci["vibration_increase_pct"] = Round(clog->vibration_increase_pct, 4);
-    if (clog->current_ma) ci["motor_current_ma"] = Round(*clog->current_ma, 3);
+    ci["back_pressure_ratio"] = RoundDecimals(clog->back_pressure_ratio, 5);
+    ci["vibration_increase_pct"] = RoundDecimals(clog->vibration_increase_pct, 4);
+    if (clog->current_ma) ci["motor_current_ma"] = RoundDecimals(*clog->current_ma, 3);
   }
   j["clog_index"] = ci;
   j["counters"] = {{"frames_total", c.frames_total},
@@ -114,9 +112,9 @@ std::string StatusJson(const WatchStatus& s, const std::optional<ClogIndex>& clo
                    {"frames_skipped_total", c.frames_skipped_total},
                    {"reconnects_total", c.reconnects_total},
                    {"alerts_total", c.alerts_total},
-                   {"latency_median_ms", Round(c.latency_median_ms, 3)},
-                   {"latency_max_ms", Round(c.latency_max_ms, 3)},
-                   {"uptime_s", Round(c.uptime_s, 3)}};
+                   {"latency_median_ms", RoundDecimals(c.latency_median_ms, 3)},
+                   {"latency_max_ms", RoundDecimals(c.latency_max_ms, 3)},
+                   {"uptime_s", RoundDecimals(c.uptime_s, 3)}};
   // Text from outside (a source's name, a decoder's words) may not be UTF-8: replaced, never a
   // throw.
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);

@@ -190,8 +190,7 @@ double WatchState::DownSecondsWithin(double from_s, double to_s) const {
 bool WatchState::Add(double time_s, FrameView view, double width_px) {
   if (last_time_s_ && time_s < *last_time_s_) time_s = *last_time_s_;  // a clock step back
   SetSourceUp(true, time_s);
-  if (!started_) first_time_s_ = time_s;
-  started_ = true;
+  if (!first_time_s_) first_time_s_ = time_s;  // the first frame: the watch has started
   last_frame_s_ = time_s;
   window_.push_back({time_s, view, width_px});
   if (view == FrameView::kStrand && !status_.baseline_ready) {
@@ -230,7 +229,7 @@ void WatchState::UpdateStatistics(double t) {
   while (!down_spans_s_.empty() && down_spans_s_.front().second < t - options_.window_s)
     down_spans_s_.pop_front();
   s.time_s = t;
-  s.source_up = started_ && source_up_;
+  s.source_up = first_time_s_.has_value() && source_up_;
   s.frames = static_cast<int>(window_.size());
   s.valid_frames = s.nozzle_only_frames = 0;
   std::vector<double> widths, recent, intervals;
@@ -320,7 +319,7 @@ WatchLevel WatchState::Decide(double t) {
   Track(&since_warn_exit_,
         s.has_recent && s.recent_drift_pct >= o.warn_drift_pct + o.hysteresis_pct, t);
 
-  if (!started_) return WatchLevel::kStarting;
+  if (!first_time_s_) return WatchLevel::kStarting;
   const WatchLevel now = s.level;
   const double hold = o.hold_s;
   if (Held(since_no_view_, t, hold)) return WatchLevel::kNoView;

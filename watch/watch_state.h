@@ -142,11 +142,11 @@ class WatchState {
   double baseline_first_s_ = -1;
   double baseline_half_px_ = 0;  // the baseline mean's 95 % half-width (0 when given)
   bool source_up_ = true;
-  bool started_ = false;                                // a frame has arrived
   std::optional<double> down_since_s_;                  // the source is down since (its last frame)
   std::deque<std::pair<double, double>> down_spans_s_;  // outages ended, within the window
   WatchLevel drift_level_ = WatchLevel::kOk;  // the last of ok, warn, clog: where a view returns
-  std::optional<double> last_time_s_, first_time_s_, last_frame_s_;
+  std::optional<double> last_time_s_, last_frame_s_;
+  std::optional<double> first_time_s_;  // the first frame's; none: still starting
   double rate_hz_ = 0;          // frame rate seen (kept while frames stop coming)
   double expected_frames_ = 0;  // frames the window should hold at that rate
   // When each condition began to hold continuously (nullopt: it does not hold now).
