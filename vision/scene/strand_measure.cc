@@ -21,9 +21,10 @@ constexpr double kMinFallbackScoreFactor = 3.0;    // times the scene's minimum 
 constexpr double kStraightPartMarginCalipers = 6;  // tracking a filament: calipers beside its part
 
 // Statuses of one channel's measurement that another channel of the same pair may not share:
-// its noise, its blur, its sampling (not which object it is).
+// its noise, its blur, its sampling. Not those by which the calipers refuse the pair
+// (RejectsPair): luma must not bring back a pair judged not to be the strand.
 bool LumaMayMeasure(FrameStatus s) {
-  return s == FrameStatus::kValid || s == FrameStatus::kImprecise || s == FrameStatus::kOccluded;
+  return s == FrameStatus::kValid || s == FrameStatus::kImprecise;
 }
 
 // Statuses that say the pair was not the strand, rather than that the frame is poor.
