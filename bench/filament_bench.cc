@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "bench/pi_budget.h"
+#include "pipeline/band.h"
 #include "vision/io/frame_source.h"
 #include "vision/scene/batch.h"
 #include "vision/scene/strand_measure.h"
@@ -24,9 +25,7 @@ void BenchFilament(const std::string& path) {
   cv::setNumThreads(1);
   StrandMeasureOptions opt;
   opt.target = vision::MeasureTarget::kFilament;
-  const vision::BandPx band = vision::DefaultBand(opt.target, 1.0);
-  opt.band_start_px = band.start_px;
-  opt.band_height_px = band.height_px;
+  clogscope::pipeline::ApplyBandPx(clogscope::pipeline::BandRequest{}, std::nullopt, &opt);
   constexpr int kRounds = 3;
   std::vector<double> fps;
   int n = 0, valid = 0;

@@ -36,23 +36,21 @@ using nlohmann::json;
 constexpr double kMinMadPx = 0.02;
 
 void Summarise(StepResult* r, const ExperimentOptions& o) {
-  std::vector<double> widths;
+  FrameWidths widths;
   std::vector<FrameRecord*> valid;
-  FrameSigmas sigmas;
   for (auto& f : r->frames) {
     if (f.m.valid()) {
-      widths.push_back(f.m.width_px);
-      sigmas.Add(f.m.width_sigma_px, f.m.model_sigma_px);
+      widths.Add(f.m.width_px, f.m.width_sigma_px, f.m.model_sigma_px);
       valid.push_back(&f);
     }
   }
-  r->n_valid = static_cast<int>(widths.size());
-  if (widths.empty()) {
+  r->n_valid = static_cast<int>(widths.width.size());
+  if (widths.width.empty()) {
     r->status = model::StepStatus::kFailed;
     if (r->detail.empty()) r->detail = "no valid frame";
     return;
   }
-  const WidthStats st = RobustWidthStats(widths, sigmas, o.outlier_mad_k, kMinMadPx);
+  const WidthStats st = RobustWidthStats(widths, o.outlier_mad_k, kMinMadPx);
   for (size_t i = 0; i < valid.size(); ++i) valid[i]->used = st.used[i];
   r->n_used = st.n_used;
   r->n_rejected = st.n_rejected;

@@ -93,8 +93,8 @@ FeedstockResult MeasureFeedstock(const std::string& video, double start_s, doubl
   const double slot = (b - a) / o.pairs;
   const double mm_per_px = conversion ? conversion->scale_um_per_px * 1e-3 : 0.0;
   vision::StrandTracker strand(o.strand);
-  std::vector<double> widths, speeds, gears, slips;
-  FrameSigmas sigmas;  // the widths' own σ
+  FrameWidths widths;
+  std::vector<double> speeds, gears, slips;
   if (a > vision::kSeekAheadS) dec->SeekToTime(a);
   vision::InputFrame f;
   f.time_s = 0;  // before the first frame: the stream's start
@@ -115,10 +115,7 @@ FeedstockResult MeasureFeedstock(const std::string& video, double start_s, doubl
       const vision::StrandMeasurement m = strand.Measure(f.image);
       if (in_pair == 0) {
         ++r.n_pairs;
-        if (m.valid()) {
-          widths.push_back(m.width_px);
-          sigmas.Add(m.width_sigma_px, m.model_sigma_px);
-        }
+        if (m.valid()) widths.Add(m.width_px, m.width_sigma_px, m.model_sigma_px);
       }
       const vision::FeedSpeedSample v = feed.Next(f.image, f.time_s, m);
       vision::GearSpeedSample g;
@@ -133,16 +130,16 @@ FeedstockResult MeasureFeedstock(const std::string& video, double start_s, doubl
     }
     if (in_pair < 2) break;  // the video or the step's part ended
   }
-  r.n_diameter = static_cast<int>(widths.size());
+  r.n_diameter = static_cast<int>(widths.width.size());
   r.n_speed = static_cast<int>(speeds.size());
   r.n_gear = static_cast<int>(gears.size());
   r.n_slip = static_cast<int>(slips.size());
-  if (widths.empty()) {
+  if (widths.width.empty()) {
     r.status = FeedstockStatus::kFailed;
     r.detail = fmt::format("{}: no valid filament width in {} frame pairs", video, r.n_pairs);
     return r;
   }
-  const WidthStats st = RobustWidthStats(widths, sigmas);
+  const WidthStats st = RobustWidthStats(widths);
   r.diameter_px = st.mean;
   r.diameter_std_px = st.std;
   if (conversion) {

@@ -29,20 +29,19 @@ std::string OverlayName(const FrameRow& r, bool from_video, std::set<std::string
 // frames after the steps' own outlier rejection; empty without valid frames.
 std::string WidthSummary(const std::vector<FrameRow>& rows,
                          const std::optional<calib::ScaleCalibration>& conv) {
-  std::vector<double> widths_px;
-  FrameSigmas sigmas;
+  FrameWidths frames;
   for (const FrameRow& r : rows) {
     if (!r.m.valid()) continue;
-    widths_px.push_back(r.m.width_px);
-    sigmas.Add(r.m.width_sigma_px, r.m.model_sigma_px);
+    frames.Add(r.m.width_px, r.m.width_sigma_px, r.m.model_sigma_px);
   }
-  if (widths_px.empty()) return "";
-  const WidthStats st = RobustWidthStats(widths_px, sigmas);
+  if (frames.width.empty()) return "";
+  const WidthStats st = RobustWidthStats(frames);
   std::string out = fmt::format("; width {:.3f} ± {:.3f} px per frame (mean ± {:.3f} px, 95 %)",
                                 st.mean, st.std, st.ci95_half_width);
   if (conv) out += fmt::format(" = {:.2f} µm", conv->ToMicrons(st.mean));
   if (st.n_rejected > 0)
-    out += fmt::format(", {} of {} widths left out as outliers", st.n_rejected, widths_px.size());
+    out +=
+        fmt::format(", {} of {} widths left out as outliers", st.n_rejected, frames.width.size());
   if (st.frames_repeat) out += "; " + RepeatDetail(st);
   return out;
 }

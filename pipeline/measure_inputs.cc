@@ -191,10 +191,10 @@ MeasureSummary MeasureInputs(MeasureInputsOptions o, std::ostream* table_out) {
     // The rows' speeds are summarised before they are written, so each row can say whether the
     // logged mean used it.
     const FeedSpeedSummary speeds = o.feed_speed ? SummariseSpeeds(rows) : FeedSpeedSummary{};
-    std::vector<double> widths_px;
+    int valid = 0;
     for (size_t i = 0; i < rows.size(); ++i) {
       const FrameRow& r = rows[i];
-      if (r.m.valid()) widths_px.push_back(r.m.width_px);
+      valid += r.m.valid();
       std::vector<std::string> fields = FrameFields(r.source, r.frame, r.time_s, r.m, conv);
       if (o.feed_speed) {
         const auto sf = SpeedFields(r.speed, speeds, i, *conv);
@@ -208,7 +208,6 @@ MeasureSummary MeasureInputs(MeasureInputsOptions o, std::ostream* table_out) {
       }
       table << CsvLine(fields) << "\n";
     }
-    const int valid = static_cast<int>(widths_px.size());
     table.flush();
     if (overlays) {
       overlays->WriteReady(rows, /*all=*/true);

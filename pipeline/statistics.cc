@@ -51,19 +51,16 @@ SampleStats RobustStats(const std::vector<double>& values, double k, double min_
   return s;
 }
 
-WidthStats RobustWidthStats(const std::vector<double>& widths, const FrameSigmas& sigmas, double k,
-                            double min_mad) {
-  if (sigmas.width_sigma.size() != widths.size() || sigmas.model_sigma.size() != widths.size())
-    throw std::invalid_argument("RobustWidthStats: one σ and one model σ per width");
+WidthStats RobustWidthStats(const FrameWidths& frames, double k, double min_mad) {
   WidthStats out;
-  static_cast<SampleStats&>(out) = RobustStats(widths, k, min_mad);
+  static_cast<SampleStats&>(out) = RobustStats(frames.width, k, min_mad);
   if (out.n_used == 0) return out;
   std::vector<double> model, noise;
-  for (size_t i = 0; i < widths.size(); ++i) {
+  for (size_t i = 0; i < frames.width.size(); ++i) {
     if (!out.used[i]) continue;
-    const double m = std::min(sigmas.model_sigma[i], sigmas.width_sigma[i]);
+    const double m = std::min(frames.model_sigma[i], frames.width_sigma[i]);
     model.push_back(m);
-    noise.push_back(std::sqrt(sigmas.width_sigma[i] * sigmas.width_sigma[i] - m * m));
+    noise.push_back(std::sqrt(frames.width_sigma[i] * frames.width_sigma[i] - m * m));
   }
   out.model_sigma = Median(model);
   out.noise_sigma = Median(noise);
@@ -71,11 +68,9 @@ WidthStats RobustWidthStats(const std::vector<double>& widths, const FrameSigmas
   // a probability below 4e-4 (χ² with n − 1 degrees of freedom; 2e-8 at 50): the frames repeat
   // each other.
   out.frames_repeat = out.n_used >= kMinRepeatFrames && out.std < 0.5 * out.noise_sigma;
-  const double sem = out.frames_repeat ? out.noise_sigma : out.sem;
-  out.sem = sem;
-  out.mean_sigma = std::hypot(sem, out.model_sigma);
+  if (out.frames_repeat) out.sem = out.noise_sigma;
   if (out.n_used >= 2) {
-    out.ci95_half_width = std::hypot(StudentT975(out.n_used - 1) * sem, kZ95 * out.model_sigma);
+    out.ci95_half_width = std::hypot(StudentT975(out.n_used - 1) * out.sem, kZ95 * out.model_sigma);
   }
   return out;
 }

@@ -31,11 +31,13 @@ SampleStats RobustStats(const std::vector<double>& values, double k = 3.5, doubl
 // - frames whose widths scatter far less than their own noise predicts are not independent
 //   draws (a codec's skipped blocks repeat one frame's noise and edges on a still scene): their
 //   mean is worth one frame, so its standard error is one frame's noise.
-struct FrameSigmas {
-  std::vector<double> width_sigma;  // each frame's whole σ
-  std::vector<double> model_sigma;  // its model part (≤ width_sigma)
-  void Add(double width_sigma_px, double model_sigma_px) {
-    width_sigma.push_back(width_sigma_px);
+struct FrameWidths {
+  std::vector<double> width;        // each frame's width
+  std::vector<double> width_sigma;  // its whole σ
+  std::vector<double> model_sigma;  // the model part of it (≤ width_sigma)
+  void Add(double width_px, double sigma_px, double model_sigma_px) {
+    width.push_back(width_px);
+    width_sigma.push_back(sigma_px);
     model_sigma.push_back(model_sigma_px);
   }
 };
@@ -43,13 +45,11 @@ struct WidthStats : SampleStats {
   double model_sigma = 0;      // median model σ of the used frames
   double noise_sigma = 0;      // median of the used frames' σ without their model part
   bool frames_repeat = false;  // the scatter is below half of noise_sigma (n ≥ kMinRepeatFrames)
-  double mean_sigma = 0;       // the mean's σ: sem (or noise_sigma when frames repeat) ⊕ model
 };
 inline constexpr int kMinRepeatFrames = 20;
-// RobustStats on the widths, then the above; ci95_half_width is t·(sem or noise_sigma) ⊕
-// 1.96·model_sigma.
-WidthStats RobustWidthStats(const std::vector<double>& widths, const FrameSigmas& sigmas,
-                            double k = 3.5, double min_mad = 0.0);
+// RobustStats on the widths, then the above: sem is noise_sigma when the frames repeat, and
+// ci95_half_width is t·sem ⊕ 1.96·model_sigma.
+WidthStats RobustWidthStats(const FrameWidths& frames, double k = 3.5, double min_mad = 0.0);
 // Says so when they repeat: "the frames repeat each other (widths scatter 0.004 px against their
 // noise 0.070 px): their mean counts as one frame".
 std::string RepeatDetail(const WidthStats& st);

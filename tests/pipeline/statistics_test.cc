@@ -60,15 +60,14 @@ double Coverage(double shared_px, double noise_px, bool repeat, double reported_
   for (int s = 0; s < kSteps; ++s) {
     const double shared = shared_px * unit(rng);
     const double first = noise_px * unit(rng);
-    std::vector<double> widths;
-    FrameSigmas sigmas;
+    FrameWidths widths;
     for (int f = 0; f < kFrames; ++f) {
       // A codec's copies still differ in the last bits of their fit.
       const double noise = repeat ? first + 1e-4 * unit(rng) : noise_px * unit(rng);
-      widths.push_back(kTruePx + shared + noise);
-      sigmas.Add(std::hypot(noise_px, reported_model_px), reported_model_px);
+      widths.Add(kTruePx + shared + noise, std::hypot(noise_px, reported_model_px),
+                 reported_model_px);
     }
-    const WidthStats st = RobustWidthStats(widths, sigmas);
+    const WidthStats st = RobustWidthStats(widths);
     *flagged_all = *flagged_all && st.frames_repeat == repeat;
     covered += std::abs(st.mean - kTruePx) <= st.ci95_half_width;
   }
