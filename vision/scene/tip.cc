@@ -107,6 +107,7 @@ bool AxialStep(const GreyImage& img, const AxisFrame& a, double s_guess, double 
   std::vector<EdgeSample> profile;
   int pixels = 0;
   const int columns = static_cast<int>(std::floor(u1 - u0 + 1e-9)) + 1;
+  if (columns <= 0) return false;  // no column between u0 and u1
   for (double s = s_guess - kReachPx; s <= s_guess + kReachPx; s += kStepPx) {
     // A row across the axis lies in the image when both its ends do; then every column does.
     const double x0 = a.ImageX(s, u0), y0 = a.ImageY(s, u0);
