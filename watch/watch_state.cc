@@ -47,6 +47,18 @@ const char* WatchLevelName(WatchLevel level) {
   return "?";
 }
 
+bool IsAlertLevel(WatchLevel level) {
+  return level == WatchLevel::kWarn || level == WatchLevel::kClog ||
+         level == WatchLevel::kNotExtruding || level == WatchLevel::kNoView;
+}
+
+// WatchStatus::changes_into is indexed by the enum's value: kWatchLevels must list it in order.
+static_assert([] {
+  for (size_t i = 0; i < std::size(kWatchLevels); ++i)
+    if (static_cast<size_t>(kWatchLevels[i]) != i) return false;
+  return true;
+}());
+
 bool WatchOptions::Validate(std::string* why) const {
   if (!(window_s >= 1 && window_s <= 3600))
     *why = fmt::format("--window-s {:g}: must be in [1, 3600] s", window_s);
@@ -384,6 +396,7 @@ bool WatchState::Evaluate(double t) {
     status_.level = next;
     status_.level_since_s = t;
     status_.level_changes += changed;
+    status_.changes_into[static_cast<size_t>(next)] += changed;
   }
   if (next == WatchLevel::kOk || next == WatchLevel::kWarn || next == WatchLevel::kClog)
     drift_level_ = next;

@@ -1,7 +1,9 @@
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <deque>
+#include <iterator>
 #include <optional>
 #include <string>
 #include <vector>
@@ -25,6 +27,8 @@ const char* WatchLevelName(WatchLevel level);
 inline constexpr WatchLevel kWatchLevels[] = {WatchLevel::kStarting,     WatchLevel::kOk,
                                               WatchLevel::kWarn,         WatchLevel::kClog,
                                               WatchLevel::kNotExtruding, WatchLevel::kNoView};
+// True for the levels that ask for attention: warn, clog, not_extruding, no_view.
+bool IsAlertLevel(WatchLevel level);
 
 // What one frame showed.
 enum class FrameView {
@@ -55,6 +59,9 @@ struct WatchStatus {
   WatchLevel previous_level = WatchLevel::kStarting;
   double level_since_s = 0;
   int level_changes = 0;  // leaving kStarting is not one (nothing changed that was known)
+  // The changes into each level, indexed by its enum value (kWatchLevels' order); those into an
+  // alert level (IsAlertLevel) are the alerts, a return to ok is none.
+  std::array<int, std::size(kWatchLevels)> changes_into{};
   std::string reason = "waiting for the first frame";  // why the watch is at this level
   bool source_up = false;  // false until the first frame, and while the source is down
 
@@ -147,8 +154,8 @@ class WatchState {
   WatchLevel drift_level_ = WatchLevel::kOk;  // the last of ok, warn, clog: where a view returns
   std::optional<double> last_time_s_, last_frame_s_;
   std::optional<double> first_time_s_;  // the first frame's; none: still starting
-  double rate_hz_ = 0;          // frame rate seen (kept while frames stop coming)
-  double expected_frames_ = 0;  // frames the window should hold at that rate
+  double rate_hz_ = 0;                  // frame rate seen (kept while frames stop coming)
+  double expected_frames_ = 0;          // frames the window should hold at that rate
   // When each condition began to hold continuously (nullopt: it does not hold now).
   std::optional<double> since_no_view_, since_not_extruding_, since_clog_, since_warn_;
   std::optional<double> since_view_back_, since_clog_exit_, since_warn_exit_;
