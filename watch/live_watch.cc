@@ -264,7 +264,6 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
   const auto update_counters = [&] {
     counters.frames_skipped_total = queue.dropped();
     counters.reconnects_total = reader.reconnects;
-    counters.alerts_total = state.status().level_changes;
     counters.latency_median_ms = latency.Quantile(0.5);
     counters.latency_max_ms = latency.max();
     counters.uptime_s = Seconds(Clock::now() - started);
@@ -338,7 +337,9 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
                         counters.frames_total});
       });
       // Arrival (decoded, in hand) to the state published: what a reader of /status waits for.
-      latency.Add(1e3 * Seconds(Clock::now() - frame.arrival));
+      const double latency_s = Seconds(Clock::now() - frame.arrival);
+      latency.Add(1e3 * latency_s);
+      counters.latency.Add(latency_s);
       frame = vision::InputFrame{};
     }
   } catch (const std::exception& e) {

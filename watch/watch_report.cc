@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
+#include "common/version.h"
 #include "model/predictor.h"
 
 namespace clogscope::watch {
@@ -111,7 +112,7 @@ std::string StatusJson(const WatchStatus& s, const std::optional<ClogIndex>& clo
                    {"frames_refused_total", c.frames_refused_total},
                    {"frames_skipped_total", c.frames_skipped_total},
                    {"reconnects_total", c.reconnects_total},
-                   {"alerts_total", c.alerts_total},
+                   {"alerts_total", s.level_changes},  // every change: what --on-alert runs on
                    {"latency_median_ms", RoundDecimals(c.latency_median_ms, 3)},
                    {"latency_max_ms", RoundDecimals(c.latency_max_ms, 3)},
                    {"uptime_s", RoundDecimals(c.uptime_s, 3)}};
@@ -120,47 +121,80 @@ std::string StatusJson(const WatchStatus& s, const std::optional<ClogIndex>& clo
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
+void LatencyHistogram::Add(double seconds) {
+  for (size_t i = 0; i < bucket_counts.size(); ++i) {
+    if (seconds <= kLatencyBucketsS[i]) {
+      ++bucket_counts[i];
+      break;
+    }
+  }
+  ++count;
+  sum_s += seconds;
+}
+
 std::string PrometheusText(const WatchStatus& s, const std::optional<ClogIndex>& clog,
                            const WatchCounters& c) {
+  constexpr double kPerUm = 1e-6, kPerPct = 1e-2;  // µm → m, % → ratio
   std::string out;
+  const auto head = [&](const char* name, const char* type, const char* help) {
+    out += fmt::format("# HELP clogscope_{0} {1}\n# TYPE clogscope_{0} {2}\n", name, help, type);
+  };
   const auto metric = [&](const char* name, const char* type, const char* help, double value) {
     if (!std::isfinite(value)) return;  // unknown: absent, as Prometheus expects
-    out += fmt::format("# HELP clogscope_{0} {1}\n# TYPE clogscope_{0} {2}\nclogscope_{0} {3}\n",
-                       name, help, type, value);
+    head(name, type, help);
+    out += fmt::format("clogscope_{} {}\n", name, value);
   };
-  out +=
-      "# HELP clogscope_level Current alert level (1 for the current one).\n"
-      "# TYPE clogscope_level gauge\n";
+  head("build_info", "gauge", "The watch's version, as labels; always 1.");
+  out += fmt::format("clogscope_build_info{{version=\"{}\"}} 1\n", kVersion);
+  head("level", "gauge", "1 for the current alert level, 0 for the others.");
   for (WatchLevel l : kWatchLevels) {
     out += fmt::format("clogscope_level{{level=\"{}\"}} {}\n", WatchLevelName(l),
                        l == s.level ? 1 : 0);
   }
   metric("source_up", "gauge", "1 when the source delivers frames.", s.source_up ? 1 : 0);
   metric("window_frames", "gauge", "Frames in the rolling window.", s.frames);
-  metric("window_valid_fraction", "gauge", "Valid frames over frames expected in the window.",
-         s.valid_fraction);
-  metric("frame_rate_hz", "gauge", "Frames arriving per second.", s.frame_rate_hz);
+  metric("window_valid_ratio", "gauge",
+         "Frames with a width over the frames expected in the rolling window.", s.valid_fraction);
+  if (s.frame_rate_hz > 0) {
+    metric("frame_interval_seconds", "gauge", "Median interval between arriving frames.",
+           1 / s.frame_rate_hz);
+  }
   if (s.has_diameter) {
-    metric("diameter_px", "gauge", "Mean effective diameter over the window, px.", s.diameter_px);
-    metric("diameter_um", "gauge", "Mean effective diameter over the window, um.", s.diameter_um);
-    metric("diameter_ci95_um", "gauge", "95 % CI half-width of the mean diameter, um.",
-           s.diameter_ci95_um);
+    metric("strand_diameter_pixels", "gauge",
+           "Mean effective strand diameter over the rolling window, in image pixels.",
+           s.diameter_px);
+    metric("strand_diameter_meters", "gauge",
+           "Mean effective strand diameter over the rolling window (needs a pixel scale).",
+           s.diameter_um * kPerUm);
+    metric("strand_diameter_ci95_meters", "gauge",
+           "Half-width of the 95 % confidence interval of the mean strand diameter.",
+           s.diameter_ci95_um * kPerUm);
   }
   if (s.baseline_ready) {
-    metric("baseline_um", "gauge", "Baseline effective diameter, um.", s.baseline_um);
+    metric("strand_baseline_diameter_meters", "gauge",
+           "Baseline effective strand diameter the drift is measured from.",
+           s.baseline_um * kPerUm);
     if (s.has_diameter) {
-      metric("drift_pct", "gauge", "Drift of the window mean from the baseline, %.", s.drift_pct);
-      metric("drift_ci95_pct", "gauge", "95 % CI half-width of the drift, %.", s.drift_ci95_pct);
+      metric("strand_drift_ratio", "gauge",
+             "Rolling window's mean diameter over the baseline, minus 1 (-0.05: 5 % narrower).",
+             s.drift_pct * kPerPct);
+      metric("strand_drift_ci95_ratio", "gauge",
+             "Half-width of the 95 % confidence interval of the drift.",
+             s.drift_ci95_pct * kPerPct);
     }
   }
   if (s.has_recent) {
-    metric("recent_drift_pct", "gauge", "Drift over the alert window, %.", s.recent_drift_pct);
+    metric("strand_recent_drift_ratio", "gauge",
+           "Drift over the alert window (what the warn and clog levels test), as a ratio.",
+           s.recent_drift_pct * kPerPct);
   }
   if (clog) {
-    metric("back_pressure_ratio", "gauge", "Predicted F_bp / F_bp,0 at the current diameter.",
+    metric("back_pressure_ratio", "gauge",
+           "Predicted back pressure F_bp / F_bp,0 at the current diameter.",
            clog->back_pressure_ratio);
-    metric("vibration_increase_pct", "gauge", "Predicted bar-mount vibration increase, %.",
-           clog->vibration_increase_pct);
+    metric("vibration_increase_ratio", "gauge",
+           "Predicted bar-mount vibration amplitude increase at the current diameter, as a ratio.",
+           clog->vibration_increase_pct * kPerPct);
   }
   metric("frames_total", "counter", "Frames received.", c.frames_total);
   metric("frames_valid_total", "counter", "Frames with a width.", c.frames_valid_total);
@@ -170,9 +204,27 @@ std::string PrometheusText(const WatchStatus& s, const std::optional<ClogIndex>&
   metric("frames_skipped_total", "counter", "Frames skipped because measuring fell behind.",
          c.frames_skipped_total);
   metric("reconnects_total", "counter", "Times the source was reopened.", c.reconnects_total);
-  metric("alerts_total", "counter", "Alert level changes.", c.alerts_total);
-  metric("latency_median_ms", "gauge", "Median frame-arrival-to-state latency, ms.",
-         c.latency_median_ms);
+  metric("level_changes_total", "counter",
+         "Level changes, returns to ok included (each runs --on-alert).", s.level_changes);
+  head("alerts_total", "counter",
+       "Level changes into an alert level (warn, clog, not_extruding, no_view), by that level.");
+  for (WatchLevel l : kWatchLevels) {
+    if (!IsAlertLevel(l)) continue;
+    out += fmt::format("clogscope_alerts_total{{level=\"{}\"}} {}\n", WatchLevelName(l),
+                       s.changes_into[static_cast<size_t>(l)]);
+  }
+  head("frame_latency_seconds", "histogram",
+       "Time from a frame's arrival to the state it updated being published.");
+  long long cumulative = 0;
+  for (size_t i = 0; i < c.latency.bucket_counts.size(); ++i) {
+    cumulative += c.latency.bucket_counts[i];
+    out += fmt::format("clogscope_frame_latency_seconds_bucket{{le=\"{}\"}} {}\n",
+                       kLatencyBucketsS[i], cumulative);
+  }
+  out += fmt::format(
+      "clogscope_frame_latency_seconds_bucket{{le=\"+Inf\"}} {0}\n"
+      "clogscope_frame_latency_seconds_sum {1}\nclogscope_frame_latency_seconds_count {0}\n",
+      c.latency.count, c.latency.sum_s);
   metric("uptime_seconds", "gauge", "Seconds since the watch started.", c.uptime_s);
   return out;
 }

@@ -1,5 +1,7 @@
 #pragma once
 
+#include <array>
+#include <iterator>
 #include <optional>
 #include <string>
 
@@ -22,6 +24,21 @@ struct ClogIndex {
 std::optional<ClogIndex> ComputeClogIndex(const model::ExtruderParams& params, double temperature_c,
                                           const WatchStatus& status, std::string* why);
 
+// Upper bounds of the frame latency histogram's buckets, s: 0.5 ms to 2 s in 1-2-5 steps (a PC
+// takes under a millisecond a frame, a Pi 10-60 ms; frames come every 40 ms at 25 frames/s).
+// +Inf is implied.
+inline constexpr double kLatencyBucketsS[] = {0.0005, 0.001, 0.002, 0.005, 0.01, 0.02,
+                                              0.05,   0.1,   0.2,   0.5,   1,    2};
+
+// Frame latencies (arrival to state published) since the start, as Prometheus histograms count
+// them: per bucket (not cumulative here), their number and sum.
+struct LatencyHistogram {
+  std::array<long long, std::size(kLatencyBucketsS)> bucket_counts{};  // le kLatencyBucketsS[i]
+  long long count = 0;                                                 // all, +Inf included
+  double sum_s = 0;
+  void Add(double seconds);
+};
+
 // Counters of the watch run that go with the state.
 struct WatchCounters {
   std::string source;  // as shown: a URL's password hidden (vision::RedactCredentials)
@@ -33,9 +50,9 @@ struct WatchCounters {
   long long frames_refused_total = 0;
   long long frames_skipped_total = 0;  // dropped because measurement fell behind a live source
   long long reconnects_total = 0;
-  long long alerts_total = 0;    // level changes
   double latency_median_ms = 0;  // frame arrival to state update, over the recent frames
   double latency_max_ms = 0;
+  LatencyHistogram latency;  // the same since the start
   double uptime_s = 0;
 };
 
@@ -47,7 +64,8 @@ double RoundDecimals(double v, int digits);
 std::string StatusJson(const WatchStatus& status, const std::optional<ClogIndex>& clog,
                        const WatchCounters& counters, const std::string& event);
 
-// The same as Prometheus text exposition format (version 0.0.4), metrics prefixed clogscope_.
+// The same as Prometheus text exposition format (version 0.0.4), metrics prefixed clogscope_, in
+// base units (metres, seconds, ratios); what is not known yet is absent (docs/watch.md lists them).
 std::string PrometheusText(const WatchStatus& status, const std::optional<ClogIndex>& clog,
                            const WatchCounters& counters);
 

@@ -1,10 +1,12 @@
 #include "watch/watch_state.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <functional>
 #include <iostream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <random>
 
@@ -313,6 +315,54 @@ TEST(WatchStateTest, StartingUntilTheFirstFrame) {
   EXPECT_TRUE(state.status().source_up);
   EXPECT_NE(metrics().find("clogscope_level{level=\"starting\"} 0\n"), std::string::npos);
   EXPECT_NE(metrics().find("clogscope_source_up 1\n"), std::string::npos);
+}
+
+// /metrics counts every level change, and as alerts only the changes into warn, clog,
+// not_extruding or no_view (a return to ok is no alert), each by its level.
+TEST(WatchStateTest, AlertsCountChangesIntoAlertLevelsNotReturnsToOk) {
+  Simulation sim;
+  sim.Run(0, 30, [](double) { return Strand(400); });
+  sim.Run(30, 50, [](double) { return Strand(388); });   // −3 %: warn
+  sim.Run(50, 80, [](double) { return Strand(400); });   // back to ok
+  sim.Run(80, 100, [](double) { return Strand(370); });  // −7.5 %: clog
+  std::map<WatchLevel, int> into;
+  for (const auto& [t, l] : sim.levels) ++into[l];
+  ASSERT_GE(into[WatchLevel::kOk], 1);
+  ASSERT_GE(into[WatchLevel::kClog], 1);
+  const WatchStatus& s = sim.state.status();
+  EXPECT_EQ(s.level_changes, static_cast<int>(sim.levels.size()));
+  const std::string metrics = PrometheusText(s, std::nullopt, {});
+  EXPECT_NE(metrics.find(fmt::format("clogscope_level_changes_total {}\n", sim.levels.size())),
+            std::string::npos)
+      << metrics;
+  for (WatchLevel l : kWatchLevels) {
+    EXPECT_EQ(s.changes_into[static_cast<size_t>(l)], into[l]) << WatchLevelName(l);
+    const std::string alerts =
+        fmt::format("clogscope_alerts_total{{level=\"{}\"}}", WatchLevelName(l));
+    if (IsAlertLevel(l))
+      EXPECT_NE(metrics.find(fmt::format("{} {}\n", alerts, into[l])), std::string::npos)
+          << metrics;
+    else
+      EXPECT_EQ(metrics.find(alerts), std::string::npos) << metrics;
+  }
+}
+
+// The frame latency histogram: per bucket here, cumulative in /metrics, in seconds.
+TEST(WatchStateTest, TheLatencyHistogramIsCumulativeInSeconds) {
+  WatchCounters c;
+  for (double s : {0.0004, 0.003, 0.003, 0.04, 3.0}) c.latency.Add(s);
+  const std::string metrics = PrometheusText(WatchStatus{}, std::nullopt, c);
+  for (const auto& [le, n] : std::vector<std::pair<std::string, int>>{
+           {"0.0005", 1}, {"0.001", 1}, {"0.005", 3}, {"0.05", 4}, {"2", 4}, {"+Inf", 5}})
+    EXPECT_NE(metrics.find(
+                  fmt::format("clogscope_frame_latency_seconds_bucket{{le=\"{}\"}} {}\n", le, n)),
+              std::string::npos)
+        << le << "\n"
+        << metrics;
+  EXPECT_NE(metrics.find("clogscope_frame_latency_seconds_count 5\n"), std::string::npos);
+  EXPECT_NE(metrics.find("clogscope_frame_latency_seconds_sum 3.0464"), std::string::npos)
+      << metrics;
+  EXPECT_NE(metrics.find("# TYPE clogscope_frame_latency_seconds histogram\n"), std::string::npos);
 }
 
 TEST(WatchStateTest, AGivenBaselineIsUsedFromTheFirstFrame) {
