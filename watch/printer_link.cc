@@ -100,6 +100,7 @@ bool PrinterLinkOptions::Resolve(std::string* base, std::string* key, std::strin
 struct PrinterLink::Impl {
   PrinterLinkOptions options;
   std::string base;
+  std::string key;  // for a client of the caller's own (WebcamSource); never shown
   Log log;
   std::function<void(const PrinterEvent&)> on_event;
   std::unique_ptr<PrinterApi> api;
@@ -208,7 +209,8 @@ struct PrinterLink::Impl {
     std::vector<MoonrakerNotifier> notifiers;
     const PrinterReply reply = moonraker->ListNotifiers(&notifiers);
     if (!reply.ok()) {
-      if (reply.error != PrinterError::kRefused)  // 404: no [notifier] component loaded
+      // 404: no [notifier] component loaded; an absent Moonraker is told by the state's warning.
+      if (reply.error == PrinterError::kUnauthorized || reply.error == PrinterError::kBadReply)
         Info(fmt::format("{}: {}", Who(), reply.detail));
       return;
     }
@@ -262,7 +264,8 @@ struct PrinterLink::Impl {
 PrinterLink::PrinterLink(const PrinterLinkOptions& options, Log log,
                          std::function<void(const PrinterEvent&)> on_event)
     : impl_(std::make_unique<Impl>(options, std::move(log), std::move(on_event))) {
-  std::string why, key;
+  std::string why;
+  std::string& key = impl_->key;
   if (!options.Resolve(&impl_->base, &key, &why)) throw std::invalid_argument(why);
   if (!options.enabled()) throw std::invalid_argument("no --moonraker or --octoprint");
   if (!options.moonraker_url.empty()) {
@@ -289,8 +292,11 @@ PrinterLink::~PrinterLink() {
 std::string PrinterLink::WebcamSource() {
   if (!impl_->moonraker)
     throw std::invalid_argument("--octoprint: give the camera's source (OctoPrint lists none)");
+  // A client of this thread's own: the link's thread is using its own already (a libcurl handle
+  // serves one thread at a time).
+  MoonrakerClient client(impl_->base, impl_->key, impl_->options.request_timeout_s);
   std::vector<MoonrakerWebcam> webcams;
-  const PrinterReply reply = impl_->moonraker->ListWebcams(&webcams);
+  const PrinterReply reply = client.ListWebcams(&webcams);
   const std::string shown = vision::RedactCredentials(impl_->base);
   if (!reply.ok())
     throw std::invalid_argument(fmt::format("--moonraker {}: no webcam to watch ({}): {}", shown,
