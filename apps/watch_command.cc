@@ -201,8 +201,9 @@ int RunWatch(int argc, char** argv) {
   watch::PrinterLinkOptions& p = o.printer;
   std::string pause_level = "clog";
   app.add_option("--moonraker", p.moonraker_url,
-                 "http://HOST:7125 (Klipper): pause the print on a clog while it prints; with no "
-                 "source, watch the webcam Moonraker lists");
+                 "http://HOST (Klipper; the web interface's address, which proxies Moonraker's "
+                 "API and webcam, or Moonraker's own HOST:7125): pause the print on a clog while "
+                 "it prints; with no source, watch the webcam Moonraker lists");
   app.add_option("--octoprint", p.octoprint_url,
                  "http://HOST: pause the print on a clog through OctoPrint's REST API");
   app.add_option("--printer-api-key-file", p.api_key_file,
@@ -230,7 +231,7 @@ int RunWatch(int argc, char** argv) {
       "      --http-token-file token                   # to the network, behind a token\n"
       "  clogscope watch /dev/video0 --scale-um-per-px 3 --extruder direct-pla --temperature-c "
       "210\n"
-      "  clogscope watch --moonraker http://printer.local:7125 --printer-api-key-file key \\\n"
+      "  clogscope watch --moonraker http://printer.local --printer-api-key-file key \\\n"
       "      --calib calib.yaml                        # its webcam; pauses on a clog\n"
       "  clogscope watch replay.mp4 --realtime --scale-um-per-px 3 --on-alert \\\n"
       "      'curl -s -X POST http://printer.local/printer/print/pause'\n"
