@@ -30,6 +30,11 @@ watch::MqttPublisher::Log MqttLog() {
           [](const std::string& m) { spdlog::warn("{}", m); }};
 }
 
+watch::PrinterLink::Log PrinterLog() {
+  return {[](const std::string& m) { spdlog::info("{}", m); },
+          [](const std::string& m) { spdlog::warn("{}", m); }};
+}
+
 }  // namespace
 
 WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* stop,
@@ -37,6 +42,13 @@ WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* s
   pipeline::MeasureInputsOptions m = options.measure;
   m.ResolveBand();
   watch::LiveWatchOptions live = options.live;
+  std::string why;
+  // The printer first: its options checked, then (with no source) its webcam is the source.
+  if (!options.printer.Validate(&why)) throw std::invalid_argument(why);
+  if (live.source.empty() && options.printer.moonraker_url.empty())
+    throw std::invalid_argument(
+        "no source: a device, stream URL, video file or folder (or --moonraker to watch its "
+        "webcam)");
   live.strand = m.strand;
   live.conversion = m.Conversion();
   if (!options.extruder.empty()) {
@@ -46,7 +58,11 @@ WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* s
   } else if (options.temperature_c || !options.set.empty()) {
     throw std::invalid_argument("--temperature-c and --set go with --extruder");
   }
-  std::string why;
+  std::optional<watch::PrinterLink> printer;
+  if (options.printer.enabled()) {
+    printer.emplace(options.printer, PrinterLog(), observers.on_printer);
+    if (live.source.empty()) live.source = printer->WebcamSource();
+  }
   if (!live.Validate(&why)) throw std::invalid_argument(why);
 
   if (!options.http_token_file.empty() && options.http.empty())
@@ -87,6 +103,7 @@ WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* s
   events.on_report = [&](const std::string&, const watch::WatchStatus& s,
                          const std::optional<watch::ClogIndex>& clog) {
     if (mqtt) mqtt->Update(s, clog);
+    if (printer) printer->Update(s);
   };
   events.on_level_change = [&](const watch::WatchStatus& s,
                                const std::optional<watch::ClogIndex>& clog) {
@@ -129,8 +146,8 @@ int RunWatch(int argc, char** argv) {
   watch::WatchOptions& w = live.watch;
   app.add_option("source", live.source,
                  "/dev/videoN, a stream URL (http://…/?action=stream, rtsp://, tcp://, udp://), a "
-                 "video file, or a folder a camera writes images into")
-      ->required();
+                 "video file, or a folder a camera writes images into; with --moonraker, "
+                 "default its webcam's stream");
   AddMeasurementOptions(app, &o.measure, &text);
   app.add_flag("--realtime", live.source_options.realtime,
                "Video file: deliver frames at their timestamps (replays, tests)");
@@ -181,6 +198,29 @@ int RunWatch(int argc, char** argv) {
                  "/level, /diameter_mm, /availability and /frame, with Home Assistant discovery");
   app.add_option("--mqtt-credentials-file", o.mqtt.credentials_file,
                  "A file holding one line 'user:password' for the MQTT broker");
+  watch::PrinterLinkOptions& p = o.printer;
+  std::string pause_level = "clog";
+  app.add_option("--moonraker", p.moonraker_url,
+                 "http://HOST (Klipper; the web interface's address, which proxies Moonraker's "
+                 "API and webcam, or Moonraker's own HOST:7125): pause the print on a clog while "
+                 "it prints; with no source, watch the webcam Moonraker lists");
+  app.add_option("--octoprint", p.octoprint_url,
+                 "http://HOST: pause the print on a clog through OctoPrint's REST API");
+  app.add_option("--printer-api-key-file", p.api_key_file,
+                 "A file holding the printer's API key (one line), sent as X-Api-Key");
+  app.add_option("--pause-level", pause_level, "The level that pauses: clog, or warn")
+      ->capture_default_str();
+  app.add_option("--pause-holdoff-s", p.pause.holdoff_s,
+                 "After a resume, no pause for this long (the watch's seconds)")
+      ->capture_default_str();
+  app.add_option("--printer-poll-s", p.poll_interval_s, "Ask the job's state this often")
+      ->capture_default_str();
+  app.add_option("--webcam", p.webcam,
+                 "Moonraker's webcam to watch, by name (default: the first "
+                 "enabled)");
+  app.add_option("--moonraker-notify-macro", p.notify_macro,
+                 "A Klipper macro run after a pause (NAME LEVEL=… TIME_S=… DRIFT_PCT=…), e.g. one "
+                 "that calls Moonraker's notifier");
   app.add_option("--duration-s", live.duration_s, "Stop after this long (default: until Ctrl-C)");
   app.footer(
       "Examples:\n"
@@ -191,12 +231,16 @@ int RunWatch(int argc, char** argv) {
       "      --http-token-file token                   # to the network, behind a token\n"
       "  clogscope watch /dev/video0 --scale-um-per-px 3 --extruder direct-pla --temperature-c "
       "210\n"
+      "  clogscope watch --moonraker http://printer.local --printer-api-key-file key \\\n"
+      "      --calib calib.yaml                        # its webcam; pauses on a clog\n"
       "  clogscope watch replay.mp4 --realtime --scale-um-per-px 3 --on-alert \\\n"
       "      'curl -s -X POST http://printer.local/printer/print/pause'\n"
       "Exit status: 0 after Ctrl-C, the file's end or --duration-s; 1 when nothing could be "
       "watched or the source failed.");
   if (!ParseCommandLine(app, argc, argv)) return 0;
   ApplyMeasurementOptions(app, text, &o.measure);
+  if (!watch::ParsePauseLevel(pause_level, &p.pause.pause_level))
+    throw std::invalid_argument("--pause-level " + pause_level + ": warn or clog");
   g_stop_watch.store(false);
   std::signal(SIGINT, OnWatchSignal);
   std::signal(SIGTERM, OnWatchSignal);

@@ -11,6 +11,7 @@
 #include "pipeline/measure_inputs.h"
 #include "watch/live_watch.h"
 #include "watch/mqtt_publisher.h"
+#include "watch/printer_link.h"
 
 namespace clogscope::apps {
 
@@ -33,6 +34,10 @@ struct WatchCommandOptions {
   std::string http_token_file;          // the bearer token the server asks for; empty: none
   std::string on_alert;                 // shell command run on every level change
   watch::MqttOptions mqtt;              // --mqtt, --mqtt-credentials-file; no url: none
+  // --moonraker / --octoprint, --printer-api-key-file, --pause-level, --pause-holdoff-s,
+  // --printer-poll-s, --webcam, --moonraker-notify-macro; no URL: none. With --moonraker and no
+  // source, its webcam is watched.
+  watch::PrinterLinkOptions printer;
 };
 
 struct WatchReport {
@@ -50,12 +55,16 @@ struct WatchObservers {
   // /frame.jpg serve the new state; the watch waits for it, so they keep serving that state
   // meanwhile.
   std::function<void(const watch::WatchStatus&)> on_level_change;
+  // What the printer link did (its state seen, a pause sent, a resume seen…), on the link's own
+  // thread: the watch does not wait for it.
+  std::function<void(const watch::PrinterEvent&)> on_printer;
 };
 
 // Watches a camera, stream, file or folder until *stop (or the file's end, or --duration-s),
-// writing JSON lines, serving HTTP and running the alert command. Throws std::invalid_argument
-// (one line naming the option, file or source) when nothing can be watched: bad options, a source
-// that cannot be opened or yields no frame, a log that cannot be opened, a port in use.
+// writing JSON lines, serving HTTP, running the alert command and pausing the printer. Throws
+// std::invalid_argument (one line naming the option, file or source) when nothing can be watched:
+// bad options, a source that cannot be opened or yields no frame (or, with --moonraker and no
+// source, no webcam listed), a log that cannot be opened, a port in use.
 WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* stop,
                         const WatchObservers& observers = {});
 

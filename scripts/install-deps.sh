@@ -19,6 +19,7 @@ packages=(
   gnuplot-nox            # plots (optional at run time)
   libmicrohttpd-dev      # `watch --http`: a server made to face a network (epoll, per-client limits); cpp-httplib 0.11 held a thread per slow client
   libmosquitto-dev       # `watch --mqtt`: the Eclipse Mosquitto client library (own network thread, last will, reconnect back-off)
+  libcurl4-openssl-dev   # `watch --moonraker/--octoprint`: the printer's HTTP API (timeouts, no redirects, https)
   mosquitto mosquitto-clients  # the MQTT tests: a real broker on localhost and mosquitto_sub to read what was published
   prometheus             # the /metrics tests: promtool checks the text and docs/'s alert rules, a real Prometheus on localhost scrapes a watch (its own service may start on :9090; the tests use a free port)
   python3-dev            # the Python module (python/): Debian's Python 3.11 headers
