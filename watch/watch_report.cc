@@ -112,7 +112,7 @@ std::string StatusJson(const WatchStatus& s, const std::optional<ClogIndex>& clo
                    {"frames_refused_total", c.frames_refused_total},
                    {"frames_skipped_total", c.frames_skipped_total},
                    {"reconnects_total", c.reconnects_total},
-                   {"alerts_total", s.level_changes},  // every change: what --on-alert runs on
+                   {"level_changes", s.level_changes},  // every change: what --on-alert runs on
                    {"latency_median_ms", RoundDecimals(c.latency_median_ms, 3)},
                    {"latency_max_ms", RoundDecimals(c.latency_max_ms, 3)},
                    {"uptime_s", RoundDecimals(c.uptime_s, 3)}};
