@@ -16,25 +16,29 @@ constexpr double kMinSigmaPx = 0.15;
 // Cauchy weights 1/(1 + (r/(c·s))²) with c = 2.385: 95 % efficiency on Gaussian noise.
 constexpr double kCauchyC = 2.385;
 
-// Parameters: background b₀, b₁; object a, k, l; centre, radius, blur.
-enum { kB0, kB1, kA, kK, kL, kC, kR, kS, kN };
+// The model's shapes: the background left of the object (level at u_ref, slope) and right of it;
+// the object's a, k, l. Their amplitudes are linear parameters, then come the centre, radius and
+// blur.
+enum { kLeft0, kLeft1, kRight0, kRight1, kBox, kLit, kTilt, kShapes };
 
-// The three object shapes at one u, blurred, and their derivatives by centre, radius and blur.
+// The seven shapes at one u, blurred, and their derivatives by centre, radius and blur.
 // With dl = u − c + R and dr = c + R − u the distances inside the left and right silhouettes,
-// a = dl/σ and b = dr/σ:
-//   box = Φ(a) + Φ(b) − 1                         (exact)
-//   tilt = [(u − c)·box + σ(φ(a) − φ(b))]/R       (exact: a blurred linear ramp on the box)
+// a = dl/σ, b = dr/σ and x = u − u_ref:
+//   left = 1 − Φ(a),  left·x = x·(1 − Φ(a)) − σφ(a)   (exact: blurred 1[t < c − R] and t·1[…])
+//   right = 1 − Φ(b), right·x = x·(1 − Φ(b)) + σφ(b)
+//   box = Φ(a) + Φ(b) − 1                              (exact)
+//   tilt = [(u − c)·box + σ(φ(a) − φ(b))]/R            (exact: a blurred linear ramp on the box)
 //   lit = [σ·G(a)·G(b) − q·(G'(a) + G'(b))]/R,  q = σ^1.5 / (2√(2R))
 // The last blurs √(1 − x²) = √dl·√dr / R: the product of the blurred roots, corrected for the
 // other root's slope across each blurred edge (√dr ≈ √(2R)·(1 − dl/4R) near the left one, and
 // blurring √t·(t − z) gives G'(z)); what remains is of order (σ/R)² of k.
 struct Shapes {
-  double v[3];     // box, lit, tilt
-  double d[3][3];  // d[shape][c, R, σ]
+  double v[kShapes];
+  double d[kShapes][3];  // d[shape][c, R, σ]
 };
 
-inline void EvalShapes(double u, double c, double r, double s, const fitcore::BlurredSqrt& root,
-                       Shapes* out) {
+inline void EvalShapes(double u, double u_ref, double c, double r, double s,
+                       const fitcore::BlurredSqrt& root, Shapes* out) {
   const double inv_s = 1.0 / s, inv_r = 1.0 / r;
   const double a = (u - c + r) * inv_s, b = (c + r - u) * inv_s;
   double fa, pa, fb, pb, ga, gpa, gb, gpb, g2a, g2b;
@@ -42,65 +46,114 @@ inline void EvalShapes(double u, double c, double r, double s, const fitcore::Bl
   fitcore::StepShape(b, &fb, &pb);
   root.WithCurvature(a, &ga, &gpa, &g2a);
   root.WithCurvature(b, &gb, &gpb, &g2b);
-  const double x = u - c;
+  const double x = u - c, xr = u - u_ref;
+  const auto set = [out](int i, double v, double dc, double dr, double ds) {
+    out->v[i] = v;
+    out->d[i][0] = dc;
+    out->d[i][1] = dr;
+    out->d[i][2] = ds;
+  };
+  set(kLeft0, 1.0 - fa, pa * inv_s, -pa * inv_s, a * pa * inv_s);
+  set(kLeft1, xr * (1.0 - fa) - s * pa, xr * pa * inv_s - a * pa, -xr * pa * inv_s + a * pa,
+      xr * a * pa * inv_s - pa - a * a * pa);
+  set(kRight0, 1.0 - fb, -pb * inv_s, -pb * inv_s, b * pb * inv_s);
+  set(kRight1, xr * (1.0 - fb) + s * pb, -xr * pb * inv_s - b * pb, -xr * pb * inv_s - b * pb,
+      xr * b * pb * inv_s + pb + b * b * pb);
   const double box = fa + fb - 1.0;
-  out->v[0] = box;
-  out->d[0][0] = (pb - pa) * inv_s;
-  out->d[0][1] = (pa + pb) * inv_s;
-  out->d[0][2] = -(a * pa + b * pb) * inv_s;
+  set(kBox, box, (pb - pa) * inv_s, (pa + pb) * inv_s, -(a * pa + b * pb) * inv_s);
   const double k = s * std::sqrt(s) / (2.0 * std::sqrt(2.0 * r));
   const double q = k * (gpa + gpb);
   const double q_c = k * (g2b - g2a) * inv_s;
   const double q_r = -0.5 * q * inv_r + k * (g2a + g2b) * inv_s;
   const double q_s = 1.5 * q * inv_s - k * (a * g2a + b * g2b) * inv_s;
   const double lit = (s * ga * gb - q) * inv_r;
-  out->v[1] = lit;
-  out->d[1][0] = (ga * gpb - gpa * gb - q_c) * inv_r;
-  out->d[1][1] = (gpa * gb + ga * gpb - q_r - lit) * inv_r;
-  out->d[1][2] = (ga * gb - a * gpa * gb - b * ga * gpb - q_s) * inv_r;
+  set(kLit, lit, (ga * gpb - gpa * gb - q_c) * inv_r, (gpa * gb + ga * gpb - q_r - lit) * inv_r,
+      (ga * gb - a * gpa * gb - b * ga * gpb - q_s) * inv_r);
   const double tilt = (x * box + s * (pa - pb)) * inv_r;
-  out->v[2] = tilt;
-  out->d[2][0] = (-box + x * (pb - pa) * inv_s + a * pa + b * pb) * inv_r;
-  out->d[2][1] = (x * (pa + pb) * inv_s - a * pa + b * pb - tilt) * inv_r;
-  out->d[2][2] = (-x * (a * pa + b * pb) * inv_s + pa - pb + a * a * pa - b * b * pb) * inv_r;
+  set(kTilt, tilt, (-box + x * (pb - pa) * inv_s + a * pa + b * pb) * inv_r,
+      (x * (pa + pb) * inv_s - a * pa + b * pb - tilt) * inv_r,
+      (-x * (a * pa + b * pb) * inv_s + pa - pb + a * a * pa - b * b * pb) * inv_r);
 }
 
-inline double Model(const EdgeSample& smp, const Vec<kN>& p, double u_ref,
+// The parameters: the backgrounds' (kBg = 4: each side its own line, the object opaque; kBg = 2:
+// one line through both sides and behind the object), the object's a, k, l; centre, radius, blur.
+template <int kBg>
+struct Layout {
+  static constexpr int kA = kBg, kK = kBg + 1, kL = kBg + 2;
+  static constexpr int kAmplitudes = kBg + 3;
+  static constexpr int kC = kAmplitudes, kR = kAmplitudes + 1, kS = kAmplitudes + 2;
+  static constexpr int kN = kAmplitudes + 3;
+  // The shapes the amplitudes multiply at u (xr = u − u_ref).
+  static void Amplitudes(const Shapes& sh, double xr, double* v, double (*d)[3]) {
+    if constexpr (kBg == 4) {
+      for (int i = 0; i < kShapes; ++i) {
+        v[i] = sh.v[i];
+        for (int q = 0; q < 3; ++q) d[i][q] = sh.d[i][q];
+      }
+    } else {
+      // One line through both sides and behind the object: b₀ + b₁·(u − u_ref), which moves with
+      // none of the geometry.
+      v[0] = 1.0;
+      v[1] = xr;
+      for (int q = 0; q < 3; ++q) d[0][q] = d[1][q] = 0.0;
+      for (int i = kBox; i < kShapes; ++i) {
+        v[i - 2] = sh.v[i];
+        for (int q = 0; q < 3; ++q) d[i - 2][q] = sh.d[i][q];
+      }
+    }
+  }
+};
+
+template <int kBg>
+inline double Model(const EdgeSample& smp, const Vec<Layout<kBg>::kN>& p, double u_ref,
                     const fitcore::BlurredSqrt& root, double* j) {
+  using L = Layout<kBg>;
   Shapes sh;
-  EvalShapes(smp.u_px, p[kC], p[kR], p[kS], root, &sh);
-  const double amp[3] = {p[kA], p[kK], p[kL]};
-  j[kB0] = 1.0;
-  j[kB1] = smp.u_px - u_ref;
-  j[kA] = sh.v[0];
-  j[kK] = sh.v[1];
-  j[kL] = sh.v[2];
-  for (int q = 0; q < 3; ++q)
-    j[kC + q] = amp[0] * sh.d[0][q] + amp[1] * sh.d[1][q] + amp[2] * sh.d[2][q];
-  return p[kB0] + p[kB1] * j[kB1] + amp[0] * sh.v[0] + amp[1] * sh.v[1] + amp[2] * sh.v[2];
+  EvalShapes(smp.u_px, u_ref, p[L::kC], p[L::kR], p[L::kS], root, &sh);
+  double v[L::kAmplitudes], d[L::kAmplitudes][3];
+  L::Amplitudes(sh, smp.u_px - u_ref, v, d);
+  double value = 0;
+  for (int i = 0; i < L::kAmplitudes; ++i) {
+    j[i] = v[i];
+    value += p[i] * v[i];
+  }
+  for (int q = 0; q < 3; ++q) {
+    double dq = 0;
+    for (int i = 0; i < L::kAmplitudes; ++i) dq += p[i] * d[i][q];
+    j[L::kC + q] = dq;
+  }
+  return value;
 }
 
-// The five amplitudes by weighted least squares for fixed centre, radius and blur: the start.
+// The amplitudes by weighted least squares for fixed centre, radius and blur: the start.
+template <int kBg>
 void SolveAmplitudes(const std::vector<EdgeSample>& samples, const std::vector<double>& w,
-                     double u_ref, Vec<kN>* p) {
+                     double u_ref, Vec<Layout<kBg>::kN>* p) {
+  using L = Layout<kBg>;
   const auto& root = fitcore::BlurredSqrt::Get();
-  Eigen::Matrix<double, 5, 5> ata = Eigen::Matrix<double, 5, 5>::Zero();
-  Eigen::Matrix<double, 5, 1> atb = Eigen::Matrix<double, 5, 1>::Zero();
+  using Row = Eigen::Matrix<double, L::kAmplitudes, 1>;
+  Eigen::Matrix<double, L::kAmplitudes, L::kAmplitudes> ata;
+  ata.setZero();
+  Row atb = Row::Zero();
   for (size_t i = 0; i < samples.size(); ++i) {
     Shapes sh;
-    EvalShapes(samples[i].u_px, (*p)[kC], (*p)[kR], (*p)[kS], root, &sh);
-    const Eigen::Matrix<double, 5, 1> row(1.0, samples[i].u_px - u_ref, sh.v[0], sh.v[1], sh.v[2]);
+    EvalShapes(samples[i].u_px, u_ref, (*p)[L::kC], (*p)[L::kR], (*p)[L::kS], root, &sh);
+    Row row;
+    double d[L::kAmplitudes][3];
+    L::Amplitudes(sh, samples[i].u_px - u_ref, row.data(), d);
     ata += w[i] * row * row.transpose();
     atb += w[i] * samples[i].value * row;
   }
   ata.diagonal().array() += 1e-9;
-  p->head<5>() = ata.ldlt().solve(atb);
+  p->template head<L::kAmplitudes>() = ata.ldlt().solve(atb);
 }
 
-}  // namespace
-
-CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_guess_px,
-                           double right_guess_px, double sigma_guess_px) {
+template <int kBg>
+CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_guess_px,
+                        double right_guess_px, double sigma_guess_px,
+                        std::vector<double>* residuals_out) {
+  using L = Layout<kBg>;
+  constexpr int kN = L::kN, kA = L::kA, kK = L::kK, kL = L::kL, kC = L::kC, kR = L::kR, kS = L::kS;
   CylinderFit out;
   out.samples = static_cast<int>(samples.size());
   if (samples.size() < 3 * kN || !(right_guess_px > left_guess_px + 2.0)) return out;
@@ -114,7 +167,7 @@ CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_g
   const auto residuals_at = [&](const Vec<kN>& q) {
     for (size_t i = 0; i < samples.size(); ++i) {
       double j[kN];
-      residuals[i] = Model(samples[i], q, u_ref, root, j) - samples[i].value;
+      residuals[i] = Model<kBg>(samples[i], q, u_ref, root, j) - samples[i].value;
     }
   };
   // The residuals' robust scale (1.4826·MAD), and Cauchy weights from the residuals at a scale.
@@ -133,11 +186,11 @@ CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_g
   // Robust amplitudes at the guessed geometry before any of it moves: a specular stripe is then
   // already down-weighted when the nonlinear fit starts, instead of dragging blur and radius to
   // wherever it fits best (a stripe 40 levels high once pulled the blur to 14 px).
-  SolveAmplitudes(samples, w, u_ref, &p);
+  SolveAmplitudes<kBg>(samples, w, u_ref, &p);
   for (int round = 0; round < 2; ++round) {
     residuals_at(p);
     reweight(robust_scale());
-    SolveAmplitudes(samples, w, u_ref, &p);
+    SolveAmplitudes<kBg>(samples, w, u_ref, &p);
   }
 
   // Weighted least squares with the weights w while cauchy_scale is 0; else the Cauchy loss
@@ -150,7 +203,7 @@ CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_g
     const double cs = kCauchyC * cauchy_scale, inv_cs2 = cs > 0 ? 1.0 / (cs * cs) : 0.0;
     for (size_t i = 0; i < samples.size(); ++i) {
       double j[kN];
-      const double r = Model(samples[i], q, u_ref, root, j) - samples[i].value;
+      const double r = Model<kBg>(samples[i], q, u_ref, root, j) - samples[i].value;
       double wi = w[i];
       if (cs > 0) {
         const double z2 = r * r * inv_cs2;
@@ -204,12 +257,18 @@ CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_g
   out.left_px = p[kC] - p[kR];
   out.right_px = p[kC] + p[kR];
   out.sigma_px = p[kS];
-  out.background = p[kB0];
-  out.background_slope_per_px = p[kB1];
-  out.ambient = p[kA];
+  // Each side's line (with one line, both are it), and the object's flat part over the background
+  // behind its centre (the two sides' lines there; with one line, a is that already).
+  const int right = kBg == 4 ? 2 : 0;
+  out.background_left = p[0] + p[1] * (out.left_px - u_ref);
+  out.background_right = p[right] + p[right + 1] * (out.right_px - u_ref);
+  out.background_slope_left_per_px = p[1];
+  out.background_slope_right_per_px = p[right + 1];
+  out.ambient = kBg == 4 ? p[kA] - 0.5 * (p[0] + p[2] + (p[1] + p[3]) * (p[kC] - u_ref)) : p[kA];
   out.shading = p[kK];
   out.tilt = p[kL];
   out.noise = noise;
+  if (residuals_out) *residuals_out = residuals;
   out.rms = std::sqrt(wrss / std::max(wsum, 1.0));
   // Covariance from the weighted normal matrix, scaled by the weighted residual variance.
   const double dof = wsum * (1.0 - static_cast<double>(kN) / samples.size());
@@ -224,6 +283,17 @@ CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_g
   out.converged = !on_bound && std::isfinite(out.left_px) && std::isfinite(out.right_px) &&
                   std::isfinite(out.sigma_px);
   return out;
+}
+
+}  // namespace
+
+CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_guess_px,
+                           double right_guess_px, double sigma_guess_px,
+                           CylinderBackground background, std::vector<double>* residuals_out) {
+  return background == CylinderBackground::kEachSide
+             ? FitCylinder<4>(samples, left_guess_px, right_guess_px, sigma_guess_px, residuals_out)
+             : FitCylinder<2>(samples, left_guess_px, right_guess_px, sigma_guess_px,
+                              residuals_out);
 }
 
 }  // namespace clogscope::vision
