@@ -84,7 +84,7 @@ WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* s
   report.http_port = http ? http->port() : 0;
   if (http) {
     live.http_url = http->url();
-    spdlog::info("serving the page at {}/ and /status, /history.json, /metrics, /frame.jpg{}",
+    spdlog::info("serving the page at /, /status, /history.json, /metrics and /frame.jpg on {}{}",
                  http->url(),
                  http_options.token.empty()
                      ? ""

@@ -228,10 +228,9 @@ struct WatchHttpServer::Impl {
           return Refusal(MHD_HTTP_BAD_REQUEST,
                          "since_s: expected a time in seconds of the watch's clock, e.g. 120");
       }
-      const watch::WatchSnapshot s = board->Read();
       r.content_type = "application/json";
       r.body = watch::HistoryJson(board->History(since_s), board->history_options(),
-                                  s.status.has_scale) +
+                                  conversion.has_value()) +
                "\n";
     } else if (path == "/") {
       r.content_type = "text/html; charset=utf-8";
