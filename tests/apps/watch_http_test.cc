@@ -241,6 +241,10 @@ TEST_F(WatchHttpTest, ABearerTokenGuardsEverythingButMetricsAndThePage) {
   EXPECT_EQ(page.status, 200);
   EXPECT_NE(page.head.find("Content-Type: text/html; charset=utf-8"), std::string::npos);
   EXPECT_EQ(page.body.find(token), std::string::npos);
+  // The page is watch/web/index.html byte for byte: embedded at build time, no file read now.
+  EXPECT_EQ(
+      page.body,
+      ReadFile((fs::path(CLOGSCOPE_TESTDATA_DIR).parent_path() / "watch/web/index.html").string()));
 }
 
 // /history.json: the board's points as JSON, from a time on with ?since_s; a bad time is one line.
