@@ -24,6 +24,7 @@
 #include "common/spawn.h"
 #include "synthetic/synthetic.h"
 #include "tests/apps/cli_test_util.h"
+#include "tests/apps/external_process.h"
 
 namespace clogscope::apps {
 namespace {
@@ -47,18 +48,7 @@ std::string MosquittoBinary() {
   return "";
 }
 
-// A free port on 127.0.0.1 (bound to port 0, told, closed).
-int FreePort() {
-  const int fd = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof(a));
-  socklen_t len = sizeof(a);
-  getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
-  close(fd);
-  return ntohs(a.sin_port);
-}
+using testing::FreeLoopbackPort;
 
 bool Accepts(int port) {
   const int fd = socket(AF_INET, SOCK_STREAM, 0);
@@ -281,7 +271,7 @@ class WatchMqttTest : public ::testing::Test {
 fs::path* WatchMqttTest::dir_ = nullptr;
 
 TEST_F(WatchMqttTest, ABrokerGetsDiscoveryOnlineTheStateTheClogAndOfflineOnACleanStop) {
-  Broker broker(*dir_, FreePort());
+  Broker broker(*dir_, FreeLoopbackPort());
   ASSERT_TRUE(broker.WaitReady(10));
   const std::string prefix = "test/clean";
   Subscriber sub(*dir_, "clean", broker.port(), {prefix + "/#", "homeassistant/+/test_clean/#"});
@@ -378,7 +368,7 @@ TEST_F(WatchMqttTest, ABrokerGetsDiscoveryOnlineTheStateTheClogAndOfflineOnAClea
 }
 
 TEST_F(WatchMqttTest, ABrokerStartedLateIsFoundAndTheLastWillSaysOfflineAfterSigkill) {
-  const int port = FreePort();
+  const int port = FreeLoopbackPort();
   const std::string prefix = "test/kill";
   const fs::path err = *dir_ / "kill.err";
   SpawnOptions run;
@@ -428,7 +418,7 @@ TEST_F(WatchMqttTest, ABrokerStartedLateIsFoundAndTheLastWillSaysOfflineAfterSig
 TEST_F(WatchMqttTest, ADeadBrokerNeitherStopsNorDelaysTheWatch) {
   // Nothing listens on the port (refused at once), or nothing answers at all (a black hole).
   for (const std::string& host :
-       {"127.0.0.1:" + std::to_string(FreePort()), std::string("10.255.255.1:1883")}) {
+       {"127.0.0.1:" + std::to_string(FreeLoopbackPort()), std::string("10.255.255.1:1883")}) {
     WatchCommandOptions o = Options("test/dead", 0);
     o.mqtt.url = "mqtt://" + host + "/test/dead";
     o.live.duration_s = 0.5;  // of the file's frames, however many are read by then
@@ -442,7 +432,7 @@ TEST_F(WatchMqttTest, ADeadBrokerNeitherStopsNorDelaysTheWatch) {
     EXPECT_LT(seconds - r.summary.seconds, 2.0) << host;
   }
   // A broker that hangs while connected: "offline" is never acknowledged.
-  Broker broker(*dir_, FreePort());
+  Broker broker(*dir_, FreeLoopbackPort());
   ASSERT_TRUE(broker.WaitReady(10));
   const std::string prefix = "test/hung";
   Subscriber sub(*dir_, "hung", broker.port(), {prefix + "/#"});
@@ -470,7 +460,7 @@ TEST_F(WatchMqttTest, TheCredentialsFileLogsIn) {
   const pid_t p = Spawn(passwd, &why);
   ASSERT_TRUE(p > 0 && WaitForExit(p, &why)) << why;
   std::ofstream(credentials) << "farm:s3cret:x\n";
-  Broker broker(*dir_, FreePort(),
+  Broker broker(*dir_, FreeLoopbackPort(),
                 "allow_anonymous false\npassword_file " + passwords.string() + "\n");
   ASSERT_TRUE(broker.WaitReady(10));
   const std::string prefix = "test/login";

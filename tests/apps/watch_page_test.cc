@@ -26,6 +26,7 @@
 #include "tests/apps/cli_test_util.h"
 #include "tests/apps/external_process.h"
 #include "tests/apps/http_test_client.h"
+#include "tests/apps/watch_test_util.h"
 
 namespace clogscope::apps {
 namespace {
@@ -142,20 +143,8 @@ class WatchPageTest : public ::testing::Test {
     o.live.watch.window_s = kWindowS;
     o.live.watch.alert_window_s = kWindowS;
     o.log_path = (*dir_ / "watch.jsonl").string();
-    o.http = "127.0.0.1:0";
     if (with_token) o.http_token_file = (*dir_ / "token").string();
-    int port = 0;
-    bool called = false;
-    WatchObservers observers;
-    observers.on_started = [&](int p) { port = p; };
-    observers.on_level_change = [&](const watch::WatchStatus& s) {
-      if (called) return;
-      called = true;
-      check(port, s);
-    };
-    std::atomic<bool> stop{false};
-    WatchNozzle(o, &stop, observers);
-    EXPECT_TRUE(called) << "the watch never changed level";
+    testing::WatchHeldAtFirstChange(o, check);
   }
 
   // Headless Chromium on `url` with a profile of its own (removed after), `mode` one of

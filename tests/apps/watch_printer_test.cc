@@ -19,6 +19,7 @@
 #include "apps/watch_command.h"
 #include "synthetic/synthetic.h"
 #include "tests/apps/cli_test_util.h"
+#include "tests/apps/external_process.h"
 #include "tests/apps/printer_stand_in.h"
 
 namespace clogscope::apps {
@@ -36,18 +37,7 @@ constexpr double kSeconds = 16.0;
 constexpr double kHoldoffS = 3.0;
 const std::string kApiKey = "clogscope-test-key-0123456789abcdef";
 
-// A free port on 127.0.0.1 where nothing listens (bound, told, closed).
-int FreePort() {
-  const int fd = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof(a));
-  socklen_t len = sizeof(a);
-  getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
-  close(fd);
-  return ntohs(a.sin_port);
-}
+using testing::FreeLoopbackPort;
 
 // The link's events as they come (on its thread), and a wait for one.
 class EventLog {
@@ -274,7 +264,7 @@ TEST_F(WatchPrinterTest, AnIdleOrAbsentPrinterIsNeverPausedAndNeverStopsTheWatch
   EXPECT_TRUE(moonraker.CallsTo("POST", "/printer/print/pause").empty());
 
   // Nothing listening: a warning, and the whole file watched.
-  o.printer.moonraker_url = "http://127.0.0.1:" + std::to_string(FreePort());
+  o.printer.moonraker_url = "http://127.0.0.1:" + std::to_string(FreeLoopbackPort());
   EventLog events;
   WatchObservers observers;
   observers.on_printer = [&](const watch::PrinterEvent& e) { events.Add(e); };
@@ -301,7 +291,7 @@ TEST_F(WatchPrinterTest, AWrongKeyIsToldWithoutShowingAnyKey) {
 
 TEST_F(WatchPrinterTest, BadPrinterOptionsGetOneLineNamingTheOption) {
   const std::string video = Video();
-  const std::string url = "--moonraker http://127.0.0.1:" + std::to_string(FreePort());
+  const std::string url = "--moonraker http://127.0.0.1:" + std::to_string(FreeLoopbackPort());
   const std::vector<std::pair<std::string, std::string>> cases = {
       {video + " --moonraker ftp://printer", "--moonraker 'ftp://printer'"},
       {video + " --moonraker http://pi:s3cret@printer", "--printer-api-key-file"},

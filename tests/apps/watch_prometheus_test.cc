@@ -25,6 +25,7 @@
 #include "tests/apps/cli_test_util.h"
 #include "tests/apps/external_process.h"
 #include "tests/apps/http_test_client.h"
+#include "tests/apps/watch_test_util.h"
 
 namespace clogscope::apps {
 namespace {
@@ -208,19 +209,7 @@ class WatchPrometheusTest : public ::testing::Test {
     o.live.watch.window_s = 1;  // the state at the change (past 6 s) holds only narrowed frames
     o.live.watch.alert_window_s = 1;
     o.log_path = (*dir_ / "watch.jsonl").string();
-    o.http = "127.0.0.1:0";
-    int port = 0;
-    bool called = false;
-    WatchObservers observers;
-    observers.on_started = [&](int p) { port = p; };
-    observers.on_level_change = [&](const watch::WatchStatus& s) {
-      if (called) return;
-      called = true;
-      check(port, s);
-    };
-    std::atomic<bool> stop{false};
-    WatchNozzle(o, &stop, observers);
-    EXPECT_TRUE(called) << "the watch never changed level";
+    testing::WatchHeldAtFirstChange(o, check);
   }
 
   static fs::path* dir_;
