@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "common/atomic_file.h"
+#include "common/host_port.h"
 #include "common/path_check.h"
 #include "watch/frame_jpeg.h"
 #include "watch/web_page.h"
@@ -35,34 +36,17 @@ constexpr const char* kPageSecurityPolicy =
     "img-src 'self' blob:; connect-src 'self'; base-uri 'none'; form-action 'none'; "
     "frame-ancestors 'none'";
 
-struct HostPort {
-  std::string host;
-  int port = -1;
-};
-
 // [HOST:]PORT, [V6]:PORT; no host: 127.0.0.1.
 HostPort ParseAddress(const std::string& address) {
-  const auto digits = [](const std::string& s) {
-    return !s.empty() && s.size() <= 5 &&
-           std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c); });
-  };
   HostPort out;
-  std::string port;
-  if (!address.empty() && address[0] == '[') {
-    const size_t close = address.find("]:");
-    if (close != std::string::npos) {
-      out.host = address.substr(1, close - 1);
-      port = address.substr(close + 2);
-    }
-  } else if (const size_t colon = address.rfind(':'); colon != std::string::npos) {
-    out.host = address.substr(0, colon);
-    port = address.substr(colon + 1);
-  } else {
-    port = address;
-  }
-  if (out.host.empty()) out.host = "127.0.0.1";
-  if (digits(port) && std::stoi(port) <= 65535) out.port = std::stoi(port);
-  if (out.port < 0 || out.host.find_first_of("[]") != std::string::npos)
+  std::string why;
+  const bool port_alone =
+      !address.empty() && address.find_first_not_of("0123456789") == std::string::npos;
+  const bool no_host = port_alone || (!address.empty() && address[0] == ':');
+  const bool ok =
+      SplitHostPort(no_host ? "127.0.0.1" + std::string(port_alone ? ":" : "") + address : address,
+                    0, &out, &why);
+  if (!ok || !out.port)
     throw std::invalid_argument(
         fmt::format("--http '{}': expected [HOST:]PORT, e.g. 8090 (this machine only) or "
                     "0.0.0.0:8090 (every network)",
@@ -280,7 +264,8 @@ WatchHttpServer::WatchHttpServer(const WatchHttpOptions& options, const watch::W
   hints.ai_socktype = SOCK_STREAM;
   hints.ai_flags = AI_PASSIVE | AI_NUMERICSERV;
   addrinfo* found = nullptr;
-  if (const int err = getaddrinfo(hp.host.c_str(), std::to_string(hp.port).c_str(), &hints, &found);
+  if (const int err =
+          getaddrinfo(hp.host.c_str(), std::to_string(*hp.port).c_str(), &hints, &found);
       err != 0)
     throw cannot(fmt::format("unknown host {} ({})", hp.host, gai_strerror(err)));
   sockaddr_storage addr{};

@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "common/atomic_file.h"
+#include "common/host_port.h"
 #include "vision/io/source_name.h"
 #include "watch/frame_jpeg.h"
 
@@ -67,31 +68,11 @@ bool ParseMqttUrl(const std::string& url, MqttEndpoint* out, std::string* why) {
         "a user or password in the URL shows in `ps` and logs: put 'user:password' in a file for "
         "--mqtt-credentials-file");
   MqttEndpoint e;
-  std::string port;
-  if (!authority.empty() && authority[0] == '[') {  // [IPv6]:PORT
-    const size_t close = authority.find(']');
-    if (close == std::string::npos) return fail("an IPv6 address needs its closing ']'");
-    e.host = authority.substr(1, close - 1);
-    const std::string after = authority.substr(close + 1);
-    if (!after.empty() && after[0] != ':') return fail("expected ':PORT' after ']'");
-    if (!after.empty()) port = after.substr(1);
-    if (!after.empty() && port.empty()) return fail("an empty port");
-  } else {
-    const size_t colon = authority.find(':');
-    e.host = authority.substr(0, colon);
-    if (colon != std::string::npos) {
-      port = authority.substr(colon + 1);
-      if (port.empty() || port.find(':') != std::string::npos)
-        return fail("expected HOST:PORT (an IPv6 address goes in brackets)");
-    }
-  }
-  if (e.host.empty()) return fail("no host");
-  if (!port.empty()) {
-    if (port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos ||
-        std::stoi(port) < 1 || std::stoi(port) > 65535)
-      return fail("the port must be a number in [1, 65535]");
-    e.port = std::stoi(port);
-  }
+  HostPort hp;
+  std::string problem;
+  if (!SplitHostPort(authority, 1, &hp, &problem)) return fail(problem);
+  e.host = hp.host;
+  if (hp.port) e.port = *hp.port;
   while (!prefix.empty() && prefix.back() == '/') prefix.pop_back();
   if (!prefix.empty()) e.prefix = prefix;
   if (e.prefix.find_first_of("+#") != std::string::npos)
