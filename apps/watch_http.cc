@@ -162,6 +162,7 @@ std::string ReadHttpToken(const std::string& path) {
 struct WatchHttpServer::Impl {
   const watch::WatchBoard* board;
   std::optional<calib::ScaleCalibration> conversion;
+  std::unique_ptr<watch::OverlayJpegCache> frames;
   std::string token;
   MHD_Daemon* daemon = nullptr;
   int port = 0;
@@ -196,13 +197,12 @@ struct WatchHttpServer::Impl {
       r.content_type = "text/plain; version=0.0.4; charset=utf-8";
       r.body = watch::PrometheusText(s.status, s.clog, s.counters);
     } else if (path == "/frame.jpg") {
-      const watch::WatchSnapshot s = board->Read();
-      if (s.frame.empty()) return Refusal(MHD_HTTP_SERVICE_UNAVAILABLE, "no frame yet");
-      // Drawn on request: the measuring thread never pays for a picture nobody looks at. Ranges
-      // are not served: the whole picture or nothing.
-      const std::vector<unsigned char> jpeg = watch::OverlayJpeg(s, conversion);
+      // Drawn on request, once a frame: the measuring thread never pays for a picture nobody
+      // looks at. Ranges are not served: the whole picture or nothing.
+      const auto jpeg = frames->Latest();
+      if (!jpeg) return Refusal(MHD_HTTP_SERVICE_UNAVAILABLE, "no frame yet");
       r.content_type = "image/jpeg";
-      r.body.assign(jpeg.begin(), jpeg.end());
+      r.body.assign(jpeg->begin(), jpeg->end());
     } else if (path == "/history.json") {
       double since_s = -std::numeric_limits<double>::infinity();
       if (const char* since = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "since_s")) {
@@ -254,6 +254,7 @@ WatchHttpServer::WatchHttpServer(const WatchHttpOptions& options, const watch::W
   Impl& d = *impl_;
   d.board = board;
   d.conversion = conversion;
+  d.frames = std::make_unique<watch::OverlayJpegCache>(board, conversion);
   d.token = options.token;
   const HostPort hp = ParseAddress(options.address);
   const auto cannot = [&](const std::string& why) {

@@ -18,4 +18,15 @@ std::vector<unsigned char> OverlayJpeg(const WatchSnapshot& s,
   return jpeg;
 }
 
+std::shared_ptr<const std::vector<unsigned char>> OverlayJpegCache::Latest() {
+  const WatchSnapshot s = board_->Read();
+  if (s.frame.empty()) return nullptr;
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!jpeg_ || s.sequence != sequence_) {
+    jpeg_ = std::make_shared<const std::vector<unsigned char>>(OverlayJpeg(s, conversion_));
+    sequence_ = s.sequence;
+  }
+  return jpeg_;
+}
+
 }  // namespace clogscope::watch

@@ -1,5 +1,7 @@
 #pragma once
 
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <vector>
 
@@ -13,5 +15,23 @@ namespace clogscope::watch {
 // when there is no frame yet.
 std::vector<unsigned char> OverlayJpeg(const WatchSnapshot& snapshot,
                                        const std::optional<calib::ScaleCalibration>& conversion);
+
+// The board's latest overlay JPEG, drawn once per published frame however many readers ask for
+// it (each of the page's clients, the MQTT camera): a 720p picture costs milliseconds to draw and
+// encode. Safe to call from any thread.
+class OverlayJpegCache {
+ public:
+  OverlayJpegCache(const WatchBoard* board, std::optional<calib::ScaleCalibration> conversion)
+      : board_(board), conversion_(std::move(conversion)) {}
+  // Null when there is no frame yet.
+  std::shared_ptr<const std::vector<unsigned char>> Latest();
+
+ private:
+  const WatchBoard* board_;
+  std::optional<calib::ScaleCalibration> conversion_;
+  std::mutex mutex_;  // held while drawing: a second reader of the same frame waits for it
+  long long sequence_ = -1;
+  std::shared_ptr<const std::vector<unsigned char>> jpeg_;
+};
 
 }  // namespace clogscope::watch

@@ -148,8 +148,8 @@ struct MqttPublisher::Impl {
       : options(o),
         endpoint(e),
         topics(e.prefix),
-        board(b),
-        conversion(std::move(c)),
+        conversion(c),
+        frames(b, std::move(c)),
         log(std::move(l)) {}
 
   MqttOptions options;
@@ -157,8 +157,8 @@ struct MqttPublisher::Impl {
   std::optional<MqttCredentials> credentials;
   MqttTopics topics;
   std::vector<MqttMessage> discovery;
-  const WatchBoard* board;
   std::optional<calib::ScaleCalibration> conversion;
+  OverlayJpegCache frames;  // the camera's picture
   Log log;
   mosquitto* mosq = nullptr;
 
@@ -298,10 +298,10 @@ struct MqttPublisher::Impl {
         frame_due = false;
         lock.unlock();
         // Drawn here, never on the measuring thread. No frame yet: the next update asks again.
-        const std::vector<unsigned char> jpeg = OverlayJpeg(board->Read(), conversion);
-        if (!jpeg.empty()) Send({topics.frame, std::string(jpeg.begin(), jpeg.end()), /*qos=*/0});
+        const auto jpeg = frames.Latest();
+        if (jpeg) Send({topics.frame, std::string(jpeg->begin(), jpeg->end()), /*qos=*/0});
         lock.lock();
-        if (!jpeg.empty()) last_frame = Clock::now();
+        if (jpeg) last_frame = Clock::now();
       } else if (connected && frame_due) {
         wake.wait_until(lock, frame_at);
       } else {
