@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "common/robust.h"
+#include "vision/edges/cylinder_model.h"
 #include "vision/edges/fit_shapes.h"
 
 namespace clogscope::vision {
@@ -12,58 +13,19 @@ namespace {
 using fitcore::Mat;
 using fitcore::Vec;
 
-constexpr double kMinSigmaPx = 0.15;
-// Cauchy weights 1/(1 + (r/(c·s))²) with c = 2.385: 95 % efficiency on Gaussian noise.
-constexpr double kCauchyC = 2.385;
-
-// Parameters: background b₀, b₁; object a, k, l; centre, radius, blur.
-enum { kB0, kB1, kA, kK, kL, kC, kR, kS, kN };
-
-// The three object shapes at one u, blurred, and their derivatives by centre, radius and blur.
-// With dl = u − c + R and dr = c + R − u the distances inside the left and right silhouettes,
-// a = dl/σ and b = dr/σ:
-//   box = Φ(a) + Φ(b) − 1                         (exact)
-//   tilt = [(u − c)·box + σ(φ(a) − φ(b))]/R       (exact: a blurred linear ramp on the box)
-//   lit = [σ·G(a)·G(b) − q·(G'(a) + G'(b))]/R,  q = σ^1.5 / (2√(2R))
-// The last blurs √(1 − x²) = √dl·√dr / R: the product of the blurred roots, corrected for the
-// other root's slope across each blurred edge (√dr ≈ √(2R)·(1 − dl/4R) near the left one, and
-// blurring √t·(t − z) gives G'(z)); what remains is of order (σ/R)² of k.
-struct Shapes {
-  double v[3];     // box, lit, tilt
-  double d[3][3];  // d[shape][c, R, σ]
-};
-
-inline void EvalShapes(double u, double c, double r, double s, const fitcore::BlurredSqrt& root,
-                       Shapes* out) {
-  const double inv_s = 1.0 / s, inv_r = 1.0 / r;
-  const double a = (u - c + r) * inv_s, b = (c + r - u) * inv_s;
-  double fa, pa, fb, pb, ga, gpa, gb, gpb, g2a, g2b;
-  fitcore::StepShape(a, &fa, &pa);
-  fitcore::StepShape(b, &fb, &pb);
-  root.WithCurvature(a, &ga, &gpa, &g2a);
-  root.WithCurvature(b, &gb, &gpb, &g2b);
-  const double x = u - c;
-  const double box = fa + fb - 1.0;
-  out->v[0] = box;
-  out->d[0][0] = (pb - pa) * inv_s;
-  out->d[0][1] = (pa + pb) * inv_s;
-  out->d[0][2] = -(a * pa + b * pb) * inv_s;
-  const double k = s * std::sqrt(s) / (2.0 * std::sqrt(2.0 * r));
-  const double q = k * (gpa + gpb);
-  const double q_c = k * (g2b - g2a) * inv_s;
-  const double q_r = -0.5 * q * inv_r + k * (g2a + g2b) * inv_s;
-  const double q_s = 1.5 * q * inv_s - k * (a * g2a + b * g2b) * inv_s;
-  const double lit = (s * ga * gb - q) * inv_r;
-  out->v[1] = lit;
-  out->d[1][0] = (ga * gpb - gpa * gb - q_c) * inv_r;
-  out->d[1][1] = (gpa * gb + ga * gpb - q_r - lit) * inv_r;
-  out->d[1][2] = (ga * gb - a * gpa * gb - b * ga * gpb - q_s) * inv_r;
-  const double tilt = (x * box + s * (pa - pb)) * inv_r;
-  out->v[2] = tilt;
-  out->d[2][0] = (-box + x * (pb - pa) * inv_s + a * pa + b * pb) * inv_r;
-  out->d[2][1] = (x * (pa + pb) * inv_s - a * pa + b * pb - tilt) * inv_r;
-  out->d[2][2] = (-x * (a * pa + b * pb) * inv_s + pa - pb + a * a * pa - b * b * pb) * inv_r;
-}
+using fitcore::cylinder::EvalShapes;
+using fitcore::cylinder::kA;
+using fitcore::cylinder::kB0;
+using fitcore::cylinder::kB1;
+using fitcore::cylinder::kC;
+using fitcore::cylinder::kCauchyC;
+using fitcore::cylinder::kK;
+using fitcore::cylinder::kL;
+using fitcore::cylinder::kMinSigmaPx;
+using fitcore::cylinder::kN;
+using fitcore::cylinder::kR;
+using fitcore::cylinder::kS;
+using fitcore::cylinder::Shapes;
 
 inline double Model(const EdgeSample& smp, const Vec<kN>& p, double u_ref,
                     const fitcore::BlurredSqrt& root, double* j) {
@@ -206,6 +168,7 @@ CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_g
   out.sigma_px = p[kS];
   out.background = p[kB0];
   out.background_slope_per_px = p[kB1];
+  out.u_ref_px = u_ref;
   out.ambient = p[kA];
   out.shading = p[kK];
   out.tilt = p[kL];
@@ -224,6 +187,14 @@ CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_g
   out.converged = !on_bound && std::isfinite(out.left_px) && std::isfinite(out.right_px) &&
                   std::isfinite(out.sigma_px);
   return out;
+}
+
+double CylinderEdgeContrast(const CylinderFit& fit, int side) {
+  const double u = side == 0 ? fit.left_px + 2.0 * fit.sigma_px : fit.right_px - 2.0 * fit.sigma_px;
+  Shapes sh;
+  EvalShapes(u, fit.centre_px, fit.radius_px, fit.sigma_px, fitcore::BlurredSqrt::Get(), &sh);
+  const double object = fit.ambient * sh.v[0] + fit.shading * sh.v[1] + fit.tilt * sh.v[2];
+  return side == 0 ? object : -object;
 }
 
 }  // namespace clogscope::vision
