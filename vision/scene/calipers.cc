@@ -14,6 +14,7 @@
 #include "vision/edges/edge_fit.h"
 #include "vision/edges/residual_structure.h"
 #include "vision/edges/straight_run.h"
+#include "vision/scene/cylinder_memory.h"
 #include "vision/scene/self_check.h"
 
 namespace clogscope::vision {
@@ -23,6 +24,9 @@ constexpr double kRadToDeg = 180.0 / M_PI;
 // A side is shaded only when its edge also moves out by more than this under the shading model.
 constexpr double kMinShadingShiftPx = 0.1;
 constexpr int kReferenceCalipers = 5;  // outside the band, for the occlusion check
+// Tracking from templates: more of the band's calipers than this refusing theirs (the scene
+// changed) and the frame is measured as the first was.
+constexpr double kMaxRefusedTemplates = 0.25;
 // How far the tip may lie from where it was placed along the axis: set by the nozzle's face on
 // both sides of the strand, or inferred from the outline (tip.h).
 constexpr double kTipSigmaWidths = 0.25;  // an unconfirmed tip's doubt, in widths
@@ -104,14 +108,26 @@ EdgeLines FitEdgeLines(const std::vector<CaliperFit>& fits, double band_s0, doub
   return out;
 }
 
+// A caliper's edges from its lit cylinder.
+void TakeCylinder(const CylinderFit& cyl, CaliperFit* cf) {
+  cf->left.converged = cf->right.converged = cyl.converged;
+  cf->left.edge_px = cyl.left_px;
+  cf->right.edge_px = cyl.right_px;
+  cf->left.edge_sigma_px = cyl.left_sigma_px;
+  cf->right.edge_sigma_px = cyl.right_sigma_px;
+  cf->left.sigma_px = cf->right.sigma_px = cyl.sigma_px;
+  cf->width_sigma_px = cyl.width_sigma_px;
+}
+
 // Replaces each caliper's two per-edge fits by one lit cylinder across its whole profile (see
 // cylinder_fit.h): shared centre, radius, blur and shading, so the interior's curvature fixes the
 // shading that a per-edge fit trades against its edge. A caliper whose cylinder does not fit, or
-// whose silhouettes leave their windows, is dropped rather than mixed with per-edge widths.
+// whose silhouettes leave their windows, is dropped rather than mixed with per-edge widths. With
+// a memory, each cylinder is kept as the template of its caliper (cylinder_memory.h).
 void RefitAsCylinders(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
                       double band_s0, double spacing, const EdgeLines& lines, double sigma_px,
-                      std::vector<CaliperFit>* fits) {
-  const double outer = std::max(10.0, 3.0 * sigma_px + 2.5);
+                      std::vector<CaliperFit>* fits, CylinderMemory* memory) {
+  const double outer = CylinderReachPx(sigma_px);
   std::vector<EdgeSample> samples;
   // Each caliper starts from its neighbour's blur: the fit then mostly has only the edges to move.
   double sigma_start = sigma_px;
@@ -121,37 +137,23 @@ void RefitAsCylinders(const GreyImage& img, const AxisFrame& f, const ClipLevels
     const double l = lines.left_u0 + lines.slope * sc, r = lines.right_u0 + lines.slope * sc;
     int clipped = 0;
     CylinderFit cyl;
-    if (GatherEdgeSamples(img, f, s0, s0 + spacing, l - outer, r + outer, clip, &samples,
-                          &clipped)) {
-      // Deep inside, the profile only tells the shading's amplitudes, which vary slowly: every
-      // fourth sample there does, and the fit costs a third.
-      const double keep = std::max(10.0, 3.0 * sigma_px + 4.0);
-      size_t n = 0;
-      for (size_t i = 0; i < samples.size(); ++i) {
-        const double u = samples[i].u_px;
-        if (u < l + keep || u > r - keep || i % 4 == 0) samples[n++] = samples[i];
-      }
-      samples.resize(n);
+    if (GatherCylinderSamples(img, f, clip, s0, s0 + spacing, l, r, sigma_px, &samples, &clipped))
       cyl = FitLitCylinder(samples, l, r, sigma_start);
-    }
     const bool ok = cyl.converged && std::abs(cyl.left_px - l) < outer - 1.0 &&
                     std::abs(cyl.right_px - r) < outer - 1.0;
     cf.left.converged = cf.right.converged = ok;
     if (ok) sigma_start = cyl.sigma_px;
     if (!ok) continue;
-    cf.left.edge_px = cyl.left_px;
-    cf.right.edge_px = cyl.right_px;
-    cf.left.edge_sigma_px = cyl.left_sigma_px;
-    cf.right.edge_sigma_px = cyl.right_sigma_px;
-    cf.left.sigma_px = cf.right.sigma_px = cyl.sigma_px;
-    cf.width_sigma_px = cyl.width_sigma_px;
+    if (memory) memory->Keep({s0, s0 + spacing, l, r, sigma_px, {}}, samples, cyl);
+    TakeCylinder(cyl, &cf);
   }
 }
 
 }  // namespace
 
 void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry& g, double band_s0,
-                     double band_s1, const StrandMeasureOptions& opt, StrandMeasurement* m) {
+                     double band_s1, const StrandMeasureOptions& opt, StrandMeasurement* m,
+                     CylinderMemory* memory) {
   auto fail = [&](FrameStatus st, std::string detail) {
     m->status = st;
     m->detail = std::move(detail);
@@ -227,11 +229,22 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   // hide: a quarter of it (at least 8 calipers) will do. A strand's short band must be clean.
   double min_used = filament ? std::max(8.0, 0.5 * opt.min_caliper_fraction * n_cal)
                              : opt.min_caliper_fraction * n_cal;
+  // Tracking a lit object: its calipers' cylinders from the templates the last full measurement
+  // left (cylinder_memory.h), without the per-edge fits, unless more than a few refuse the frame
+  // (the scene changed): then as in the first frame, which makes new templates.
+  if (memory) memory->Use(f, opt.caliper_spacing_px);
+  TrackedCylinders tracked;
+  bool from_memory = false;
+  if (memory && !memory->empty() && g.precise && shade[0] == 1 && shade[1] == 1 &&
+      g.left_sign == -g.right_sign) {
+    tracked = TrackCylinders(img, f, clip, band_s0, opt.caliper_spacing_px, n_cal, memory);
+    from_memory = tracked.refused <= kMaxRefusedTemplates * n_cal;
+  }
   // Usually one pass. Another re-centres the windows on the fitted edge lines, or widens them to
   // the fitted blur; a badly blurred frame needs a few widenings before its fit sees the whole
   // edge.
   constexpr int kMaxPasses = 4;
-  for (int pass = 0; pass < kMaxPasses; ++pass) {
+  for (int pass = 0; pass < kMaxPasses && !from_memory; ++pass) {
     double outer = std::max(6.5, 3.0 * sigma_guess + 2.5);
     // A guess from the scene (a gradient peak) lies inside a shaded silhouette by a few px: the
     // first pass looks wider so that both plateaus are in its windows.
@@ -332,6 +345,17 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     sigma_guess = widen ? std::max(new_sigma, 0.6 * outer) : new_sigma;
     if (!(recentre || widen)) break;
   }
+  if (from_memory) {
+    for (int k = 0; k < n_cal; ++k) {
+      TakeCylinder(tracked.fits[k], &fits[k]);
+      fits[k].left.contrast = CylinderEdgeContrast(tracked.fits[k], 0);
+      fits[k].right.contrast = CylinderEdgeContrast(tracked.fits[k], 1);
+    }
+    total_samples = tracked.samples;
+    total_saturated = tracked.saturated;
+    border = tracked.border;
+    sigma_guess = memory->sigma_px;
+  }
   if (border)
     return fail(FrameStatus::kTouchesBorder, "edge windows reach the frame or ROI border");
   // The windows from here on, at the blur and models the passes settled on.
@@ -384,13 +408,29 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   // pair (an edge and a shading step, filament and idler) must not become one by a richer model.
   // Then on every caliper: a knurl or gear tooth that spoils one edge's window spoils the
   // cylinder's less, which uses both edges and the interior.
-  if (shade[0] == 1 && shade[1] == 1 && g.left_sign == -g.right_sign &&
-      per_edge_consistent >= min_used) {
+  if (from_memory) {
+    const EdgeLines lines = FitEdgeLines(fits, band_s0, opt.caliper_spacing_px);
+    if (lines.calipers >= 2) {
+      left_guess = lines.left_u0;
+      right_guess = lines.right_u0;
+      slope_guess = lines.slope;
+    }
+    // The model's doubt is the scene's, as the full measurement found it.
+    cylinder_doubt_px = memory->cylinder_doubt_px;
+  } else if (shade[0] == 1 && shade[1] == 1 && g.left_sign == -g.right_sign &&
+             per_edge_consistent >= min_used) {
     EdgeLines lines;
     lines.left_u0 = left_guess;
     lines.right_u0 = right_guess;
     lines.slope = slope_guess;
-    RefitAsCylinders(img, f, clip, band_s0, opt.caliper_spacing_px, lines, sigma_guess, &fits);
+    RefitAsCylinders(img, f, clip, band_s0, opt.caliper_spacing_px, lines, sigma_guess, &fits,
+                     memory);
+    if (memory) {
+      memory->left_u0_px = lines.left_u0;
+      memory->right_u0_px = lines.right_u0;
+      memory->slope = lines.slope;
+      memory->sigma_px = sigma_guess;
+    }
     lines = FitEdgeLines(fits, band_s0, opt.caliper_spacing_px);
     if (lines.calipers >= 2) {
       // Two models of the same silhouette: each within its blur of it where it holds. Beyond
@@ -408,6 +448,9 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       right_guess = lines.right_u0;
       slope_guess = lines.slope;
     }
+    if (memory) memory->cylinder_doubt_px = cylinder_doubt_px;
+  } else if (memory) {
+    memory->Clear();  // not lit cylinders this time: nothing to track
   }
 
   // Per-caliper widths, robust combination.

@@ -36,6 +36,7 @@ StrandMeasurement StrandTracker::Measure(const cv::Mat& frame) {
 
 StrandMeasurement StrandTracker::Detect(const cv::Mat& frame) {
   ++full_detections_;
+  cylinders_.Clear();  // perhaps another scene, or another channel of it
   SceneResult scene;
   StrandMeasurement m = FindAndMeasure(frame, options_, &scene);
   if (m.valid()) Remember(scene, m, frame.size());
@@ -87,14 +88,15 @@ bool StrandTracker::Follow(const cv::Mat& frame, StrandMeasurement* out) {
       take_tip();
     }
   }
+  CylinderMemory* cylinders = options_.target == MeasureTarget::kFilament ? &cylinders_ : nullptr;
   StrandMeasurement m =
-      MeasureInScene(channel, data_max, FrameStatus::kValid, "", g, roi, options_);
+      MeasureInScene(channel, data_max, FrameStatus::kValid, "", g, roi, options_, cylinders);
   if (options_.target == MeasureTarget::kFilament && g.straight_s1_px > g.straight_s0_px &&
       !KeptStraightPart(m, g, options_.caliper_spacing_px)) {
     // A filament is measured on its last straight part only (MeasureInScene); when that part no
     // longer holds, the whole stretch is looked at for the longest straight part again.
     g.straight_s0_px = g.straight_s1_px = 0;
-    m = MeasureInScene(channel, data_max, FrameStatus::kValid, "", g, roi, options_);
+    m = MeasureInScene(channel, data_max, FrameStatus::kValid, "", g, roi, options_, cylinders);
   }
   // A frame that does not measure like the last one is looked at afresh.
   if (!m.valid() || std::abs(m.width_px - width_px_) > std::max(2.0, 0.03 * width_px_))
