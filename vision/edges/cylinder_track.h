@@ -33,8 +33,8 @@ struct CylinderTemplate {
 
 // Limits beyond which the template refuses. Lengths in px.
 struct CylinderTrackOptions {
-  // Centre or radius this far from the template's: its first order is off by ~1e-3 px there
-  // (cylinder_track_test.cc), and a fit from afresh makes a new template.
+  // Centre or radius this far from the template's: beyond its first order's reach (untested
+  // beyond this; a fit from afresh makes a new template).
   double max_shift_px = 0.3;
   double max_blur_change_px = 0.3;
   // The residuals' robust scale above this many times the template's: something the template does
