@@ -84,8 +84,12 @@ WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* s
   report.http_port = http ? http->port() : 0;
   if (http) {
     live.http_url = http->url();
-    spdlog::info("serving /status, /metrics and /frame.jpg on {}{}", http->url(),
-                 http_options.token.empty() ? "" : " (a bearer token for all but /metrics)");
+    spdlog::info("serving the page at /, /status, /history.json, /metrics and /frame.jpg on {}{}",
+                 http->url(),
+                 http_options.token.empty()
+                     ? ""
+                     : " (a bearer token for all but / and /metrics: open the page as "
+                       "/#token=TOKEN)");
     if (!http->loopback_only() && http_options.token.empty())
       spdlog::warn(
           "--http {}: reachable from other machines, with no --http-token-file: whoever reaches "
@@ -184,13 +188,15 @@ int RunWatch(int argc, char** argv) {
   app.add_option("--report-s", live.report_every_s,
                  "A status line every this-many seconds (default: --window-s)");
   app.add_option("--http", o.http,
-                 "[HOST:]PORT to serve /status, /metrics and /frame.jpg: a port alone is "
+                 "[HOST:]PORT to serve a page at / (live frame, diameter history, level), "
+                 "/status, /history.json, /metrics and /frame.jpg: a port alone is "
                  "127.0.0.1, this machine only; 0.0.0.0:PORT lets every network that reaches "
                  "this machine see the camera's frames and the state, unencrypted: add "
                  "--http-token-file, or keep it on a trusted network");
   app.add_option("--http-token-file", o.http_token_file,
                  "A file holding a bearer token (one line, at least 16 characters): every path "
-                 "but /metrics then asks for 'Authorization: Bearer TOKEN'");
+                 "but / and /metrics then asks for 'Authorization: Bearer TOKEN' (open the page "
+                 "as http://HOST:PORT/#token=TOKEN)");
   app.add_option("--on-alert", o.on_alert,
                  "Shell command run on every level change (state in CLOGSCOPE_* variables)");
   app.add_option("--mqtt", o.mqtt.url,

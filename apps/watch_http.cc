@@ -11,8 +11,10 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdarg>
 #include <cstring>
+#include <limits>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -20,6 +22,7 @@
 #include "common/atomic_file.h"
 #include "common/path_check.h"
 #include "watch/frame_jpeg.h"
+#include "watch/web_page.h"
 
 namespace clogscope::apps {
 namespace {
@@ -27,6 +30,10 @@ namespace {
 constexpr const char* kTokenOption = "--http-token-file";
 constexpr size_t kMaxHttpTokenFileBytes = 4096;
 constexpr int kListenBacklog = 64;
+constexpr const char* kPageSecurityPolicy =
+    "default-src 'none'; script-src 'unsafe-inline'; style-src 'unsafe-inline'; "
+    "img-src 'self' blob:; connect-src 'self'; base-uri 'none'; form-action 'none'; "
+    "frame-ancestors 'none'";
 
 struct HostPort {
   std::string host;
@@ -188,8 +195,9 @@ struct WatchHttpServer::Impl {
     if ((length && std::strcmp(length, "0") != 0) ||
         MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Transfer-Encoding"))
       return Refusal(MHD_HTTP_CONTENT_TOO_LARGE, "request bodies are refused");
-    // /metrics stays open: a Prometheus scraper without the token still sees the level.
-    if (!token.empty() && path != "/metrics" && !Authorized(c, token)) {
+    // /metrics stays open: a Prometheus scraper without the token still sees the level. So does
+    // the page at /, which holds no data: it asks for the rest with the token it was given.
+    if (!token.empty() && path != "/metrics" && path != "/" && !Authorized(c, token)) {
       Reply r = Refusal(MHD_HTTP_UNAUTHORIZED, "a bearer token is required (--http-token-file)");
       r.headers.emplace_back("WWW-Authenticate", "Bearer realm=\"clogscope watch\"");
       return r;
@@ -211,10 +219,28 @@ struct WatchHttpServer::Impl {
       const std::vector<unsigned char> jpeg = watch::OverlayJpeg(s, conversion);
       r.content_type = "image/jpeg";
       r.body.assign(jpeg.begin(), jpeg.end());
+    } else if (path == "/history.json") {
+      double since_s = -std::numeric_limits<double>::infinity();
+      if (const char* since = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "since_s")) {
+        char* end = nullptr;
+        since_s = std::strtod(since, &end);
+        if (*since == '\0' || *end != '\0' || !std::isfinite(since_s))
+          return Refusal(MHD_HTTP_BAD_REQUEST,
+                         "since_s: expected a time in seconds of the watch's clock, e.g. 120");
+      }
+      r.content_type = "application/json";
+      r.body = watch::HistoryJson(board->History(since_s), board->history_options(),
+                                  conversion.has_value()) +
+               "\n";
     } else if (path == "/") {
-      r.body = "clogscope watch: /status /metrics /frame.jpg\n";
+      r.content_type = "text/html; charset=utf-8";
+      r.body = watch::WatchPageHtml();
+      // Nothing but the watch itself: no script, style or picture from elsewhere, and nowhere
+      // else to send the token to.
+      r.headers.emplace_back("Content-Security-Policy", kPageSecurityPolicy);
+      r.headers.emplace_back("Referrer-Policy", "no-referrer");
     } else {
-      return Refusal(MHD_HTTP_NOT_FOUND, "not found: /status /metrics /frame.jpg");
+      return Refusal(MHD_HTTP_NOT_FOUND, "not found: / /status /history.json /metrics /frame.jpg");
     }
     return r;
   }

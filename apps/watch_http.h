@@ -1,10 +1,11 @@
 #pragma once
 
-// `watch --http`: /status (JSON), /metrics (Prometheus text) and /frame.jpg (the latest frame with
-// its overlay), served by GNU libmicrohttpd so that it can face a network: a few threads poll
-// every connection (a slow client holds a socket, never a thread), each client's share is bounded
-// (HttpLimits), only GET and HEAD without a body are answered, and an optional bearer token guards
-// everything but /metrics.
+// `watch --http`: the page at / (watch/web/index.html), /status (JSON), /history.json (the
+// board's history; ?since_s=T for the points from T on), /metrics (Prometheus text) and /frame.jpg
+// (the latest frame with its overlay), served by GNU libmicrohttpd so that it can face a network:
+// a few threads poll every connection (a slow client holds a socket, never a thread), each
+// client's share is bounded (HttpLimits), only GET and HEAD without a body are answered, and an
+// optional bearer token guards everything but /metrics and the page (which holds no data).
 
 #include <cstddef>
 #include <memory>
@@ -31,7 +32,8 @@ struct WatchHttpOptions {
   // --http: HOST:PORT, [IPv6]:PORT, or PORT alone for 127.0.0.1 (this machine only). Port 0: a free
   // port, told by WatchHttpServer::url().
   std::string address;
-  // Not empty: every path but /metrics asks for "Authorization: Bearer TOKEN" (401 without it).
+  // Not empty: every path but /metrics and / asks for "Authorization: Bearer TOKEN" (401 without
+  // it).
   std::string token;
   HttpLimits limits;
 };

@@ -21,6 +21,7 @@ packages=(
   libmosquitto-dev       # `watch --mqtt`: the Eclipse Mosquitto client library (own network thread, last will, reconnect back-off)
   libcurl4-openssl-dev   # `watch --moonraker/--octoprint`: the printer's HTTP API (timeouts, no redirects, https)
   mosquitto mosquitto-clients  # the MQTT tests: a real broker on localhost and mosquitto_sub to read what was published
+  chromium               # the page at / (`watch --http`) tested in a real browser: headless Chromium loads it from a running watch, its DOM and a screenshot are checked against the rendered diameter (tests only; ~360 MB installed)
   prometheus             # the /metrics tests: promtool checks the text and docs/'s alert rules, a real Prometheus on localhost scrapes a watch (its own service may start on :9090; the tests use a free port)
   python3-dev            # the Python module (python/): Debian's Python 3.11 headers
   pybind11-dev           # the Python module's bindings (headers and CMake config)

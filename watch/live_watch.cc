@@ -204,6 +204,7 @@ bool LiveWatchOptions::Validate(std::string* why) const {
 void WatchBoard::Publish(WatchSnapshot snapshot) {
   std::lock_guard<std::mutex> lock(mutex_);
   latest_ = std::move(snapshot);
+  history_.Add(latest_.status);
 }
 
 void WatchBoard::PublishState(const WatchStatus& status, const std::optional<ClogIndex>& clog,
@@ -212,11 +213,17 @@ void WatchBoard::PublishState(const WatchStatus& status, const std::optional<Clo
   latest_.status = status;
   latest_.clog = clog;
   latest_.counters = counters;
+  history_.Add(status);
 }
 
 WatchSnapshot WatchBoard::Read() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return latest_;
+}
+
+std::vector<HistoryPoint> WatchBoard::History(double since_s) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return history_.Points(since_s);
 }
 
 LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEvents& events,

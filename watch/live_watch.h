@@ -2,15 +2,18 @@
 
 #include <atomic>
 #include <functional>
+#include <limits>
 #include <mutex>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "calib/pixel_scale.h"
 #include "model/parameters.h"
 #include "vision/io/live_source.h"
 #include "vision/scene/strand_measure.h"
+#include "watch/watch_history.h"
 #include "watch/watch_report.h"
 #include "watch/watch_state.h"
 
@@ -42,17 +45,26 @@ struct WatchSnapshot {
   long long sequence = 0;                 // frames published so far
 };
 
+// The latest state and its history (every state published feeds it), shared with readers on
+// other threads.
 class WatchBoard {
  public:
+  // Throws std::invalid_argument when the history's options do not validate.
+  explicit WatchBoard(const WatchHistoryOptions& history = {}) : history_(history) {}
   void Publish(WatchSnapshot snapshot);
   // The state without a new frame (time passing while none arrive): the latest frame stays.
   void PublishState(const WatchStatus& status, const std::optional<ClogIndex>& clog,
                     const WatchCounters& counters);
   WatchSnapshot Read() const;  // a copy (the frame is shared, never written again)
+  // The history's points at or after since_s (all by default), oldest first.
+  std::vector<HistoryPoint> History(
+      double since_s = -std::numeric_limits<double>::infinity()) const;
+  const WatchHistoryOptions& history_options() const { return history_.options(); }
 
  private:
   mutable std::mutex mutex_;
   WatchSnapshot latest_;
+  WatchHistory history_;
 };
 
 // What the watch tells its caller, on the measuring thread.

@@ -272,6 +272,7 @@ void WatchState::UpdateStatistics(double t) {
   s.has_diameter = w.ok;
   if (w.ok) {
     s.diameter_px = w.mean_px;
+    s.diameter_ci95_px = w.half_px;
     s.n_used = w.n_used;
     s.n_rejected = w.n_rejected;
     s.n_effective = w.n_eff;

@@ -77,6 +77,7 @@ struct WatchStatus {
   bool has_diameter = false;
   bool has_scale = false;
   double diameter_px = 0;
+  double diameter_ci95_px = 0;  // the frame-to-frame spread's alone (the scale's σ is in µm)
   double diameter_um = NAN;
   double diameter_ci95_um = NAN;
   double diameter_std_um = NAN;  // frame-to-frame

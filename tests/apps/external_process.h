@@ -34,9 +34,12 @@ inline int FreeLoopbackPort() {
 }
 
 // `argv` started with its standard input the read end of a pipe and its standard output and error
-// the write end of another (SIGPIPE at its default in the child). Returns the pid, or -1; *input
-// and *output are this side's ends (close-on-exec), -1 when not wanted.
-inline pid_t SpawnWithPipes(const std::vector<std::string>& argv, int* input, int* output) {
+// the write end of another (SIGPIPE at its default in the child); its standard error to the file
+// `error_path` instead when one is named (a program whose output is a document, not a log).
+// Returns the pid, or -1; *input and *output are this side's ends (close-on-exec), -1 when not
+// wanted.
+inline pid_t SpawnWithPipes(const std::vector<std::string>& argv, int* input, int* output,
+                            const std::string& error_path = "") {
   int in[2] = {-1, -1}, out[2] = {-1, -1};
   if ((input && pipe2(in, O_CLOEXEC) != 0) || pipe2(out, O_CLOEXEC) != 0) return -1;
   posix_spawn_file_actions_t actions;
@@ -46,7 +49,11 @@ inline pid_t SpawnWithPipes(const std::vector<std::string>& argv, int* input, in
   else
     posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
   posix_spawn_file_actions_adddup2(&actions, out[1], 1);
-  posix_spawn_file_actions_adddup2(&actions, out[1], 2);
+  if (error_path.empty())
+    posix_spawn_file_actions_adddup2(&actions, out[1], 2);
+  else
+    posix_spawn_file_actions_addopen(&actions, 2, error_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                     0644);
   posix_spawnattr_t attr;
   posix_spawnattr_init(&attr);
   sigset_t defaults;
@@ -75,15 +82,17 @@ inline pid_t SpawnWithPipes(const std::vector<std::string>& argv, int* input, in
 
 struct ProgramResult {
   int exit_code = -1;  // -1: not started, or killed by a signal
-  std::string output;  // standard output and error, interleaved as written
+  std::string output;  // standard output and error, interleaved as written (error: see below)
 };
 
 // Runs `argv` with `input` on its standard input and waits for it; what it writes is read while
-// the input is written (poll on both pipes), so neither side can block the other.
-inline ProgramResult RunWithInput(const std::vector<std::string>& argv, const std::string& input) {
+// the input is written (poll on both pipes), so neither side can block the other. Its standard
+// error goes to `error_path` when one is named, else into the output.
+inline ProgramResult RunWithInput(const std::vector<std::string>& argv, const std::string& input,
+                                  const std::string& error_path = "") {
   ProgramResult r;
   int in = -1, out = -1;
-  const pid_t pid = SpawnWithPipes(argv, &in, &out);
+  const pid_t pid = SpawnWithPipes(argv, &in, &out, error_path);
   if (pid < 0) return r;
   fcntl(in, F_SETFL, O_NONBLOCK);
   // A child that exits before reading all its input must not kill this process with SIGPIPE.

@@ -219,7 +219,7 @@ TEST_F(WatchHttpTest, OnlyGetAndHeadWithoutABodyAreAnswered) {
   EXPECT_EQ(Get(port, "/metrics").status, 200);
 }
 
-TEST_F(WatchHttpTest, ABearerTokenGuardsEverythingButMetrics) {
+TEST_F(WatchHttpTest, ABearerTokenGuardsEverythingButMetricsAndThePage) {
   const std::string token = "0123456789abcdefXYZ+/=";
   const auto server = Start("127.0.0.1:0", token);
   const int port = server->port();
@@ -230,10 +230,53 @@ TEST_F(WatchHttpTest, ABearerTokenGuardsEverythingButMetrics) {
   EXPECT_EQ(Get(port, "/status", "Authorization: Bearer " + token.substr(1) + "\r\n").status, 401);
   EXPECT_EQ(Get(port, "/status", "Authorization: Basic " + token + "\r\n").status, 401);
   EXPECT_EQ(Get(port, "/frame.jpg").status, 401);
-  EXPECT_EQ(Get(port, "/").status, 401);
+  EXPECT_EQ(Get(port, "/history.json").status, 401);
+  EXPECT_EQ(Get(port, "/history.json?since_s=0").status, 401);
   EXPECT_EQ(Get(port, "/status", "Authorization: Bearer " + token + "\r\n").status, 200);
+  EXPECT_EQ(Get(port, "/history.json", "Authorization: Bearer " + token + "\r\n").status, 200);
   EXPECT_EQ(Get(port, "/frame.jpg", "Authorization: bearer " + token + "\r\n").status, 200);
   EXPECT_EQ(Get(port, "/metrics").status, 200);  // a scraper needs no token
+  // The page holds no data: it is served without the token, and asks for the data with it.
+  const HttpReply page = Get(port, "/");
+  EXPECT_EQ(page.status, 200);
+  EXPECT_NE(page.head.find("Content-Type: text/html; charset=utf-8"), std::string::npos);
+  EXPECT_EQ(page.body.find(token), std::string::npos);
+  // The page is watch/web/index.html byte for byte: embedded at build time, no file read now.
+  EXPECT_EQ(
+      page.body,
+      ReadFile((fs::path(CLOGSCOPE_TESTDATA_DIR).parent_path() / "watch/web/index.html").string()));
+}
+
+// /history.json: the board's points as JSON, from a time on with ?since_s; a bad time is one line.
+TEST_F(WatchHttpTest, HistoryIsServedFromTheBoardAndSinceSelectsItsTail) {
+  watch::WatchState state({}, std::nullopt);
+  for (int i = 0; i < 100; ++i) {  // 4 s at 25 frames/s of a 50 px strand
+    state.Add(i / 25.0, watch::FrameView::kStrand, 50.0 + 0.1 * (i % 2));
+    watch::WatchSnapshot s;
+    s.status = state.status();
+    board_.Publish(s);
+  }
+  const auto server = Start();
+  const int port = server->port();
+  const HttpReply all = Get(port, "/history.json");
+  ASSERT_EQ(all.status, 200) << all.body;
+  EXPECT_NE(all.head.find("application/json"), std::string::npos);
+  const nlohmann::json j = nlohmann::json::parse(all.body);
+  ASSERT_EQ(j["points"].size(), 4u);
+  EXPECT_EQ(j["unit"], "px");
+  EXPECT_NEAR(j["points"][3]["diameter_px"].get<double>(), 50.05, 0.01);
+  EXPECT_EQ(j["points"][3]["time_s"], 3.96);
+  const nlohmann::json tail = nlohmann::json::parse(Get(port, "/history.json?since_s=2").body);
+  ASSERT_EQ(tail["points"].size(), 2u);
+  EXPECT_EQ(tail["points"][0]["time_s"], 2.96);
+  for (const std::string bad : {"", "abc", "1x", "nan", "inf"}) {
+    const HttpReply r = Get(port, "/history.json?since_s=" + bad);
+    EXPECT_EQ(r.status, 400) << bad;
+    EXPECT_EQ(r.body, "since_s: expected a time in seconds of the watch's clock, e.g. 120\n");
+  }
+  const HttpReply missing = Get(port, "/nothing");
+  EXPECT_EQ(missing.status, 404);
+  EXPECT_EQ(missing.body, "not found: / /status /history.json /metrics /frame.jpg\n");
 }
 
 // The sockets of this process whose local port is `port`: the server's listening and accepted

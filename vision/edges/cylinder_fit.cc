@@ -12,57 +12,94 @@ namespace {
 
 using fitcore::Mat;
 using fitcore::Vec;
-
 using fitcore::cylinder::EvalShapes;
-using fitcore::cylinder::kA;
-using fitcore::cylinder::kB0;
-using fitcore::cylinder::kB1;
-using fitcore::cylinder::kC;
+using fitcore::cylinder::kBox;
 using fitcore::cylinder::kCauchyC;
-using fitcore::cylinder::kK;
-using fitcore::cylinder::kL;
+using fitcore::cylinder::kLit;
 using fitcore::cylinder::kMinSigmaPx;
-using fitcore::cylinder::kN;
-using fitcore::cylinder::kR;
-using fitcore::cylinder::kS;
+using fitcore::cylinder::kShapes;
+using fitcore::cylinder::kTilt;
 using fitcore::cylinder::Shapes;
 
-inline double Model(const EdgeSample& smp, const Vec<kN>& p, double u_ref,
+// The parameters: the backgrounds' (kBg = 4: each side its own line, the object opaque; kBg = 2:
+// one line through both sides and behind the object), the object's a, k, l; centre, radius, blur.
+template <int kBg>
+struct Layout {
+  static constexpr int kA = kBg, kK = kBg + 1, kL = kBg + 2;
+  static constexpr int kAmplitudes = kBg + 3;
+  static constexpr int kC = kAmplitudes, kR = kAmplitudes + 1, kS = kAmplitudes + 2;
+  static constexpr int kN = kAmplitudes + 3;
+  // The shapes the amplitudes multiply at u (xr = u − u_ref).
+  static void Amplitudes(const Shapes& sh, double xr, double* v, double (*d)[3]) {
+    if constexpr (kBg == 4) {
+      for (int i = 0; i < kShapes; ++i) {
+        v[i] = sh.v[i];
+        for (int q = 0; q < 3; ++q) d[i][q] = sh.d[i][q];
+      }
+    } else {
+      // One line through both sides and behind the object: b₀ + b₁·(u − u_ref), which moves with
+      // none of the geometry.
+      v[0] = 1.0;
+      v[1] = xr;
+      for (int q = 0; q < 3; ++q) d[0][q] = d[1][q] = 0.0;
+      for (int i = kBox; i < kShapes; ++i) {
+        v[i - 2] = sh.v[i];
+        for (int q = 0; q < 3; ++q) d[i - 2][q] = sh.d[i][q];
+      }
+    }
+  }
+};
+
+template <int kBg>
+inline double Model(const EdgeSample& smp, const Vec<Layout<kBg>::kN>& p, double u_ref,
                     const fitcore::BlurredSqrt& root, double* j) {
+  using L = Layout<kBg>;
   Shapes sh;
-  EvalShapes(smp.u_px, p[kC], p[kR], p[kS], root, &sh);
-  const double amp[3] = {p[kA], p[kK], p[kL]};
-  j[kB0] = 1.0;
-  j[kB1] = smp.u_px - u_ref;
-  j[kA] = sh.v[0];
-  j[kK] = sh.v[1];
-  j[kL] = sh.v[2];
-  for (int q = 0; q < 3; ++q)
-    j[kC + q] = amp[0] * sh.d[0][q] + amp[1] * sh.d[1][q] + amp[2] * sh.d[2][q];
-  return p[kB0] + p[kB1] * j[kB1] + amp[0] * sh.v[0] + amp[1] * sh.v[1] + amp[2] * sh.v[2];
+  EvalShapes(smp.u_px, u_ref, p[L::kC], p[L::kR], p[L::kS], root, &sh);
+  double v[L::kAmplitudes], d[L::kAmplitudes][3];
+  L::Amplitudes(sh, smp.u_px - u_ref, v, d);
+  double value = 0;
+  for (int i = 0; i < L::kAmplitudes; ++i) {
+    j[i] = v[i];
+    value += p[i] * v[i];
+  }
+  for (int q = 0; q < 3; ++q) {
+    double dq = 0;
+    for (int i = 0; i < L::kAmplitudes; ++i) dq += p[i] * d[i][q];
+    j[L::kC + q] = dq;
+  }
+  return value;
 }
 
-// The five amplitudes by weighted least squares for fixed centre, radius and blur: the start.
+// The amplitudes by weighted least squares for fixed centre, radius and blur: the start.
+template <int kBg>
 void SolveAmplitudes(const std::vector<EdgeSample>& samples, const std::vector<double>& w,
-                     double u_ref, Vec<kN>* p) {
+                     double u_ref, Vec<Layout<kBg>::kN>* p) {
+  using L = Layout<kBg>;
   const auto& root = fitcore::BlurredSqrt::Get();
-  Eigen::Matrix<double, 5, 5> ata = Eigen::Matrix<double, 5, 5>::Zero();
-  Eigen::Matrix<double, 5, 1> atb = Eigen::Matrix<double, 5, 1>::Zero();
+  using Row = Eigen::Matrix<double, L::kAmplitudes, 1>;
+  Eigen::Matrix<double, L::kAmplitudes, L::kAmplitudes> ata;
+  ata.setZero();
+  Row atb = Row::Zero();
   for (size_t i = 0; i < samples.size(); ++i) {
     Shapes sh;
-    EvalShapes(samples[i].u_px, (*p)[kC], (*p)[kR], (*p)[kS], root, &sh);
-    const Eigen::Matrix<double, 5, 1> row(1.0, samples[i].u_px - u_ref, sh.v[0], sh.v[1], sh.v[2]);
+    EvalShapes(samples[i].u_px, u_ref, (*p)[L::kC], (*p)[L::kR], (*p)[L::kS], root, &sh);
+    Row row;
+    double d[L::kAmplitudes][3];
+    L::Amplitudes(sh, samples[i].u_px - u_ref, row.data(), d);
     ata += w[i] * row * row.transpose();
     atb += w[i] * samples[i].value * row;
   }
   ata.diagonal().array() += 1e-9;
-  p->head<5>() = ata.ldlt().solve(atb);
+  p->template head<L::kAmplitudes>() = ata.ldlt().solve(atb);
 }
 
-}  // namespace
-
-CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_guess_px,
-                           double right_guess_px, double sigma_guess_px) {
+template <int kBg>
+CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_guess_px,
+                        double right_guess_px, double sigma_guess_px,
+                        std::vector<double>* residuals_out) {
+  using L = Layout<kBg>;
+  constexpr int kN = L::kN, kA = L::kA, kK = L::kK, kL = L::kL, kC = L::kC, kR = L::kR, kS = L::kS;
   CylinderFit out;
   out.samples = static_cast<int>(samples.size());
   if (samples.size() < 3 * kN || !(right_guess_px > left_guess_px + 2.0)) return out;
@@ -76,7 +113,7 @@ CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_g
   const auto residuals_at = [&](const Vec<kN>& q) {
     for (size_t i = 0; i < samples.size(); ++i) {
       double j[kN];
-      residuals[i] = Model(samples[i], q, u_ref, root, j) - samples[i].value;
+      residuals[i] = Model<kBg>(samples[i], q, u_ref, root, j) - samples[i].value;
     }
   };
   // The residuals' robust scale (1.4826·MAD), and Cauchy weights from the residuals at a scale.
@@ -95,11 +132,11 @@ CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_g
   // Robust amplitudes at the guessed geometry before any of it moves: a specular stripe is then
   // already down-weighted when the nonlinear fit starts, instead of dragging blur and radius to
   // wherever it fits best (a stripe 40 levels high once pulled the blur to 14 px).
-  SolveAmplitudes(samples, w, u_ref, &p);
+  SolveAmplitudes<kBg>(samples, w, u_ref, &p);
   for (int round = 0; round < 2; ++round) {
     residuals_at(p);
     reweight(robust_scale());
-    SolveAmplitudes(samples, w, u_ref, &p);
+    SolveAmplitudes<kBg>(samples, w, u_ref, &p);
   }
 
   // Weighted least squares with the weights w while cauchy_scale is 0; else the Cauchy loss
@@ -112,7 +149,7 @@ CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_g
     const double cs = kCauchyC * cauchy_scale, inv_cs2 = cs > 0 ? 1.0 / (cs * cs) : 0.0;
     for (size_t i = 0; i < samples.size(); ++i) {
       double j[kN];
-      const double r = Model(samples[i], q, u_ref, root, j) - samples[i].value;
+      const double r = Model<kBg>(samples[i], q, u_ref, root, j) - samples[i].value;
       double wi = w[i];
       if (cs > 0) {
         const double z2 = r * r * inv_cs2;
@@ -166,13 +203,20 @@ CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_g
   out.left_px = p[kC] - p[kR];
   out.right_px = p[kC] + p[kR];
   out.sigma_px = p[kS];
-  out.background = p[kB0];
-  out.background_slope_per_px = p[kB1];
+  // Each side's line (with one line, both are it), and the object's flat part over the background
+  // behind its centre (the two sides' lines there; with one line, a is that already).
+  const int right = kBg == 4 ? 2 : 0;
+  out.background_left = p[0] + p[1] * (out.left_px - u_ref);
+  out.background_right = p[right] + p[right + 1] * (out.right_px - u_ref);
+  out.background_slope_left_per_px = p[1];
+  out.background_slope_right_per_px = p[right + 1];
+  out.background = kBg == 4 ? CylinderBackground::kEachSide : CylinderBackground::kOneLine;
   out.u_ref_px = u_ref;
-  out.ambient = p[kA];
+  out.ambient = kBg == 4 ? p[kA] - 0.5 * (p[0] + p[2] + (p[1] + p[3]) * (p[kC] - u_ref)) : p[kA];
   out.shading = p[kK];
   out.tilt = p[kL];
   out.noise = noise;
+  if (residuals_out) *residuals_out = residuals;
   out.rms = std::sqrt(wrss / std::max(wsum, 1.0));
   // Covariance from the weighted normal matrix, scaled by the weighted residual variance.
   const double dof = wsum * (1.0 - static_cast<double>(kN) / samples.size());
@@ -189,11 +233,24 @@ CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_g
   return out;
 }
 
+}  // namespace
+
+CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_guess_px,
+                           double right_guess_px, double sigma_guess_px,
+                           CylinderBackground background, std::vector<double>* residuals_out) {
+  return background == CylinderBackground::kEachSide
+             ? FitCylinder<4>(samples, left_guess_px, right_guess_px, sigma_guess_px, residuals_out)
+             : FitCylinder<2>(samples, left_guess_px, right_guess_px, sigma_guess_px,
+                              residuals_out);
+}
+
 double CylinderEdgeContrast(const CylinderFit& fit, int side) {
   const double u = side == 0 ? fit.left_px + 2.0 * fit.sigma_px : fit.right_px - 2.0 * fit.sigma_px;
   Shapes sh;
-  EvalShapes(u, fit.centre_px, fit.radius_px, fit.sigma_px, fitcore::BlurredSqrt::Get(), &sh);
-  const double object = fit.ambient * sh.v[0] + fit.shading * sh.v[1] + fit.tilt * sh.v[2];
+  EvalShapes(u, fit.u_ref_px, fit.centre_px, fit.radius_px, fit.sigma_px,
+             fitcore::BlurredSqrt::Get(), &sh);
+  const double object =
+      fit.ambient * sh.v[kBox] + fit.shading * sh.v[kLit] + fit.tilt * sh.v[kTilt];
   return side == 0 ? object : -object;
 }
 

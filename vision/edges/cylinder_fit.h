@@ -6,25 +6,43 @@
 
 namespace clogscope::vision {
 
+// The background of a lit cylinder (below): how its fit models what lies beside the object.
+enum class CylinderBackground {
+  // An object in front of a backdrop (a strand below the nozzle): an uneven lamp or a textured
+  // backdrop differs from one side to the other, and one line bent through both would move the
+  // silhouettes (up to 0.33 px measured).
+  kEachSide,
+  // One line, two parameters fewer: a filament's calipers, whose backgrounds beside it are gear
+  // teeth and guides as often as a backdrop (Greeff's real video: 281 of 281 frames valid at
+  // 137.65 px with one line, 274 at 137.91 px with a line each side).
+  kOneLine,
+};
+
 // A front-lit cylinder's whole profile across a caliper, blurred:
-//   value(u) = b₀ + b₁·(u − u_ref) + blur_σ{ 1[|x| < 1] · (a + k·√(1 − x²) + l·x) },
-//   x = (u − centre)/radius.
-// a is the ambient (flat) part of the object's brightness, k the Lambertian part (n·v of a lit
-// cylinder), l a tilt for light from one side. Both edges share the centre, the radius, the blur
-// and the shading, so the interior's curvature fixes k and each silhouette is placed where the
-// shading's √d ramp starts — not where a per-edge fit, trading its step against its ramp, puts it.
-// Residuals are weighted robustly (Cauchy, from the residuals' MAD), so a specular stripe or a
-// clear strand's internal lines do not pull the fit.
+//   value(u) = blur_σ{ 1[x < −1]·(bl₀ + bl₁·u) + 1[x > 1]·(br₀ + br₁·u)
+//                      + 1[|x| < 1]·(a + k·√(1 − x²) + l·x) },   x = (u − centre)/radius,
+// each side's background its own line, seen only beside the opaque object (kEachSide), or
+//   value(u) = b₀ + b₁·u + blur_σ{ 1[|x| < 1]·(a + k·√(1 − x²) + l·x) }
+// with one line through both sides (kOneLine). a is the ambient (flat) part
+// of the object's brightness, k the Lambertian part (n·v of a lit cylinder), l a tilt for light
+// from one side. Both edges share the centre, the radius, the blur and the shading, so the
+// interior's curvature fixes k and each silhouette is placed where the shading's √d ramp starts —
+// not where a per-edge fit, trading its step against its ramp, puts it. Residuals are weighted
+// robustly (Cauchy, from the residuals' MAD), so a specular stripe or a clear strand's internal
+// lines do not pull the fit.
 struct CylinderFit {
   bool converged = false;
   double centre_px = 0, radius_px = 0;
-  double left_px = 0, right_px = 0;                    // centre ∓ radius: the silhouette
-  double left_sigma_px = 0, right_sigma_px = 0;        // standard errors of the edges
-  double width_sigma_px = 0;                           // standard error of 2·radius
-  double sigma_px = 0;                                 // Gaussian width of the blur
-  double background = 0, background_slope_per_px = 0;  // b₀, b₁
-  double u_ref_px = 0;  // where b₁ is anchored: midway between the guessed edges
-  double ambient = 0, shading = 0, tilt = 0;  // a, k, l
+  double left_px = 0, right_px = 0;              // centre ∓ radius: the silhouette
+  double left_sigma_px = 0, right_sigma_px = 0;  // standard errors of the edges
+  double width_sigma_px = 0;                     // standard error of 2·radius
+  double sigma_px = 0;                           // Gaussian width of the blur
+  // Each side's background at its silhouette, and its slope.
+  double background_left = 0, background_right = 0;
+  double background_slope_left_per_px = 0, background_slope_right_per_px = 0;
+  CylinderBackground background = CylinderBackground::kEachSide;  // the model fitted
+  double u_ref_px = 0;  // where the lines' levels are anchored: midway between the guessed edges
+  double ambient = 0, shading = 0, tilt = 0;  // a (over the background behind the centre), k, l
   double rms = 0;                             // weighted residual RMS, grey levels
   double noise = 0;                           // robust residual scale (1.4826·MAD), grey levels
   int samples = 0;
@@ -33,13 +51,16 @@ struct CylinderFit {
 };
 
 // Fits the model to samples spanning both edges and the background beyond each, started from the
-// two edges (left < right) and a blur.
+// two edges (left < right) and a blur. residuals_out, when given, receives each sample's residual
+// (value − model) at the fit.
 CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_guess_px,
-                           double right_guess_px, double sigma_guess_px);
+                           double right_guess_px, double sigma_guess_px,
+                           CylinderBackground background = CylinderBackground::kEachSide,
+                           std::vector<double>* residuals_out = nullptr);
 
 // A fitted cylinder's contrast at one silhouette (side 0 left, 1 right), as a per-edge fit's
-// (EdgeFit::contrast): the model's change from the background to 2σ inside the object, signed
-// like the step from −u to +u there.
+// (EdgeFit::contrast): the object's part of the model (a, k, l; over the background behind it)
+// 2σ inside the silhouette, signed like the step from −u to +u there.
 double CylinderEdgeContrast(const CylinderFit& fit, int side);
 
 }  // namespace clogscope::vision

@@ -15,13 +15,20 @@ using fitcore::Vec;
 using fitcore::cylinder::EvalShapes;
 using fitcore::cylinder::kCauchyC;
 using fitcore::cylinder::kMinSigmaPx;
-using fitcore::cylinder::kN;
 using fitcore::cylinder::Shapes;
 
-// The template's parameters: background b₀, b₁, amplitudes a, k, l as the full fit's, and the
-// geometry as offsets from the template's centre, radius and blur.
-enum { kB0, kB1, kA, kK, kL, kDc, kDr, kDs };
-static_assert(kDs + 1 == kN, "the template fits the full fit's parameters");
+// The template's parameters: the one background line b₀ + b₁·(u − u_ref), amplitudes a, k, l as
+// the full (kOneLine) fit's, and the geometry as offsets from the template's centre, radius and
+// blur.
+enum { kB0, kB1, kA, kK, kL, kDc, kDr, kDs, kN };
+// The template's object shapes, in the order of the amplitudes a, k, l.
+constexpr fitcore::cylinder::Shape kObjectShapes[3] = {
+    fitcore::cylinder::kBox, fitcore::cylinder::kLit, fitcore::cylinder::kTilt};
+
+// The one line's level at u_ref from its level at the left silhouette.
+double LineLevel(const CylinderFit& fit) {
+  return fit.background_left - fit.background_slope_left_per_px * (fit.left_px - fit.u_ref_px);
+}
 
 // The Gauss–Newton system at q over all samples with Cauchy weights at the residuals and scale
 // `noise`, as the full fit's second run; keeps the residuals.
@@ -92,7 +99,8 @@ const char* CylinderTrackRefusalName(CylinderTrackRefusal r) {
 
 bool MakeCylinderTemplate(const std::vector<EdgeSample>& samples, const CylinderFit& fit,
                           CylinderTemplate* out) {
-  if (!fit.converged || samples.empty() || fit.samples != static_cast<int>(samples.size()))
+  if (!fit.converged || fit.background != CylinderBackground::kOneLine || samples.empty() ||
+      fit.samples != static_cast<int>(samples.size()))
     return false;
   const auto& root = fitcore::BlurredSqrt::Get();
   out->reference = fit;
@@ -102,17 +110,20 @@ bool MakeCylinderTemplate(const std::vector<EdgeSample>& samples, const Cylinder
   // The full fit's bound (cylinder_fit.cc) about its own start; here about the fitted blur.
   out->max_sigma_px = std::max(3.0 * fit.sigma_px, std::min(8.0, fit.radius_px / 3.0));
   std::vector<double> residuals(samples.size());
+  const double b0 = LineLevel(fit);
   for (size_t i = 0; i < samples.size(); ++i) {
     Shapes sh;
-    EvalShapes(samples[i].u_px, fit.centre_px, fit.radius_px, fit.sigma_px, root, &sh);
+    EvalShapes(samples[i].u_px, fit.u_ref_px, fit.centre_px, fit.radius_px, fit.sigma_px, root,
+               &sh);
     CylinderTemplate::Sample& s = out->samples[i];
     s.du_px = static_cast<float>(samples[i].u_px - fit.u_ref_px);
     for (int k = 0; k < 3; ++k) {
-      s.shape[k] = static_cast<float>(sh.v[k]);
-      for (int m = 0; m < 3; ++m) s.d_shape[k][m] = static_cast<float>(sh.d[k][m]);
+      s.shape[k] = static_cast<float>(sh.v[kObjectShapes[k]]);
+      for (int m = 0; m < 3; ++m) s.d_shape[k][m] = static_cast<float>(sh.d[kObjectShapes[k]][m]);
     }
-    const double model = fit.background + fit.background_slope_per_px * s.du_px +
-                         fit.ambient * sh.v[0] + fit.shading * sh.v[1] + fit.tilt * sh.v[2];
+    const double model = b0 + fit.background_slope_left_per_px * s.du_px +
+                         fit.ambient * sh.v[kObjectShapes[0]] +
+                         fit.shading * sh.v[kObjectShapes[1]] + fit.tilt * sh.v[kObjectShapes[2]];
     residuals[i] = model - samples[i].value;
   }
   out->noise = RobustScale(residuals);
@@ -129,7 +140,8 @@ CylinderTrackRefusal TrackLitCylinder(const CylinderTemplate& t,
       samples.front().u_px != t.first_u_px || samples.back().u_px != t.last_u_px)
     return CylinderTrackRefusal::kOtherSamples;
   Vec<kN> q;
-  q << ref.background, ref.background_slope_per_px, ref.ambient, ref.shading, ref.tilt, 0, 0, 0;
+  q << LineLevel(ref), ref.background_slope_left_per_px, ref.ambient, ref.shading, ref.tilt, 0, 0,
+      0;
   std::vector<double> residuals(samples.size());
   const auto step = [](const System& s) -> Vec<kN> {
     Mat<kN> a = s.jtj;
@@ -172,9 +184,11 @@ CylinderTrackRefusal TrackLitCylinder(const CylinderTemplate& t,
   out->left_px = out->centre_px - out->radius_px;
   out->right_px = out->centre_px + out->radius_px;
   out->sigma_px = sigma;
-  out->background = q[kB0];
-  out->background_slope_per_px = q[kB1];
+  out->background = CylinderBackground::kOneLine;
   out->u_ref_px = ref.u_ref_px;
+  out->background_left = q[kB0] + q[kB1] * (out->left_px - ref.u_ref_px);
+  out->background_right = q[kB0] + q[kB1] * (out->right_px - ref.u_ref_px);
+  out->background_slope_left_per_px = out->background_slope_right_per_px = q[kB1];
   out->ambient = q[kA];
   out->shading = q[kK];
   out->tilt = q[kL];

@@ -57,8 +57,9 @@ enum class CylinderTrackRefusal {
 };
 const char* CylinderTrackRefusalName(CylinderTrackRefusal r);
 
-// The template of a converged full fit on `samples` (the same samples it was fitted to). False
-// when the fit did not converge.
+// The template of a converged full fit with one background line (CylinderBackground::kOneLine) on
+// `samples` (the same samples it was fitted to). False when the fit did not converge or has a line
+// each side.
 bool MakeCylinderTemplate(const std::vector<EdgeSample>& samples, const CylinderFit& fit,
                           CylinderTemplate* out);
 

@@ -122,13 +122,21 @@ void TakeCylinder(const CylinderFit& cyl, CaliperFit* cf) {
 // Replaces each caliper's two per-edge fits by one lit cylinder across its whole profile (see
 // cylinder_fit.h): shared centre, radius, blur and shading, so the interior's curvature fixes the
 // shading that a per-edge fit trades against its edge. A caliper whose cylinder does not fit, or
-// whose silhouettes leave their windows, is dropped rather than mixed with per-edge widths. With
-// a memory, each cylinder is kept as the template of its caliper (cylinder_memory.h).
+// whose silhouettes leave their windows, is dropped rather than mixed with per-edge widths.
+// structure_doubt_px (per side), when given: how far what the cylinders' residuals share near each
+// silhouette may have moved it (residual_structure.h). With a memory, each cylinder is kept as the
+// template of its caliper (cylinder_memory.h).
 void RefitAsCylinders(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
                       double band_s0, double spacing, const EdgeLines& lines, double sigma_px,
-                      std::vector<CaliperFit>* fits, CylinderMemory* memory) {
+                      CylinderBackground background, std::vector<CaliperFit>* fits,
+                      double structure_doubt_px[2], CylinderMemory* memory) {
   const double outer = CylinderReachPx(sigma_px);
   std::vector<EdgeSample> samples;
+  // The residuals the calipers share near each silhouette (residual_structure.h): a profile the
+  // lit cylinder does not describe there (a codec's ringing about the shading's steep start,
+  // a stripe or halo beside the edge) moves both of its edges alike in every caliper.
+  ResidualStructure structure[2] = {ResidualStructure(outer), ResidualStructure(outer)};
+  std::vector<double> per_unit[2], residuals;
   // Each caliper starts from its neighbour's blur: the fit then mostly has only the edges to move.
   double sigma_start = sigma_px;
   for (size_t k = 0; k < fits->size(); ++k) {
@@ -138,14 +146,31 @@ void RefitAsCylinders(const GreyImage& img, const AxisFrame& f, const ClipLevels
     int clipped = 0;
     CylinderFit cyl;
     if (GatherCylinderSamples(img, f, clip, s0, s0 + spacing, l, r, sigma_px, &samples, &clipped))
-      cyl = FitLitCylinder(samples, l, r, sigma_start);
+      cyl = FitLitCylinder(samples, l, r, sigma_start, background,
+                           structure_doubt_px ? &residuals : nullptr);
     const bool ok = cyl.converged && std::abs(cyl.left_px - l) < outer - 1.0 &&
                     std::abs(cyl.right_px - r) < outer - 1.0;
     cf.left.converged = cf.right.converged = ok;
     if (ok) sigma_start = cyl.sigma_px;
     if (!ok) continue;
+    for (int side = 0; side < 2 && structure_doubt_px; ++side) {
+      int near = 0;
+      const double edge = side == 0 ? cyl.left_px : cyl.right_px;
+      for (size_t i = 0; i < samples.size(); ++i) {
+        const double du = samples[i].u_px - edge;
+        if (std::abs(du) > outer) continue;
+        structure[side].Add(du, residuals[i]);
+        ++near;
+      }
+      per_unit[side].push_back(SharedStructureEdgeDoubtPx(
+          1.0, cyl.rms, side == 0 ? cyl.left_sigma_px : cyl.right_sigma_px, near, 2 * outer));
+    }
     if (memory) memory->Keep({s0, s0 + spacing, l, r, sigma_px, {}}, samples, cyl);
     TakeCylinder(cyl, &cf);
+  }
+  for (int side = 0; side < 2 && structure_doubt_px; ++side) {
+    structure_doubt_px[side] =
+        per_unit[side].size() < 2 ? 0.0 : Median(per_unit[side]) * structure[side].SharedRms();
   }
 }
 
@@ -172,7 +197,8 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   std::vector<double> shade_evidence[2], shade_shift[2];
   double shading_doubt_px[2] = {0, 0};  // per side: how far out a shaded edge would lie
   double cylinder_doubt_px = 0;         // the lit cylinders' disagreement with the per-edge fits
-  double shading_shift_px[2] = {0, 0};  // the same for every side judged plain
+  double cylinder_structure_px[2] = {0, 0};  // per side: what the cylinders' residuals share
+  double shading_shift_px[2] = {0, 0};       // the same for every side judged plain
   std::vector<EdgeSample> samples;
   samples.reserve(512);
   double sigma_guess = 1.5;
@@ -232,6 +258,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   // Tracking a lit object: its calipers' cylinders from the templates the last full measurement
   // left (cylinder_memory.h), without the per-edge fits, unless more than a few refuse the frame
   // (the scene changed): then as in the first frame, which makes new templates.
+  if (!filament) memory = nullptr;  // templates have one background line: a filament's
   if (memory) memory->Use(f, opt.caliper_spacing_px);
   TrackedCylinders tracked;
   bool from_memory = false;
@@ -423,8 +450,9 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     lines.left_u0 = left_guess;
     lines.right_u0 = right_guess;
     lines.slope = slope_guess;
-    RefitAsCylinders(img, f, clip, band_s0, opt.caliper_spacing_px, lines, sigma_guess, &fits,
-                     memory);
+    RefitAsCylinders(img, f, clip, band_s0, opt.caliper_spacing_px, lines, sigma_guess,
+                     filament ? CylinderBackground::kOneLine : CylinderBackground::kEachSide, &fits,
+                     filament ? nullptr : cylinder_structure_px, memory);
     if (memory) {
       memory->left_u0_px = lines.left_u0;
       memory->right_u0_px = lines.right_u0;
@@ -555,6 +583,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   // A strand's width about its smooth trend along the band: a swell relaxing down the band widens
   // the calipers' spread without making their mean any less certain.
   double trend_var = -1, width_slope = 0;
+  double missing_doubt_px = 0;  // a changing width's calipers that are not in the mean
   if (cal_widths.size() >= 4) {
     Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
     Eigen::Vector3d atb = Eigen::Vector3d::Zero();
@@ -579,6 +608,21 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       // Only a width that clearly changes: the slope of a straight strand's noisy widths is noise.
       const double slope_sigma = std::sqrt(trend_var * ata.inverse()(1, 1));
       if (std::abs(coef[1]) > 3.0 * slope_sigma) width_slope = coef[1];
+      // The band's width is the mean over all its rows: where the width changes along it (a swell
+      // relaxing), a caliper missing from the mean (no edge found, an outlier) takes its part of
+      // the change with it. The trend at the calipers used against at all of them says how much.
+      if (width_slope != 0) {
+        double all = 0, in = 0;
+        int n_all = 0, n_in = 0;
+        for (int k = run_begin; k < run_end; ++k) {
+          const Caliper& c = m->calipers[k];
+          const double ds = c.s_px - s_mid, w = coef[0] + coef[1] * ds + coef[2] * ds * ds;
+          all += w;
+          ++n_all;
+          if (c.inlier) in += w, ++n_in;
+        }
+        if (n_in > 0) missing_doubt_px = std::abs(all / n_all - in / n_in);
+      }
     }
     const double half = 0.5 * (m->straight_end_px - m->straight_start_px);
     // A disc's chord w(s) ≈ 2R − s²/R bends with |w''|/2 = 1/R ≈ 2/w; a strand's slow changes
@@ -613,10 +657,10 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   }
   m->model_sigma_px = 0.5 * (shading_doubt_px[0] + shading_doubt_px[1]);
   {
-    // The inlier calipers' own edge models. (Calipers refitted as cylinders carry the cylinders'
-    // disagreement with the per-edge fits instead: the cylinders' own residual structure on
-    // Greeff's real filament, knurled and lit, doubled its σ to 0.16 px against a frame-to-frame
-    // scatter of 0.08 px.)
+    // The inlier calipers' own edge models; a strand's calipers refitted as cylinders, the
+    // cylinders'. (A filament's cylinders carry only their disagreement with the per-edge fits:
+    // their residual structure on Greeff's real filament, knurled and lit, doubled its σ to
+    // 0.16 px against a frame-to-frame scatter of 0.08 px.)
     double structure_doubt_px[2];
     for (int side = 0; side < 2; ++side) {
       std::vector<CaliperEdge> edges;
@@ -629,6 +673,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       // About each caliper's fitted edge: the window's reach either side of it.
       const Window w = window(side, 0.0, outer, inner);
       structure_doubt_px[side] = BandEdgeDoubtPx(img, f, clip, edges, -w.u0, w.u1);
+      structure_doubt_px[side] = std::hypot(structure_doubt_px[side], cylinder_structure_px[side]);
     }
     // And where the band starts, when the width changes along it (die swell relaxing): a tip set
     // by the nozzle's face or the object's own end is good to a fraction of a px (tip.h); one
@@ -637,7 +682,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     const double tip_sigma_px = g.tip_sigma_px >= 0 ? g.tip_sigma_px : kTipSigmaWidths * width0;
     m->model_sigma_px = std::hypot(
         std::hypot(m->model_sigma_px + cylinder_doubt_px, std::abs(width_slope) * tip_sigma_px),
-        std::hypot(structure_doubt_px[0], structure_doubt_px[1]));
+        std::hypot(std::hypot(structure_doubt_px[0], structure_doubt_px[1]), missing_doubt_px));
   }
   m->width_sigma_px = std::hypot(m->width_sigma_px, m->model_sigma_px);
 

@@ -99,7 +99,8 @@ TrackedCylinders TrackCylinders(const GreyImage& img, const AxisFrame& f, const 
     out.samples += static_cast<int>(samples.size());
     out.saturated += clipped;
     ++out.fitted_in_full;
-    fit = FitLitCylinder(samples, slab.left_px, slab.right_px, slab.sigma_px);
+    fit = FitLitCylinder(samples, slab.left_px, slab.right_px, slab.sigma_px,
+                         CylinderBackground::kOneLine);
     const double outer = CylinderReachPx(slab.sigma_px);
     fit.converged = fit.converged && std::abs(fit.left_px - slab.left_px) < outer - 1.0 &&
                     std::abs(fit.right_px - slab.right_px) < outer - 1.0;

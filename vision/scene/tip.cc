@@ -233,10 +233,16 @@ TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0,
         FaceOnSide(img, centred, s_guess, half, min_face_step, -1),
         FaceOnSide(img, centred, s_guess, half, min_face_step, +1)};
     const TipEstimate face = LineAcross(faces[0], faces[1]);
-    const TipEstimate end = LineAcross(ObjectEnd(img, centred, s_guess, -kEndColumns[1] * width,
-                                                 -kEndColumns[0] * width, min_face_step),
-                                       ObjectEnd(img, centred, s_guess, kEndColumns[0] * width,
-                                                 kEndColumns[1] * width, min_face_step));
+    const auto end_near = [&](double s) {
+      return LineAcross(ObjectEnd(img, centred, s, -kEndColumns[1] * width, -kEndColumns[0] * width,
+                                  min_face_step),
+                        ObjectEnd(img, centred, s, kEndColumns[0] * width, kEndColumns[1] * width,
+                                  min_face_step));
+    };
+    // Edges that flare out into a swell too fast to follow end short of the nozzle: the object's
+    // end may lie beyond the reach below, and is looked for again half a reach further up.
+    TipEstimate end = end_near(s_guess);
+    if (!end.found) end = end_near(s_guess - 0.5 * kReachPx);
     // A face on one side only, or two that are not one line (a flank, a hair's end): the reading
     // nearest the guess.
     const LineReading* one = nullptr;

@@ -14,12 +14,15 @@ constexpr double kBackground = 35, kLevel = 160;
 // A lit cylinder's profile (ambient a, Lambertian 1 − a, tilt l, optional extra light `extra(x)`)
 // blurred by numerical convolution — independent of the fit's closed forms — sampled on four
 // sheared rows at 1 px, with noise.
+// The object is opaque: `background(t)`, when given, is seen only beside it (else kBackground
+// everywhere, the object's levels over it).
 std::vector<EdgeSample> Profile(double centre, double radius, double sigma, double ambient,
                                 double tilt, double noise, std::mt19937* rng,
-                                const std::function<double(double)>& extra = nullptr) {
+                                const std::function<double(double)>& extra = nullptr,
+                                const std::function<double(double)>& background = nullptr) {
   const auto object = [&](double t) {
     const double x = (t - centre) / radius;
-    if (std::abs(x) >= 1) return 0.0;
+    if (std::abs(x) >= 1) return background ? background(t) - kBackground : 0.0;
     double v = kLevel * (ambient + (1 - ambient) * std::sqrt(1 - x * x)) + tilt * x;
     if (extra) v += extra(x);
     return v;
@@ -61,9 +64,34 @@ TEST(CylinderFitTest, FindsTheSilhouetteOfShadedAndPlainCylinders) {
           EXPECT_NEAR(f.ambient, kLevel * ambient, 1.0) << where;
           EXPECT_NEAR(f.shading, kLevel * (1 - ambient), 1.0) << where;
           EXPECT_NEAR(f.tilt, tilt, 1.0) << where;
-          EXPECT_NEAR(f.background, kBackground, 0.5) << where;
+          EXPECT_NEAR(f.background_left, kBackground, 0.5) << where;
+          EXPECT_NEAR(f.background_right, kBackground, 0.5) << where;
         }
       }
+    }
+  }
+}
+
+// An uneven lamp or backdrop: each side's background its own line, hidden behind the object.
+// One line through both (the model before) put these silhouettes up to 0.33 px off.
+TEST(CylinderFitTest, EachSidesBackgroundIsItsOwn) {
+  std::mt19937 rng(7);
+  const double c = 80.4, radius = 24;
+  for (double ambient : {0.4, 0.8}) {
+    for (double sigma : {1.0, 2.5}) {
+      const auto uneven = [&](double t) {
+        return t < c ? 20 + 0.6 * (t - c + radius) : 70 - 0.4 * (t - c - radius);
+      };
+      const auto s = Profile(c, radius, sigma, ambient, 0, 0, &rng, nullptr, uneven);
+      const CylinderFit f = FitLitCylinder(s, c - radius + 2, c + radius - 2, 1.5);
+      const std::string where = ::testing::PrintToString(std::vector<double>{ambient, sigma});
+      ASSERT_TRUE(f.converged) << where;
+      EXPECT_NEAR(f.left_px, c - radius, 0.02) << where;
+      EXPECT_NEAR(f.right_px, c + radius, 0.02) << where;
+      EXPECT_NEAR(f.background_left, 20, 0.3) << where;
+      EXPECT_NEAR(f.background_right, 70, 0.3) << where;
+      EXPECT_NEAR(f.background_slope_left_per_px, 0.6, 0.02) << where;
+      EXPECT_NEAR(f.background_slope_right_per_px, -0.4, 0.02) << where;
     }
   }
 }
