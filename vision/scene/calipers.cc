@@ -266,6 +266,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       g.left_sign == -g.right_sign) {
     tracked = TrackCylinders(img, f, clip, band_s0, opt.caliper_spacing_px, n_cal, memory);
     from_memory = tracked.refused <= kMaxRefusedTemplates * n_cal;
+    if (from_memory) ++memory->frames_from_templates;
   }
   // Usually one pass. Another re-centres the windows on the fitted edge lines, or widens them to
   // the fitted blur; a badly blurred frame needs a few widenings before its fit sees the whole

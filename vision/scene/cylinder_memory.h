@@ -47,6 +47,8 @@ class CylinderMemory {
   double left_u0_px = 0, right_u0_px = 0, slope = 0;
   double sigma_px = 0;
   double cylinder_doubt_px = 0;
+  // Frames measured from the templates (calipers.cc counts them; for tests and benches).
+  int frames_from_templates = 0;
 
  private:
   AxisFrame frame_;

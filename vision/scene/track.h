@@ -28,6 +28,8 @@ class StrandTracker {
 
   int full_detections() const { return full_detections_; }
   int tracked_frames() const { return tracked_frames_; }
+  // A filament's calipers' lit cylinders, kept as templates (cylinder_memory.h).
+  const CylinderMemory& cylinders() const { return cylinders_; }
 
  private:
   StrandMeasurement Detect(const cv::Mat& frame);
