@@ -23,6 +23,7 @@ class StrandTracker {
   // Forgets the strand: the next frame is searched from scratch.
   void Reset() {
     tracking_ = false;
+    short_straight_frames_ = 0;
     cylinders_.Clear();
   }
 
@@ -44,6 +45,7 @@ class StrandTracker {
   cv::Size frame_size_;
   int full_detections_ = 0;
   int tracked_frames_ = 0;
+  int short_straight_frames_ = 0;  // a filament's: frames in a row on a short straight part
 };
 
 }  // namespace clogscope::vision
