@@ -14,7 +14,7 @@ constexpr double kTipHysteresisPx = 1.5;  // tip moves smaller than this keep th
 // for a longer part in the first frame the part is short, then ever more rarely while it stays
 // short (its 2nd, 4th, 8th … frame), and at least every kRegrowAtMostFrames frames. (Greeff's real
 // video: a part of 10 calipers, kept 20 frames, read 137.38–137.49 px where the 17 found again then
-// read 137.65, and 4 of 281 widths were left out as outliers; with the looks, 11 of them, none.)
+// read 137.65, and 4 of 281 widths were left out as outliers; with the looks, none.)
 constexpr int kShortStraightPartTimes = 2;
 constexpr int kRegrowAtMostFrames = 32;
 
