@@ -14,6 +14,8 @@
 #include "vision/edges/edge_fit.h"
 #include "vision/edges/residual_structure.h"
 #include "vision/edges/straight_run.h"
+#include "vision/scene/caliper_cylinders.h"
+#include "vision/scene/caliper_edges.h"
 #include "vision/scene/cylinder_memory.h"
 #include "vision/scene/self_check.h"
 
@@ -51,127 +53,11 @@ bool ShadingEvident(const std::vector<double>& f) { return ShadingEvidenceSigmas
 // both sides move out under the shading model).
 constexpr double kShadingDoubtSigmas = 2.0;
 
-struct CaliperFit {
-  EdgeFit left, right;
-  EdgeFit left_shaded, right_shaded;  // while the model is undecided
-  double width_sigma_px = -1;         // set by a joint fit of both edges (their errors correlate)
-  bool inside_roi = true;
-  int saturated = 0;
-  int samples = 0;
-};
-
 // A fit counts when it converged inside its window [u0, u1] (not within 1 px of its ends) with
 // the edge's expected sign of contrast.
 bool UsableFit(const EdgeFit& fit, double u0, double u1, int expected_sign) {
   return fit.converged && fit.edge_px > u0 + 1.0 && fit.edge_px < u1 - 1.0 &&
          fit.contrast * expected_sign > 0;
-}
-
-// The two edges as lines u = u0 + slope·s with a shared slope (parallel edges), least squares over
-// the calipers whose width agrees with the median (an occluded or damaged caliper must not tilt the
-// lines: the width's tilt correction depends on the slope).
-struct EdgeLines {
-  double left_u0 = 0, right_u0 = 0, slope = 0;
-  int calipers = 0;
-};
-
-EdgeLines FitEdgeLines(const std::vector<CaliperFit>& fits, double band_s0, double spacing) {
-  std::vector<double> widths;
-  for (const auto& cf : fits) {
-    if (cf.left.converged && cf.right.converged)
-      widths.push_back(cf.right.edge_px - cf.left.edge_px);
-  }
-  EdgeLines out;
-  if (widths.size() < 2) return out;
-  const double med = Median(widths);
-  const double tol = std::max(4.0 * kMadToSigma * Mad(widths, med), 0.1);
-  double n = 0, ss = 0, sss = 0, sl = 0, sr = 0, sls = 0, srs = 0;
-  for (size_t k = 0; k < fits.size(); ++k) {
-    const CaliperFit& cf = fits[k];
-    if (!cf.left.converged || !cf.right.converged) continue;
-    if (std::abs(cf.right.edge_px - cf.left.edge_px - med) > tol) continue;
-    const double s = band_s0 + (k + 0.5) * spacing;
-    n += 1;
-    ss += s;
-    sss += s * s;
-    sl += cf.left.edge_px;
-    sr += cf.right.edge_px;
-    sls += cf.left.edge_px * s;
-    srs += cf.right.edge_px * s;
-  }
-  if (n < 2) return out;
-  const double var_s = sss - ss * ss / n;
-  out.slope = var_s > 1e-9 ? ((sls - sl * ss / n) + (srs - sr * ss / n)) / (2 * var_s) : 0.0;
-  out.left_u0 = (sl - out.slope * ss) / n;
-  out.right_u0 = (sr - out.slope * ss) / n;
-  out.calipers = static_cast<int>(n);
-  return out;
-}
-
-// A caliper's edges from its lit cylinder.
-void TakeCylinder(const CylinderFit& cyl, CaliperFit* cf) {
-  cf->left.converged = cf->right.converged = cyl.converged;
-  cf->left.edge_px = cyl.left_px;
-  cf->right.edge_px = cyl.right_px;
-  cf->left.edge_sigma_px = cyl.left_sigma_px;
-  cf->right.edge_sigma_px = cyl.right_sigma_px;
-  cf->left.sigma_px = cf->right.sigma_px = cyl.sigma_px;
-  cf->width_sigma_px = cyl.width_sigma_px;
-}
-
-// Replaces each caliper's two per-edge fits by one lit cylinder across its whole profile (see
-// cylinder_fit.h): shared centre, radius, blur and shading, so the interior's curvature fixes the
-// shading that a per-edge fit trades against its edge. A caliper whose cylinder does not fit, or
-// whose silhouettes leave their windows, is dropped rather than mixed with per-edge widths.
-// structure_doubt_px (per side), when given: how far what the cylinders' residuals share near each
-// silhouette may have moved it (residual_structure.h). With a memory, each cylinder is kept as the
-// template of its caliper (cylinder_memory.h).
-void RefitAsCylinders(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
-                      double band_s0, double spacing, const EdgeLines& lines, double sigma_px,
-                      CylinderBackground background, std::vector<CaliperFit>* fits,
-                      double structure_doubt_px[2], CylinderMemory* memory) {
-  const double outer = CylinderReachPx(sigma_px);
-  std::vector<EdgeSample> samples;
-  // The residuals the calipers share near each silhouette (residual_structure.h): a profile the
-  // lit cylinder does not describe there (a codec's ringing about the shading's steep start,
-  // a stripe or halo beside the edge) moves both of its edges alike in every caliper.
-  ResidualStructure structure[2] = {ResidualStructure(outer), ResidualStructure(outer)};
-  std::vector<double> per_unit[2], residuals;
-  // Each caliper starts from its neighbour's blur: the fit then mostly has only the edges to move.
-  double sigma_start = sigma_px;
-  for (size_t k = 0; k < fits->size(); ++k) {
-    CaliperFit& cf = (*fits)[k];
-    const double s0 = band_s0 + k * spacing, sc = s0 + 0.5 * spacing;
-    const double l = lines.left_u0 + lines.slope * sc, r = lines.right_u0 + lines.slope * sc;
-    int clipped = 0;
-    CylinderFit cyl;
-    if (GatherCylinderSamples(img, f, clip, s0, s0 + spacing, l, r, sigma_px, &samples, &clipped))
-      cyl = FitLitCylinder(samples, l, r, sigma_start, background,
-                           structure_doubt_px ? &residuals : nullptr);
-    const bool ok = cyl.converged && std::abs(cyl.left_px - l) < outer - 1.0 &&
-                    std::abs(cyl.right_px - r) < outer - 1.0;
-    cf.left.converged = cf.right.converged = ok;
-    if (ok) sigma_start = cyl.sigma_px;
-    if (!ok) continue;
-    for (int side = 0; side < 2 && structure_doubt_px; ++side) {
-      int near = 0;
-      const double edge = side == 0 ? cyl.left_px : cyl.right_px;
-      for (size_t i = 0; i < samples.size(); ++i) {
-        const double du = samples[i].u_px - edge;
-        if (std::abs(du) > outer) continue;
-        structure[side].Add(du, residuals[i]);
-        ++near;
-      }
-      per_unit[side].push_back(SharedStructureEdgeDoubtPx(
-          1.0, cyl.rms, side == 0 ? cyl.left_sigma_px : cyl.right_sigma_px, near, 2 * outer));
-    }
-    if (memory) memory->Keep({s0, s0 + spacing, l, r, sigma_px, {}}, samples, cyl);
-    TakeCylinder(cyl, &cf);
-  }
-  for (int side = 0; side < 2 && structure_doubt_px; ++side) {
-    structure_doubt_px[side] =
-        per_unit[side].size() < 2 ? 0.0 : Median(per_unit[side]) * structure[side].SharedRms();
-  }
 }
 
 }  // namespace
@@ -376,11 +262,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     if (!(recentre || widen)) break;
   }
   if (from_memory) {
-    for (int k = 0; k < n_cal; ++k) {
-      TakeCylinder(tracked.fits[k], &fits[k]);
-      fits[k].left.contrast = CylinderEdgeContrast(tracked.fits[k], 0);
-      fits[k].right.contrast = CylinderEdgeContrast(tracked.fits[k], 1);
-    }
+    TakeTrackedCylinders(tracked, &fits);
     total_samples = tracked.samples;
     total_saturated = tracked.saturated;
     border = tracked.border;
