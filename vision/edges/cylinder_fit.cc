@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "common/robust.h"
+#include "vision/edges/cylinder_model.h"
 #include "vision/edges/fit_shapes.h"
 
 namespace clogscope::vision {
@@ -11,69 +12,14 @@ namespace {
 
 using fitcore::Mat;
 using fitcore::Vec;
-
-constexpr double kMinSigmaPx = 0.15;
-// Cauchy weights 1/(1 + (r/(c·s))²) with c = 2.385: 95 % efficiency on Gaussian noise.
-constexpr double kCauchyC = 2.385;
-
-// The model's shapes: the background left of the object (level at u_ref, slope) and right of it;
-// the object's a, k, l. Their amplitudes are linear parameters, then come the centre, radius and
-// blur.
-enum { kLeft0, kLeft1, kRight0, kRight1, kBox, kLit, kTilt, kShapes };
-
-// The seven shapes at one u, blurred, and their derivatives by centre, radius and blur.
-// With dl = u − c + R and dr = c + R − u the distances inside the left and right silhouettes,
-// a = dl/σ, b = dr/σ and x = u − u_ref:
-//   left = 1 − Φ(a),  left·x = x·(1 − Φ(a)) − σφ(a)   (exact: blurred 1[t < c − R] and t·1[…])
-//   right = 1 − Φ(b), right·x = x·(1 − Φ(b)) + σφ(b)
-//   box = Φ(a) + Φ(b) − 1                              (exact)
-//   tilt = [(u − c)·box + σ(φ(a) − φ(b))]/R            (exact: a blurred linear ramp on the box)
-//   lit = [σ·G(a)·G(b) − q·(G'(a) + G'(b))]/R,  q = σ^1.5 / (2√(2R))
-// The last blurs √(1 − x²) = √dl·√dr / R: the product of the blurred roots, corrected for the
-// other root's slope across each blurred edge (√dr ≈ √(2R)·(1 − dl/4R) near the left one, and
-// blurring √t·(t − z) gives G'(z)); what remains is of order (σ/R)² of k.
-struct Shapes {
-  double v[kShapes];
-  double d[kShapes][3];  // d[shape][c, R, σ]
-};
-
-inline void EvalShapes(double u, double u_ref, double c, double r, double s,
-                       const fitcore::BlurredSqrt& root, Shapes* out) {
-  const double inv_s = 1.0 / s, inv_r = 1.0 / r;
-  const double a = (u - c + r) * inv_s, b = (c + r - u) * inv_s;
-  double fa, pa, fb, pb, ga, gpa, gb, gpb, g2a, g2b;
-  fitcore::StepShape(a, &fa, &pa);
-  fitcore::StepShape(b, &fb, &pb);
-  root.WithCurvature(a, &ga, &gpa, &g2a);
-  root.WithCurvature(b, &gb, &gpb, &g2b);
-  const double x = u - c, xr = u - u_ref;
-  const auto set = [out](int i, double v, double dc, double dr, double ds) {
-    out->v[i] = v;
-    out->d[i][0] = dc;
-    out->d[i][1] = dr;
-    out->d[i][2] = ds;
-  };
-  set(kLeft0, 1.0 - fa, pa * inv_s, -pa * inv_s, a * pa * inv_s);
-  set(kLeft1, xr * (1.0 - fa) - s * pa, xr * pa * inv_s - a * pa, -xr * pa * inv_s + a * pa,
-      xr * a * pa * inv_s - pa - a * a * pa);
-  set(kRight0, 1.0 - fb, -pb * inv_s, -pb * inv_s, b * pb * inv_s);
-  set(kRight1, xr * (1.0 - fb) + s * pb, -xr * pb * inv_s - b * pb, -xr * pb * inv_s - b * pb,
-      xr * b * pb * inv_s + pb + b * b * pb);
-  const double box = fa + fb - 1.0;
-  set(kBox, box, (pb - pa) * inv_s, (pa + pb) * inv_s, -(a * pa + b * pb) * inv_s);
-  const double k = s * std::sqrt(s) / (2.0 * std::sqrt(2.0 * r));
-  const double q = k * (gpa + gpb);
-  const double q_c = k * (g2b - g2a) * inv_s;
-  const double q_r = -0.5 * q * inv_r + k * (g2a + g2b) * inv_s;
-  const double q_s = 1.5 * q * inv_s - k * (a * g2a + b * g2b) * inv_s;
-  const double lit = (s * ga * gb - q) * inv_r;
-  set(kLit, lit, (ga * gpb - gpa * gb - q_c) * inv_r, (gpa * gb + ga * gpb - q_r - lit) * inv_r,
-      (ga * gb - a * gpa * gb - b * ga * gpb - q_s) * inv_r);
-  const double tilt = (x * box + s * (pa - pb)) * inv_r;
-  set(kTilt, tilt, (-box + x * (pb - pa) * inv_s + a * pa + b * pb) * inv_r,
-      (x * (pa + pb) * inv_s - a * pa + b * pb - tilt) * inv_r,
-      (-x * (a * pa + b * pb) * inv_s + pa - pb + a * a * pa - b * b * pb) * inv_r);
-}
+using fitcore::cylinder::EvalShapes;
+using fitcore::cylinder::kBox;
+using fitcore::cylinder::kCauchyC;
+using fitcore::cylinder::kLit;
+using fitcore::cylinder::kMinSigmaPx;
+using fitcore::cylinder::kShapes;
+using fitcore::cylinder::kTilt;
+using fitcore::cylinder::Shapes;
 
 // The parameters: the backgrounds' (kBg = 4: each side its own line, the object opaque; kBg = 2:
 // one line through both sides and behind the object), the object's a, k, l; centre, radius, blur.
@@ -264,6 +210,8 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   out.background_right = p[right] + p[right + 1] * (out.right_px - u_ref);
   out.background_slope_left_per_px = p[1];
   out.background_slope_right_per_px = p[right + 1];
+  out.background = kBg == 4 ? CylinderBackground::kEachSide : CylinderBackground::kOneLine;
+  out.u_ref_px = u_ref;
   out.ambient = kBg == 4 ? p[kA] - 0.5 * (p[0] + p[2] + (p[1] + p[3]) * (p[kC] - u_ref)) : p[kA];
   out.shading = p[kK];
   out.tilt = p[kL];
@@ -294,6 +242,16 @@ CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_g
              ? FitCylinder<4>(samples, left_guess_px, right_guess_px, sigma_guess_px, residuals_out)
              : FitCylinder<2>(samples, left_guess_px, right_guess_px, sigma_guess_px,
                               residuals_out);
+}
+
+double CylinderEdgeContrast(const CylinderFit& fit, int side) {
+  const double u = side == 0 ? fit.left_px + 2.0 * fit.sigma_px : fit.right_px - 2.0 * fit.sigma_px;
+  Shapes sh;
+  EvalShapes(u, fit.u_ref_px, fit.centre_px, fit.radius_px, fit.sigma_px,
+             fitcore::BlurredSqrt::Get(), &sh);
+  const double object =
+      fit.ambient * sh.v[kBox] + fit.shading * sh.v[kLit] + fit.tilt * sh.v[kTilt];
+  return side == 0 ? object : -object;
 }
 
 }  // namespace clogscope::vision

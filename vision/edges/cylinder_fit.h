@@ -6,6 +6,18 @@
 
 namespace clogscope::vision {
 
+// The background of a lit cylinder (below): how its fit models what lies beside the object.
+enum class CylinderBackground {
+  // An object in front of a backdrop (a strand below the nozzle): an uneven lamp or a textured
+  // backdrop differs from one side to the other, and one line bent through both would move the
+  // silhouettes (up to 0.33 px measured).
+  kEachSide,
+  // One line, two parameters fewer: a filament's calipers, whose backgrounds beside it are gear
+  // teeth and guides as often as a backdrop (Greeff's real video: 281 of 281 frames valid at
+  // 137.65 px with one line, 274 at 137.91 px with a line each side).
+  kOneLine,
+};
+
 // A front-lit cylinder's whole profile across a caliper, blurred:
 //   value(u) = blur_σ{ 1[x < −1]·(bl₀ + bl₁·u) + 1[x > 1]·(br₀ + br₁·u)
 //                      + 1[|x| < 1]·(a + k·√(1 − x²) + l·x) },   x = (u − centre)/radius,
@@ -28,23 +40,14 @@ struct CylinderFit {
   // Each side's background at its silhouette, and its slope.
   double background_left = 0, background_right = 0;
   double background_slope_left_per_px = 0, background_slope_right_per_px = 0;
+  CylinderBackground background = CylinderBackground::kEachSide;  // the model fitted
+  double u_ref_px = 0;  // where the lines' levels are anchored: midway between the guessed edges
   double ambient = 0, shading = 0, tilt = 0;  // a (over the background behind the centre), k, l
   double rms = 0;                             // weighted residual RMS, grey levels
   double noise = 0;                           // robust residual scale (1.4826·MAD), grey levels
   int samples = 0;
   int outliers = 0;  // residuals beyond 4 robust σ
   int iterations = 0;
-};
-
-enum class CylinderBackground {
-  // An object in front of a backdrop (a strand below the nozzle): an uneven lamp or a textured
-  // backdrop differs from one side to the other, and one line bent through both would move the
-  // silhouettes (up to 0.33 px measured).
-  kEachSide,
-  // One line, two parameters fewer: a filament's calipers, whose backgrounds beside it are gear
-  // teeth and guides as often as a backdrop (Greeff's real video: 281 of 281 frames valid at
-  // 137.65 px with one line, 274 at 137.91 px with a line each side).
-  kOneLine,
 };
 
 // Fits the model to samples spanning both edges and the background beyond each, started from the
@@ -54,5 +57,10 @@ CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_g
                            double right_guess_px, double sigma_guess_px,
                            CylinderBackground background = CylinderBackground::kEachSide,
                            std::vector<double>* residuals_out = nullptr);
+
+// A fitted cylinder's contrast at one silhouette (side 0 left, 1 right), as a per-edge fit's
+// (EdgeFit::contrast): the object's part of the model (a, k, l; over the background behind it)
+// 2σ inside the silhouette, signed like the step from −u to +u there.
+double CylinderEdgeContrast(const CylinderFit& fit, int side);
 
 }  // namespace clogscope::vision

@@ -14,6 +14,9 @@
 #include "vision/edges/edge_fit.h"
 #include "vision/edges/residual_structure.h"
 #include "vision/edges/straight_run.h"
+#include "vision/scene/caliper_cylinders.h"
+#include "vision/scene/caliper_edges.h"
+#include "vision/scene/cylinder_memory.h"
 #include "vision/scene/self_check.h"
 
 namespace clogscope::vision {
@@ -23,6 +26,9 @@ constexpr double kRadToDeg = 180.0 / M_PI;
 // A side is shaded only when its edge also moves out by more than this under the shading model.
 constexpr double kMinShadingShiftPx = 0.1;
 constexpr int kReferenceCalipers = 5;  // outside the band, for the occlusion check
+// Tracking from templates: more of the band's calipers than this refusing theirs (the scene
+// changed) and the frame is measured as the first was.
+constexpr double kMaxRefusedTemplates = 0.25;
 // How far the tip may lie from where it was placed along the axis: set by the nozzle's face on
 // both sides of the strand, or inferred from the outline (tip.h).
 constexpr double kTipSigmaWidths = 0.25;  // an unconfirmed tip's doubt, in widths
@@ -47,15 +53,6 @@ bool ShadingEvident(const std::vector<double>& f) { return ShadingEvidenceSigmas
 // both sides move out under the shading model).
 constexpr double kShadingDoubtSigmas = 2.0;
 
-struct CaliperFit {
-  EdgeFit left, right;
-  EdgeFit left_shaded, right_shaded;  // while the model is undecided
-  double width_sigma_px = -1;         // set by a joint fit of both edges (their errors correlate)
-  bool inside_roi = true;
-  int saturated = 0;
-  int samples = 0;
-};
-
 // A fit counts when it converged inside its window [u0, u1] (not within 1 px of its ends) with
 // the edge's expected sign of contrast.
 bool UsableFit(const EdgeFit& fit, double u0, double u1, int expected_sign) {
@@ -63,120 +60,11 @@ bool UsableFit(const EdgeFit& fit, double u0, double u1, int expected_sign) {
          fit.contrast * expected_sign > 0;
 }
 
-// The two edges as lines u = u0 + slope·s with a shared slope (parallel edges), least squares over
-// the calipers whose width agrees with the median (an occluded or damaged caliper must not tilt the
-// lines: the width's tilt correction depends on the slope).
-struct EdgeLines {
-  double left_u0 = 0, right_u0 = 0, slope = 0;
-  int calipers = 0;
-};
-
-EdgeLines FitEdgeLines(const std::vector<CaliperFit>& fits, double band_s0, double spacing) {
-  std::vector<double> widths;
-  for (const auto& cf : fits) {
-    if (cf.left.converged && cf.right.converged)
-      widths.push_back(cf.right.edge_px - cf.left.edge_px);
-  }
-  EdgeLines out;
-  if (widths.size() < 2) return out;
-  const double med = Median(widths);
-  const double tol = std::max(4.0 * kMadToSigma * Mad(widths, med), 0.1);
-  double n = 0, ss = 0, sss = 0, sl = 0, sr = 0, sls = 0, srs = 0;
-  for (size_t k = 0; k < fits.size(); ++k) {
-    const CaliperFit& cf = fits[k];
-    if (!cf.left.converged || !cf.right.converged) continue;
-    if (std::abs(cf.right.edge_px - cf.left.edge_px - med) > tol) continue;
-    const double s = band_s0 + (k + 0.5) * spacing;
-    n += 1;
-    ss += s;
-    sss += s * s;
-    sl += cf.left.edge_px;
-    sr += cf.right.edge_px;
-    sls += cf.left.edge_px * s;
-    srs += cf.right.edge_px * s;
-  }
-  if (n < 2) return out;
-  const double var_s = sss - ss * ss / n;
-  out.slope = var_s > 1e-9 ? ((sls - sl * ss / n) + (srs - sr * ss / n)) / (2 * var_s) : 0.0;
-  out.left_u0 = (sl - out.slope * ss) / n;
-  out.right_u0 = (sr - out.slope * ss) / n;
-  out.calipers = static_cast<int>(n);
-  return out;
-}
-
-// Replaces each caliper's two per-edge fits by one lit cylinder across its whole profile (see
-// cylinder_fit.h): shared centre, radius, blur and shading, so the interior's curvature fixes the
-// shading that a per-edge fit trades against its edge. A caliper whose cylinder does not fit, or
-// whose silhouettes leave their windows, is dropped rather than mixed with per-edge widths.
-// structure_doubt_px (per side), when given: how far what the cylinders' residuals share near each
-// silhouette may have moved it (residual_structure.h).
-void RefitAsCylinders(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
-                      double band_s0, double spacing, const EdgeLines& lines, double sigma_px,
-                      CylinderBackground background, std::vector<CaliperFit>* fits,
-                      double structure_doubt_px[2]) {
-  const double outer = std::max(10.0, 3.0 * sigma_px + 2.5);
-  std::vector<EdgeSample> samples;
-  // The residuals the calipers share near each silhouette (residual_structure.h): a profile the
-  // lit cylinder does not describe there (a codec's ringing about the shading's steep start,
-  // a stripe or halo beside the edge) moves both of its edges alike in every caliper.
-  ResidualStructure structure[2] = {ResidualStructure(outer), ResidualStructure(outer)};
-  std::vector<double> per_unit[2], residuals;
-  // Each caliper starts from its neighbour's blur: the fit then mostly has only the edges to move.
-  double sigma_start = sigma_px;
-  for (size_t k = 0; k < fits->size(); ++k) {
-    CaliperFit& cf = (*fits)[k];
-    const double s0 = band_s0 + k * spacing, sc = s0 + 0.5 * spacing;
-    const double l = lines.left_u0 + lines.slope * sc, r = lines.right_u0 + lines.slope * sc;
-    int clipped = 0;
-    CylinderFit cyl;
-    if (GatherEdgeSamples(img, f, s0, s0 + spacing, l - outer, r + outer, clip, &samples,
-                          &clipped)) {
-      // Deep inside, the profile only tells the shading's amplitudes, which vary slowly: every
-      // fourth sample there does, and the fit costs a third.
-      const double keep = std::max(10.0, 3.0 * sigma_px + 4.0);
-      size_t n = 0;
-      for (size_t i = 0; i < samples.size(); ++i) {
-        const double u = samples[i].u_px;
-        if (u < l + keep || u > r - keep || i % 4 == 0) samples[n++] = samples[i];
-      }
-      samples.resize(n);
-      cyl = FitLitCylinder(samples, l, r, sigma_start, background,
-                           structure_doubt_px ? &residuals : nullptr);
-    }
-    const bool ok = cyl.converged && std::abs(cyl.left_px - l) < outer - 1.0 &&
-                    std::abs(cyl.right_px - r) < outer - 1.0;
-    cf.left.converged = cf.right.converged = ok;
-    if (ok) sigma_start = cyl.sigma_px;
-    if (!ok) continue;
-    for (int side = 0; side < 2 && structure_doubt_px; ++side) {
-      int near = 0;
-      const double edge = side == 0 ? cyl.left_px : cyl.right_px;
-      for (size_t i = 0; i < samples.size(); ++i) {
-        const double du = samples[i].u_px - edge;
-        if (std::abs(du) > outer) continue;
-        structure[side].Add(du, residuals[i]);
-        ++near;
-      }
-      per_unit[side].push_back(SharedStructureEdgeDoubtPx(
-          1.0, cyl.rms, side == 0 ? cyl.left_sigma_px : cyl.right_sigma_px, near, 2 * outer));
-    }
-    cf.left.edge_px = cyl.left_px;
-    cf.right.edge_px = cyl.right_px;
-    cf.left.edge_sigma_px = cyl.left_sigma_px;
-    cf.right.edge_sigma_px = cyl.right_sigma_px;
-    cf.left.sigma_px = cf.right.sigma_px = cyl.sigma_px;
-    cf.width_sigma_px = cyl.width_sigma_px;
-  }
-  for (int side = 0; side < 2 && structure_doubt_px; ++side) {
-    structure_doubt_px[side] =
-        per_unit[side].size() < 2 ? 0.0 : Median(per_unit[side]) * structure[side].SharedRms();
-  }
-}
-
 }  // namespace
 
 void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry& g, double band_s0,
-                     double band_s1, const StrandMeasureOptions& opt, StrandMeasurement* m) {
+                     double band_s1, const StrandMeasureOptions& opt, StrandMeasurement* m,
+                     CylinderMemory* memory) {
   auto fail = [&](FrameStatus st, std::string detail) {
     m->status = st;
     m->detail = std::move(detail);
@@ -253,11 +141,26 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   // hide: a quarter of it (at least 8 calipers) will do. A strand's short band must be clean.
   double min_used = filament ? std::max(8.0, 0.5 * opt.min_caliper_fraction * n_cal)
                              : opt.min_caliper_fraction * n_cal;
+  // Tracking a lit object: its calipers' cylinders from the templates the last full measurement
+  // left (cylinder_memory.h), without the per-edge fits, unless more than a few refuse the frame
+  // (the scene changed): then as in the first frame, which makes new templates.
+  if (!filament) memory = nullptr;  // templates have one background line: a filament's
+  if (memory) memory->Use(f, opt.caliper_spacing_px);
+  TrackedCylinders tracked;
+  bool from_memory = false;
+  const bool fit_in_full = memory && memory->fit_in_full_once;
+  if (memory) memory->fit_in_full_once = false;
+  if (memory && !fit_in_full && !memory->empty() && g.precise && shade[0] == 1 && shade[1] == 1 &&
+      g.left_sign == -g.right_sign) {
+    tracked = TrackCylinders(img, f, clip, band_s0, opt.caliper_spacing_px, n_cal, memory);
+    from_memory = tracked.refused <= kMaxRefusedTemplates * n_cal;
+    if (from_memory) ++memory->frames_from_templates;
+  }
   // Usually one pass. Another re-centres the windows on the fitted edge lines, or widens them to
   // the fitted blur; a badly blurred frame needs a few widenings before its fit sees the whole
   // edge.
   constexpr int kMaxPasses = 4;
-  for (int pass = 0; pass < kMaxPasses; ++pass) {
+  for (int pass = 0; pass < kMaxPasses && !from_memory; ++pass) {
     double outer = std::max(6.5, 3.0 * sigma_guess + 2.5);
     // A guess from the scene (a gradient peak) lies inside a shaded silhouette by a few px: the
     // first pass looks wider so that both plateaus are in its windows.
@@ -358,6 +261,13 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     sigma_guess = widen ? std::max(new_sigma, 0.6 * outer) : new_sigma;
     if (!(recentre || widen)) break;
   }
+  if (from_memory) {
+    TakeTrackedCylinders(tracked, &fits);
+    total_samples = tracked.samples;
+    total_saturated = tracked.saturated;
+    border = tracked.border;
+    sigma_guess = memory->sigma_px;
+  }
   if (border)
     return fail(FrameStatus::kTouchesBorder, "edge windows reach the frame or ROI border");
   // The windows from here on, at the blur and models the passes settled on.
@@ -410,15 +320,30 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   // pair (an edge and a shading step, filament and idler) must not become one by a richer model.
   // Then on every caliper: a knurl or gear tooth that spoils one edge's window spoils the
   // cylinder's less, which uses both edges and the interior.
-  if (shade[0] == 1 && shade[1] == 1 && g.left_sign == -g.right_sign &&
-      per_edge_consistent >= min_used) {
+  if (from_memory) {
+    const EdgeLines lines = FitEdgeLines(fits, band_s0, opt.caliper_spacing_px);
+    if (lines.calipers >= 2) {
+      left_guess = lines.left_u0;
+      right_guess = lines.right_u0;
+      slope_guess = lines.slope;
+    }
+    // The model's doubt is the scene's, as the full measurement found it.
+    cylinder_doubt_px = memory->cylinder_doubt_px;
+  } else if (shade[0] == 1 && shade[1] == 1 && g.left_sign == -g.right_sign &&
+             per_edge_consistent >= min_used) {
     EdgeLines lines;
     lines.left_u0 = left_guess;
     lines.right_u0 = right_guess;
     lines.slope = slope_guess;
     RefitAsCylinders(img, f, clip, band_s0, opt.caliper_spacing_px, lines, sigma_guess,
                      filament ? CylinderBackground::kOneLine : CylinderBackground::kEachSide, &fits,
-                     filament ? nullptr : cylinder_structure_px);
+                     filament ? nullptr : cylinder_structure_px, memory);
+    if (memory) {
+      memory->left_u0_px = lines.left_u0;
+      memory->right_u0_px = lines.right_u0;
+      memory->slope = lines.slope;
+      memory->sigma_px = sigma_guess;
+    }
     lines = FitEdgeLines(fits, band_s0, opt.caliper_spacing_px);
     if (lines.calipers >= 2) {
       // Two models of the same silhouette: each within its blur of it where it holds. Beyond
@@ -436,6 +361,9 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       right_guess = lines.right_u0;
       slope_guess = lines.slope;
     }
+    if (memory) memory->cylinder_doubt_px = cylinder_doubt_px;
+  } else if (memory) {
+    memory->Clear();  // not lit cylinders this time: nothing to track
   }
 
   // Per-caliper widths, robust combination.

@@ -225,7 +225,8 @@ StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOption
 
 StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameStatus status,
                                  const std::string& detail, const StrandGeometry& g,
-                                 const cv::Rect& roi, const StrandMeasureOptions& opt) {
+                                 const cv::Rect& roi, const StrandMeasureOptions& opt,
+                                 CylinderMemory* memory) {
   StrandMeasurement m;
   m.status = status;
   m.detail = detail;
@@ -271,7 +272,7 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
   if (opt.target == MeasureTarget::kStrand)
     calipers.caliper_spacing_px =
         (s1 - s0) / std::max(1.0, std::round((s1 - s0) / opt.caliper_spacing_px));
-  MeasureCalipers(img, data_max, g, s0, s1, calipers, &m);
+  MeasureCalipers(img, data_max, g, s0, s1, calipers, &m, memory);
   if (m.valid() && opt.target == MeasureTarget::kStrand) {
     if (g.tip_width_px > 0) m.swell_ratio = std::max(1.0, g.tip_width_px / m.width_px);
     const SelfCheck check =

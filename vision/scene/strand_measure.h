@@ -98,6 +98,7 @@ StrandMeasurement MeasureStrand(const cv::Mat& frame, const StrandMeasureOptions
 struct StrandGeometry;
 struct SceneOptions;
 struct SceneResult;
+class CylinderMemory;
 // MeasureStrand that also hands back the scene it found (candidates, verdicts, chosen geometry)
 // when scene_out is given: for tracking and for inspect.
 StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOptions& options,
@@ -105,10 +106,12 @@ StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOption
 
 // The second half of MeasureStrand: the band and calipers on a strand already found in `channel`
 // (the ROI view the scene chose). A status other than kValid is passed through with its detail.
-// Tracking calls it with the geometry of the last frame.
+// Tracking calls it with the geometry of the last frame, and for a filament with the memory of its
+// calipers' lit cylinders (cylinder_memory.h).
 StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameStatus status,
                                  const std::string& detail, const StrandGeometry& geometry,
-                                 const cv::Rect& roi, const StrandMeasureOptions& options);
+                                 const cv::Rect& roi, const StrandMeasureOptions& options,
+                                 CylinderMemory* memory = nullptr);
 
 // The ROI views the strand is looked for in: the grey frame, or a colour frame's luma and its B, G
 // and R channels (an orange strand on a blue background may show no luma edge at all); and one of

@@ -8,6 +8,15 @@
 namespace clogscope::vision {
 namespace {
 constexpr double kTipHysteresisPx = 1.5;  // tip moves smaller than this keep the band in place
+// A filament's straight part shorter than this many of its fewest calipers is short: a gear mark
+// or a speck split what was straight, and the part kept (FindStraightRun keeps it where it was),
+// however long it stays, may lie beside the mark. The whole stretch is looked at again, in full,
+// for a longer part in the first frame the part is short, then ever more rarely while it stays
+// short (its 2nd, 4th, 8th … frame), and at least every kRegrowAtMostFrames frames. (Greeff's real
+// video: a part of 10 calipers, kept 20 frames, read 137.38–137.49 px where the 17 found again then
+// read 137.65, and 4 of 281 widths were left out as outliers; with the looks, none.)
+constexpr int kShortStraightPartTimes = 2;
+constexpr int kRegrowAtMostFrames = 32;
 
 // True when a filament's width came from (part of) the straight part measured before, as
 // FindStraightRun keeps it while it has enough straight calipers.
@@ -17,6 +26,11 @@ bool KeptStraightPart(const StrandMeasurement& m, const StrandGeometry& before, 
          m.straight_end_px <= before.straight_s1_px + kSlackPx &&
          m.straight_end_px - m.straight_start_px >=
              StraightRunOptions{}.min_kept_calipers * spacing_px - kSlackPx;
+}
+
+// The calipers of a filament's straight part.
+int StraightCalipers(const StrandMeasurement& m, double spacing_px) {
+  return static_cast<int>(std::lround((m.straight_end_px - m.straight_start_px) / spacing_px));
 }
 }  // namespace
 
@@ -36,6 +50,8 @@ StrandMeasurement StrandTracker::Measure(const cv::Mat& frame) {
 
 StrandMeasurement StrandTracker::Detect(const cv::Mat& frame) {
   ++full_detections_;
+  cylinders_.Clear();  // perhaps another scene, or another channel of it
+  short_straight_frames_ = 0;
   SceneResult scene;
   StrandMeasurement m = FindAndMeasure(frame, options_, &scene);
   if (m.valid()) Remember(scene, m, frame.size());
@@ -87,14 +103,32 @@ bool StrandTracker::Follow(const cv::Mat& frame, StrandMeasurement* out) {
       take_tip();
     }
   }
+  CylinderMemory* cylinders = options_.target == MeasureTarget::kFilament ? &cylinders_ : nullptr;
   StrandMeasurement m =
-      MeasureInScene(channel, data_max, FrameStatus::kValid, "", g, roi, options_);
+      MeasureInScene(channel, data_max, FrameStatus::kValid, "", g, roi, options_, cylinders);
   if (options_.target == MeasureTarget::kFilament && g.straight_s1_px > g.straight_s0_px &&
       !KeptStraightPart(m, g, options_.caliper_spacing_px)) {
     // A filament is measured on its last straight part only (MeasureInScene); when that part no
     // longer holds, the whole stretch is looked at for the longest straight part again.
     g.straight_s0_px = g.straight_s1_px = 0;
-    m = MeasureInScene(channel, data_max, FrameStatus::kValid, "", g, roi, options_);
+    m = MeasureInScene(channel, data_max, FrameStatus::kValid, "", g, roi, options_, cylinders);
+    short_straight_frames_ = 0;
+  } else if (options_.target == MeasureTarget::kFilament && g.straight_s1_px > g.straight_s0_px) {
+    const double spacing = options_.caliper_spacing_px;
+    const bool short_part = StraightCalipers(m, spacing) <
+                            kShortStraightPartTimes * StraightRunOptions{}.min_kept_calipers;
+    short_straight_frames_ = short_part ? short_straight_frames_ + 1 : 0;
+    const int n = short_straight_frames_;
+    if (short_part && ((n & (n - 1)) == 0 || n % kRegrowAtMostFrames == 0)) {
+      // Perhaps straight again beyond it: the whole stretch's longest straight part, if longer.
+      StrandGeometry whole = g;
+      whole.straight_s0_px = whole.straight_s1_px = 0;
+      cylinders_.fit_in_full_once = true;
+      StrandMeasurement w = MeasureInScene(channel, data_max, FrameStatus::kValid, "", whole, roi,
+                                           options_, cylinders);
+      if (w.valid() && StraightCalipers(w, spacing) > StraightCalipers(m, spacing))
+        m = std::move(w);
+    }
   }
   // A frame that does not measure like the last one is looked at afresh.
   if (!m.valid() || std::abs(m.width_px - width_px_) > std::max(2.0, 0.03 * width_px_))

@@ -2,6 +2,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "vision/scene/cylinder_memory.h"
 #include "vision/scene/scene.h"
 #include "vision/scene/strand_measure.h"
 
@@ -20,10 +21,16 @@ class StrandTracker {
   StrandMeasurement Measure(const cv::Mat& frame);
 
   // Forgets the strand: the next frame is searched from scratch.
-  void Reset() { tracking_ = false; }
+  void Reset() {
+    tracking_ = false;
+    short_straight_frames_ = 0;
+    cylinders_.Clear();
+  }
 
   int full_detections() const { return full_detections_; }
   int tracked_frames() const { return tracked_frames_; }
+  // A filament's calipers' lit cylinders, kept as templates (cylinder_memory.h).
+  const CylinderMemory& cylinders() const { return cylinders_; }
 
  private:
   StrandMeasurement Detect(const cv::Mat& frame);
@@ -32,11 +39,13 @@ class StrandTracker {
 
   StrandMeasureOptions options_;
   bool tracking_ = false;
-  SceneResult scene_;  // the last good scene; its geometry holds the fitted edge lines
+  SceneResult scene_;         // the last good scene; its geometry holds the fitted edge lines
+  CylinderMemory cylinders_;  // a filament's calipers' lit cylinders, fitted as templates
   double width_px_ = 0;
   cv::Size frame_size_;
   int full_detections_ = 0;
   int tracked_frames_ = 0;
+  int short_straight_frames_ = 0;  // a filament's: frames in a row on a short straight part
 };
 
 }  // namespace clogscope::vision

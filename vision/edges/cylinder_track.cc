@@ -1,0 +1,210 @@
+#include "vision/edges/cylinder_track.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "common/robust.h"
+#include "vision/edges/cylinder_model.h"
+#include "vision/edges/fit_shapes.h"
+
+namespace clogscope::vision {
+namespace {
+
+using fitcore::Mat;
+using fitcore::Vec;
+using fitcore::cylinder::EvalShapes;
+using fitcore::cylinder::kCauchyC;
+using fitcore::cylinder::kMinSigmaPx;
+using fitcore::cylinder::Shapes;
+
+// The template's parameters: the one background line b₀ + b₁·(u − u_ref), amplitudes a, k, l as
+// the full (kOneLine) fit's, and the geometry as offsets from the template's centre, radius and
+// blur.
+enum { kB0, kB1, kA, kK, kL, kDc, kDr, kDs, kN };
+// The template's object shapes, in the order of the amplitudes a, k, l.
+constexpr fitcore::cylinder::Shape kObjectShapes[3] = {
+    fitcore::cylinder::kBox, fitcore::cylinder::kLit, fitcore::cylinder::kTilt};
+
+// The one line's level at u_ref from its level at the left silhouette.
+double LineLevel(const CylinderFit& fit) {
+  return fit.background_left - fit.background_slope_left_per_px * (fit.left_px - fit.u_ref_px);
+}
+
+// The Gauss–Newton system at q over all samples with Cauchy weights at the residuals and scale
+// `noise`, as the full fit's second run; keeps the residuals.
+struct System {
+  Mat<kN> jtj;
+  Vec<kN> jtr;
+  double wsum = 0, wrss = 0;
+};
+
+System Evaluate(const CylinderTemplate& t, const std::vector<EdgeSample>& samples, const Vec<kN>& q,
+                double noise, std::vector<double>* residuals) {
+  double h[kN][kN] = {}, g[kN] = {};
+  System out;
+  const double cs = kCauchyC * noise, inv_cs2 = 1.0 / (cs * cs);
+  const double amp[3] = {q[kA], q[kK], q[kL]};
+  const double dg[3] = {q[kDc], q[kDr], q[kDs]};
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const CylinderTemplate::Sample& s = t.samples[i];
+    double j[kN];
+    j[kB0] = 1.0;
+    j[kB1] = s.du_px;
+    double model = q[kB0] + q[kB1] * s.du_px;
+    for (int k = 0; k < 3; ++k) {
+      const double shape =
+          s.shape[k] + s.d_shape[k][0] * dg[0] + s.d_shape[k][1] * dg[1] + s.d_shape[k][2] * dg[2];
+      j[kA + k] = shape;
+      model += amp[k] * shape;
+    }
+    for (int k = 0; k < 3; ++k)
+      j[kDc + k] = amp[0] * s.d_shape[0][k] + amp[1] * s.d_shape[1][k] + amp[2] * s.d_shape[2][k];
+    const double r = model - samples[i].value;
+    (*residuals)[i] = r;
+    const double w = 1.0 / (1.0 + r * r * inv_cs2);
+    out.wsum += w;
+    out.wrss += w * r * r;
+    fitcore::Accumulate<kN>(j, r, w, h, g);
+  }
+  fitcore::Symmetric<kN>(h, g, &out.jtj, &out.jtr);
+  return out;
+}
+
+double RobustScale(const std::vector<double>& residuals) {
+  std::vector<double> a(residuals.size());
+  std::transform(residuals.begin(), residuals.end(), a.begin(),
+                 [](double r) { return std::abs(r); });
+  return std::max(kMadToSigma * Median(a), 1e-6);
+}
+
+}  // namespace
+
+const char* CylinderTrackRefusalName(CylinderTrackRefusal r) {
+  switch (r) {
+    case CylinderTrackRefusal::kNone:
+      return "none";
+    case CylinderTrackRefusal::kOtherSamples:
+      return "other_samples";
+    case CylinderTrackRefusal::kMoved:
+      return "moved";
+    case CylinderTrackRefusal::kShadingChanged:
+      return "shading_changed";
+    case CylinderTrackRefusal::kNoisier:
+      return "noisier";
+    case CylinderTrackRefusal::kNotConverged:
+      return "not_converged";
+  }
+  return "?";
+}
+
+bool MakeCylinderTemplate(const std::vector<EdgeSample>& samples, const CylinderFit& fit,
+                          CylinderTemplate* out) {
+  if (!fit.converged || fit.background != CylinderBackground::kOneLine || samples.empty() ||
+      fit.samples != static_cast<int>(samples.size()))
+    return false;
+  const auto& root = fitcore::BlurredSqrt::Get();
+  out->reference = fit;
+  out->samples.resize(samples.size());
+  out->first_u_px = samples.front().u_px;
+  out->last_u_px = samples.back().u_px;
+  // The full fit's bound (cylinder_fit.cc) about its own start; here about the fitted blur.
+  out->max_sigma_px = std::max(3.0 * fit.sigma_px, std::min(8.0, fit.radius_px / 3.0));
+  std::vector<double> residuals(samples.size());
+  const double b0 = LineLevel(fit);
+  for (size_t i = 0; i < samples.size(); ++i) {
+    Shapes sh;
+    EvalShapes(samples[i].u_px, fit.u_ref_px, fit.centre_px, fit.radius_px, fit.sigma_px, root,
+               &sh);
+    CylinderTemplate::Sample& s = out->samples[i];
+    s.du_px = static_cast<float>(samples[i].u_px - fit.u_ref_px);
+    for (int k = 0; k < 3; ++k) {
+      s.shape[k] = static_cast<float>(sh.v[kObjectShapes[k]]);
+      for (int m = 0; m < 3; ++m) s.d_shape[k][m] = static_cast<float>(sh.d[kObjectShapes[k]][m]);
+    }
+    const double model = b0 + fit.background_slope_left_per_px * s.du_px +
+                         fit.ambient * sh.v[kObjectShapes[0]] +
+                         fit.shading * sh.v[kObjectShapes[1]] + fit.tilt * sh.v[kObjectShapes[2]];
+    residuals[i] = model - samples[i].value;
+  }
+  out->noise = RobustScale(residuals);
+  return true;
+}
+
+CylinderTrackRefusal TrackLitCylinder(const CylinderTemplate& t,
+                                      const std::vector<EdgeSample>& samples,
+                                      const CylinderTrackOptions& opt, CylinderFit* out) {
+  const CylinderFit& ref = t.reference;
+  *out = CylinderFit{};
+  out->samples = static_cast<int>(samples.size());
+  if (samples.size() != t.samples.size() || samples.empty() ||
+      samples.front().u_px != t.first_u_px || samples.back().u_px != t.last_u_px)
+    return CylinderTrackRefusal::kOtherSamples;
+  Vec<kN> q;
+  q << LineLevel(ref), ref.background_slope_left_per_px, ref.ambient, ref.shading, ref.tilt, 0, 0,
+      0;
+  std::vector<double> residuals(samples.size());
+  const auto step = [](const System& s) -> Vec<kN> {
+    Mat<kN> a = s.jtj;
+    a.diagonal().array() += 1e-12;
+    return a.ldlt().solve(-s.jtr);
+  };
+  // Cauchy weights at the scale the full fit would take: the full fit takes its scale once per
+  // fit, from the residuals of a first weighted fit, and on real profiles its width moves with
+  // that scale (half a px per unit of relative change on Greeff's video: knurl and compression
+  // leave structure the model lacks). The reference's scale, then, in the ratio of this frame's
+  // residuals to the reference's, once the first steps have brought the fit near its minimum.
+  constexpr int kMaxIterations = 8, kScaleIteration = 1;
+  double noise = ref.noise;
+  System sys;
+  bool converged = false;
+  for (int it = 0; it < kMaxIterations && !converged; ++it) {
+    sys = Evaluate(t, samples, q, noise, &residuals);
+    if (it == kScaleIteration) noise = ref.noise * RobustScale(residuals) / t.noise;
+    const Vec<kN> d = step(sys);
+    q += d;
+    out->iterations = it + 1;
+    // The full fit's tolerance (cylinder_fit.cc).
+    converged = it > kScaleIteration && std::abs(d[kDc]) < 1e-3 && std::abs(d[kDr]) < 1e-3 &&
+                std::abs(d[kDs]) < 1e-2;
+  }
+  if (!converged || !q.allFinite()) return CylinderTrackRefusal::kNotConverged;
+  const double sigma = ref.sigma_px + q[kDs];
+  if (std::abs(q[kDc]) > opt.max_shift_px || std::abs(q[kDr]) > opt.max_shift_px ||
+      std::abs(q[kDs]) > opt.max_blur_change_px || sigma < kMinSigmaPx || sigma > t.max_sigma_px)
+    return CylinderTrackRefusal::kMoved;
+  const double shading_change =
+      std::abs(q[kA] - ref.ambient) + std::abs(q[kK] - ref.shading) + std::abs(q[kL] - ref.tilt);
+  if (shading_change > opt.max_shading_change_fraction * std::abs(ref.ambient + ref.shading))
+    return CylinderTrackRefusal::kShadingChanged;
+  if (noise > opt.max_noise_ratio * ref.noise) return CylinderTrackRefusal::kNoisier;
+
+  out->converged = true;
+  out->centre_px = ref.centre_px + q[kDc];
+  out->radius_px = ref.radius_px + q[kDr];
+  out->left_px = out->centre_px - out->radius_px;
+  out->right_px = out->centre_px + out->radius_px;
+  out->sigma_px = sigma;
+  out->background = CylinderBackground::kOneLine;
+  out->u_ref_px = ref.u_ref_px;
+  out->background_left = q[kB0] + q[kB1] * (out->left_px - ref.u_ref_px);
+  out->background_right = q[kB0] + q[kB1] * (out->right_px - ref.u_ref_px);
+  out->background_slope_left_per_px = out->background_slope_right_per_px = q[kB1];
+  out->ambient = q[kA];
+  out->shading = q[kK];
+  out->tilt = q[kL];
+  out->noise = noise;
+  // As the full fit: the weighted residuals at the last system (its step below the tolerance),
+  // their variance and the covariance from the weighted normal matrix.
+  for (double r : residuals)
+    if (std::abs(r) > 4.0 * noise) ++out->outliers;
+  out->rms = std::sqrt(sys.wrss / std::max(sys.wsum, 1.0));
+  const double dof = sys.wsum * (1.0 - static_cast<double>(kN) / samples.size());
+  const double var = dof > 0 ? sys.wrss / dof : 0.0;
+  const Mat<kN> cov = sys.jtj.ldlt().solve(Mat<kN>::Identity()) * var;
+  out->left_sigma_px = std::sqrt(std::max(0.0, cov(kDc, kDc) + cov(kDr, kDr) - 2 * cov(kDc, kDr)));
+  out->right_sigma_px = std::sqrt(std::max(0.0, cov(kDc, kDc) + cov(kDr, kDr) + 2 * cov(kDc, kDr)));
+  out->width_sigma_px = 2.0 * std::sqrt(std::max(0.0, cov(kDr, kDr)));
+  return CylinderTrackRefusal::kNone;
+}
+
+}  // namespace clogscope::vision

@@ -1,0 +1,74 @@
+#pragma once
+
+// A lit cylinder fitted in full once (cylinder_fit.h), fitted again in later frames of a steady
+// scene as a template: the model's three shapes (box, lit, tilt) and their derivatives by centre,
+// radius and blur are kept at each of the caliper's samples, so that a later frame's fit on the
+// same pixels needs no shape evaluated again. The template's model is exact in the background and
+// the three amplitudes (a change of lighting is followed), and first order in the geometry: it
+// refuses when the centre, radius or blur moved further than its first order holds, and when the
+// profile no longer looks like the template's (more noise, other shading), rather than give a
+// width the full fit would not.
+#include <array>
+#include <vector>
+
+#include "vision/edges/cylinder_fit.h"
+#include "vision/edges/edge_fit.h"
+
+namespace clogscope::vision {
+
+struct CylinderTemplate {
+  // One sample's u − u_ref, shapes and their derivatives d[shape][centre, radius, blur], at the
+  // reference geometry. (Floats: the shapes are of order 1, the model needs 1e-5 of them.)
+  struct Sample {
+    float du_px;
+    float shape[3];
+    float d_shape[3][3];
+  };
+  std::vector<Sample> samples;
+  double noise = 0;  // robust scale (1.4826·MAD) of the reference fit's residuals, grey levels
+  float first_u_px = 0, last_u_px = 0;  // the samples' ends, to tell that they are the same pixels
+  CylinderFit reference;                // the full fit the template was made from
+  double max_sigma_px = 0;              // the full fit's bound on the blur
+};
+
+// Limits beyond which the template refuses. Lengths in px.
+struct CylinderTrackOptions {
+  // Centre or radius this far from the template's: beyond its first order's reach (untested
+  // beyond this; a fit from afresh makes a new template).
+  double max_shift_px = 0.3;
+  double max_blur_change_px = 0.3;
+  // The residuals' robust scale above this many times the template's: something the template does
+  // not describe (a particle, a gear tooth, a change of the scene).
+  double max_noise_ratio = 1.5;
+  // The object's brightness above the background (its amplitudes a, k, l) changed by more than
+  // this fraction of the template's a + k: the lighting changed, and the template's shading with
+  // it.
+  double max_shading_change_fraction = 0.15;
+};
+
+// Why a template was not fitted to a frame.
+enum class CylinderTrackRefusal {
+  kNone,
+  kOtherSamples,    // not the template's pixels
+  kMoved,           // centre, radius or blur beyond the options' limits
+  kShadingChanged,  // amplitudes beyond max_shading_change_fraction
+  kNoisier,         // residual scale beyond max_noise_ratio
+  kNotConverged,
+};
+const char* CylinderTrackRefusalName(CylinderTrackRefusal r);
+
+// The template of a converged full fit with one background line (CylinderBackground::kOneLine) on
+// `samples` (the same samples it was fitted to). False when the fit did not converge or has a line
+// each side.
+bool MakeCylinderTemplate(const std::vector<EdgeSample>& samples, const CylinderFit& fit,
+                          CylinderTemplate* out);
+
+// Fits the template to `samples`, the template's pixels in a later frame: Gauss–Newton steps on
+// the full fit's robust (Cauchy) loss, at the reference fit's scale. On
+// success fills *out as FitLitCylinder would (edges, their σ from the weighted normal matrix,
+// blur, amplitudes, noise) and returns kNone; otherwise the reason, and *out is not converged.
+CylinderTrackRefusal TrackLitCylinder(const CylinderTemplate& t,
+                                      const std::vector<EdgeSample>& samples,
+                                      const CylinderTrackOptions& options, CylinderFit* out);
+
+}  // namespace clogscope::vision

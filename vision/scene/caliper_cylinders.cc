@@ -1,0 +1,77 @@
+#include "vision/scene/caliper_cylinders.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "common/robust.h"
+#include "vision/edges/residual_structure.h"
+
+namespace clogscope::vision {
+
+void TakeCylinder(const CylinderFit& cyl, CaliperFit* cf) {
+  cf->left.converged = cf->right.converged = cyl.converged;
+  cf->left.edge_px = cyl.left_px;
+  cf->right.edge_px = cyl.right_px;
+  cf->left.edge_sigma_px = cyl.left_sigma_px;
+  cf->right.edge_sigma_px = cyl.right_sigma_px;
+  cf->left.sigma_px = cf->right.sigma_px = cyl.sigma_px;
+  cf->width_sigma_px = cyl.width_sigma_px;
+}
+
+void TakeTrackedCylinders(const TrackedCylinders& tracked, std::vector<CaliperFit>* fits) {
+  for (size_t k = 0; k < fits->size(); ++k) {
+    TakeCylinder(tracked.fits[k], &(*fits)[k]);
+    (*fits)[k].left.contrast = CylinderEdgeContrast(tracked.fits[k], 0);
+    (*fits)[k].right.contrast = CylinderEdgeContrast(tracked.fits[k], 1);
+  }
+}
+
+void RefitAsCylinders(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
+                      double band_s0, double spacing, const EdgeLines& lines, double sigma_px,
+                      CylinderBackground background, std::vector<CaliperFit>* fits,
+                      double structure_doubt_px[2], CylinderMemory* memory) {
+  const double outer = CylinderReachPx(sigma_px);
+  std::vector<EdgeSample> samples;
+  // The residuals the calipers share near each silhouette (residual_structure.h): a profile the
+  // lit cylinder does not describe there (a codec's ringing about the shading's steep start,
+  // a stripe or halo beside the edge) moves both of its edges alike in every caliper.
+  ResidualStructure structure[2] = {ResidualStructure(outer), ResidualStructure(outer)};
+  std::vector<double> per_unit[2], residuals;
+  // Each caliper starts from its neighbour's blur: the fit then mostly has only the edges to move.
+  double sigma_start = sigma_px;
+  for (size_t k = 0; k < fits->size(); ++k) {
+    CaliperFit& cf = (*fits)[k];
+    const double s0 = band_s0 + k * spacing, sc = s0 + 0.5 * spacing;
+    const double l = lines.left_u0 + lines.slope * sc, r = lines.right_u0 + lines.slope * sc;
+    int clipped = 0;
+    CylinderFit cyl;
+    if (GatherCylinderSamples(img, f, clip, s0, s0 + spacing, l, r, sigma_px, &samples, &clipped))
+      cyl = FitLitCylinder(samples, l, r, sigma_start, background,
+                           structure_doubt_px ? &residuals : nullptr);
+    const bool ok = cyl.converged && std::abs(cyl.left_px - l) < outer - 1.0 &&
+                    std::abs(cyl.right_px - r) < outer - 1.0;
+    cf.left.converged = cf.right.converged = ok;
+    if (ok) sigma_start = cyl.sigma_px;
+    if (!ok) continue;
+    for (int side = 0; side < 2 && structure_doubt_px; ++side) {
+      int near = 0;
+      const double edge = side == 0 ? cyl.left_px : cyl.right_px;
+      for (size_t i = 0; i < samples.size(); ++i) {
+        const double du = samples[i].u_px - edge;
+        if (std::abs(du) > outer) continue;
+        structure[side].Add(du, residuals[i]);
+        ++near;
+      }
+      per_unit[side].push_back(SharedStructureEdgeDoubtPx(
+          1.0, cyl.rms, side == 0 ? cyl.left_sigma_px : cyl.right_sigma_px, near, 2 * outer));
+    }
+    if (memory) memory->Keep({s0, s0 + spacing, l, r, sigma_px, {}}, samples, cyl);
+    TakeCylinder(cyl, &cf);
+  }
+  for (int side = 0; side < 2 && structure_doubt_px; ++side) {
+    structure_doubt_px[side] =
+        per_unit[side].size() < 2 ? 0.0 : Median(per_unit[side]) * structure[side].SharedRms();
+  }
+}
+
+}  // namespace clogscope::vision

@@ -1,0 +1,112 @@
+#include "vision/scene/cylinder_memory.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace clogscope::vision {
+namespace {
+long Key(double s0_px) { return std::lround(s0_px * 1024.0); }
+}  // namespace
+
+double CylinderReachPx(double sigma_px) { return std::max(10.0, 3.0 * sigma_px + 2.5); }
+
+bool GatherCylinderSamples(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
+                           double s0_px, double s1_px, double left_px, double right_px,
+                           double sigma_px, std::vector<EdgeSample>* samples, int* clipped) {
+  const double outer = CylinderReachPx(sigma_px);
+  if (!GatherEdgeSamples(img, f, s0_px, s1_px, left_px - outer, right_px + outer, clip, samples,
+                         clipped))
+    return false;
+  // Deep inside, the profile only tells the shading's amplitudes, which vary slowly: every fourth
+  // sample there does, and the fit costs a third.
+  const double keep = std::max(10.0, 3.0 * sigma_px + 4.0);
+  size_t n = 0;
+  for (size_t i = 0; i < samples->size(); ++i) {
+    const double u = (*samples)[i].u_px;
+    if (u < left_px + keep || u > right_px - keep || i % 4 == 0) (*samples)[n++] = (*samples)[i];
+  }
+  samples->resize(n);
+  return true;
+}
+
+void CylinderMemory::Use(const AxisFrame& f, double spacing_px) {
+  if (f.ox == frame_.ox && f.oy == frame_.oy && f.dx == frame_.dx && f.dy == frame_.dy &&
+      spacing_px == spacing_px_)
+    return;
+  calipers_.clear();
+  frame_ = f;
+  spacing_px_ = spacing_px;
+}
+
+const CylinderMemory::Caliper* CylinderMemory::Find(double s0_px) const {
+  const auto it = calipers_.find(Key(s0_px));
+  return it == calipers_.end() ? nullptr : &it->second;
+}
+
+void CylinderMemory::Keep(const Caliper& slab, const std::vector<EdgeSample>& samples,
+                          const CylinderFit& fit) {
+  Caliper c = slab;
+  if (MakeCylinderTemplate(samples, fit, &c.cylinder))
+    calipers_[Key(slab.s0_px)] = std::move(c);
+  else
+    calipers_.erase(Key(slab.s0_px));
+}
+
+TrackedCylinders TrackCylinders(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
+                                double band_s0_px, double spacing_px, int n,
+                                CylinderMemory* memory) {
+  TrackedCylinders out;
+  out.fits.resize(n);
+  std::vector<EdgeSample> samples;
+  const CylinderTrackOptions options;
+  for (int k = 0; k < n; ++k) {
+    const double s0 = band_s0_px + k * spacing_px, s1 = s0 + spacing_px;
+    CylinderFit& fit = out.fits[k];
+    int clipped = 0;
+    CylinderMemory::Caliper slab;
+    const double sc = 0.5 * (s0 + s1);
+    slab.s0_px = s0;
+    slab.s1_px = s1;
+    slab.left_px = memory->left_u0_px + memory->slope * sc;
+    slab.right_px = memory->right_u0_px + memory->slope * sc;
+    slab.sigma_px = memory->sigma_px;
+    if (const CylinderMemory::Caliper* c = memory->Find(s0)) {
+      if (!GatherCylinderSamples(img, f, clip, c->s0_px, c->s1_px, c->left_px, c->right_px,
+                                 c->sigma_px, &samples, &clipped)) {
+        out.border = true;
+        continue;
+      }
+      const auto refusal = TrackLitCylinder(c->cylinder, samples, options, &fit);
+      if (refusal == CylinderTrackRefusal::kNone) {
+        ++out.from_template;
+        out.samples += static_cast<int>(samples.size());
+        out.saturated += clipped;
+        continue;
+      }
+      ++out.refused;
+      clipped = 0;
+      slab.left_px = c->left_px;
+      slab.right_px = c->right_px;
+      slab.sigma_px = c->sigma_px;
+    }
+    // In full, as calipers.cc's RefitAsCylinders (a cylinder whose silhouettes leave their slab
+    // does not count).
+    if (!GatherCylinderSamples(img, f, clip, s0, s1, slab.left_px, slab.right_px, slab.sigma_px,
+                               &samples, &clipped)) {
+      out.border = true;
+      continue;
+    }
+    out.samples += static_cast<int>(samples.size());
+    out.saturated += clipped;
+    ++out.fitted_in_full;
+    fit = FitLitCylinder(samples, slab.left_px, slab.right_px, slab.sigma_px,
+                         CylinderBackground::kOneLine);
+    const double outer = CylinderReachPx(slab.sigma_px);
+    fit.converged = fit.converged && std::abs(fit.left_px - slab.left_px) < outer - 1.0 &&
+                    std::abs(fit.right_px - slab.right_px) < outer - 1.0;
+    if (fit.converged) memory->Keep(slab, samples, fit);
+  }
+  return out;
+}
+
+}  // namespace clogscope::vision

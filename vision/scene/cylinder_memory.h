@@ -1,0 +1,81 @@
+#pragma once
+
+#include <map>
+#include <vector>
+
+#include "vision/edges/caliper_samples.h"
+#include "vision/edges/cylinder_track.h"
+#include "vision/edges/grey_image.h"
+
+namespace clogscope::vision {
+
+// How far beyond each edge a caliper's lit cylinder is fitted, for a blur sigma_px.
+double CylinderReachPx(double sigma_px);
+
+// The pixels one caliper's lit cylinder is fitted to: the slab s0 <= s < s1 across both edges
+// (left_px and right_px at its middle) and far enough beyond them for a blur sigma_px, every
+// fourth pixel deep inside the object. Counts clipped pixels in *clipped; false when the slab
+// leaves the image.
+bool GatherCylinderSamples(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
+                           double s0_px, double s1_px, double left_px, double right_px,
+                           double sigma_px, std::vector<EdgeSample>* samples, int* clipped);
+
+// A filament's calipers as lit cylinders, kept from the frames that fitted them in full, for the
+// next frames of the same scene (the same axis frame and caliper grid): each caliper's template
+// (cylinder_track.h) and the slab it was fitted on.
+class CylinderMemory {
+ public:
+  struct Caliper {
+    double s0_px = 0, s1_px = 0, left_px = 0, right_px = 0, sigma_px = 0;  // its slab
+    CylinderTemplate cylinder;
+  };
+
+  // Forgets the templates unless they were made in axis frame f on calipers `spacing_px` long.
+  void Use(const AxisFrame& f, double spacing_px);
+  void Clear() { calipers_.clear(); }
+  bool empty() const { return calipers_.empty(); }
+
+  // The caliper starting at s0_px, or null.
+  const Caliper* Find(double s0_px) const;
+  // Keeps a caliper's full fit on `samples` (gathered as GatherCylinderSamples with its slab).
+  void Keep(const Caliper& slab, const std::vector<EdgeSample>& samples, const CylinderFit& fit);
+
+  // What the full measurement that made the templates found beyond the fits: the edge lines
+  // u = left_u0 + slope·s (right likewise) and the blur of its per-edge fits, about which its
+  // cylinders were fitted, and how far their edges lay from the per-edge fits' beyond the blur
+  // (calipers.cc).
+  double left_u0_px = 0, right_u0_px = 0, slope = 0;
+  double sigma_px = 0;
+  double cylinder_doubt_px = 0;
+  // Frames measured from the templates (calipers.cc counts them; for tests and benches).
+  int frames_from_templates = 0;
+  // The next measurement fits every caliper in full, as the first frame, keeping templates
+  // (calipers.cc clears it): a look at the whole stretch, most of whose calipers the templates do
+  // not describe (a gear's marks), whose tracked fits would be refused and then done in full
+  // anyway.
+  bool fit_in_full_once = false;
+
+ private:
+  AxisFrame frame_;
+  double spacing_px_ = 0;
+  std::map<long, Caliper> calipers_;  // by s0 in 1/1024 px
+};
+
+// Every caliper of [band_s0_px, band_s0_px + n·spacing_px) fitted as a lit cylinder: from its
+// template where it has one that holds in this frame; else in full (FitLitCylinder on the
+// template's slab, or on one about the memory's lines), its template then kept. The slabs stay
+// where the full measurement put them: on real profiles the full fit's width moves with the
+// pixels it is given by a tenth of a px.
+struct TrackedCylinders {
+  std::vector<CylinderFit> fits;  // per caliper; not converged where neither fit held
+  bool border = false;            // a slab left the image
+  int samples = 0, saturated = 0;
+  int from_template = 0;
+  int refused = 0;  // templates that refused the frame (cylinder_track.h), then fitted in full
+  int fitted_in_full = 0;
+};
+TrackedCylinders TrackCylinders(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
+                                double band_s0_px, double spacing_px, int n,
+                                CylinderMemory* memory);
+
+}  // namespace clogscope::vision
