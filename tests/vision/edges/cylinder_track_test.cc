@@ -6,6 +6,7 @@
 #include <random>
 #include <vector>
 
+#include "tests/running_stats.h"
 #include "vision/edges/cylinder_fit.h"
 
 namespace clogscope::vision {
@@ -61,17 +62,7 @@ CylinderTemplate ReferenceTemplate(std::mt19937* rng) {
   return t;
 }
 
-struct Stats {
-  int n = 0;
-  double s1 = 0, s2 = 0;
-  void Add(double e) {
-    ++n;
-    s1 += e;
-    s2 += e * e;
-  }
-  double mean() const { return s1 / n; }
-  double sd() const { return std::sqrt(std::max(0.0, s2 / n - mean() * mean())); }
-};
+using Stats = testing::RunningStats;
 
 // Frames whose cylinder moved by less than the template's limit: its edges as unbiased as a full
 // fit's on the same pixels, as scattered, and its σ describing the scatter. Measured over 100

@@ -7,6 +7,7 @@
 #include <cstdio>
 
 #include "synthetic/synthetic.h"
+#include "tests/running_stats.h"
 #include "vision/scene/strand_measure.h"
 
 namespace clogscope::vision {
@@ -27,17 +28,7 @@ StrandMeasureOptions OptionsFor(const SceneParams& p) {
   return o;
 }
 
-struct Stats {
-  int n = 0;
-  double s1 = 0, s2 = 0;
-  void Add(double e) {
-    ++n;
-    s1 += e;
-    s2 += e * e;
-  }
-  double mean() const { return s1 / n; }
-  double sd() const { return std::sqrt(std::max(0.0, s2 / n - mean() * mean())); }
-};
+using Stats = testing::RunningStats;
 
 // 200 frames: either polarity, tilt ±20°, blur to 3 px, any nozzle or none, texture, discs, gears,
 // shading, clear strands, colour on colour, vignetting, gradients, highlights, beds.
