@@ -22,7 +22,8 @@ std::shared_ptr<const std::vector<unsigned char>> OverlayJpegCache::Latest() {
   const WatchSnapshot s = board_->Read();
   if (s.frame.empty()) return nullptr;
   std::lock_guard<std::mutex> lock(mutex_);
-  if (!jpeg_ || s.sequence != sequence_) {
+  // A reader that took its snapshot before another drew a newer one gets the newer picture.
+  if (!jpeg_ || s.sequence > sequence_) {
     jpeg_ = std::make_shared<const std::vector<unsigned char>>(OverlayJpeg(s, conversion_));
     sequence_ = s.sequence;
   }

@@ -62,7 +62,11 @@ bool PausePolicy::OnPrinterState(double time_s, PrintState state) {
     retry_after_s_.reset();
     holdoff_until_s_ = time_s + options_.holdoff_s;
   } else if (state == PrintState::kIdle) {
-    seen_paused_ = false;  // the job ended: a new one starts armed, without a hold-off
+    // The job ended: a new one starts armed, without a hold-off, a retry or a pause already made.
+    seen_paused_ = false;
+    episode_paused_ = false;
+    retry_after_s_.reset();
+    holdoff_until_s_.reset();
   }
   // kUnknown (no answer) keeps seen_paused_: an outage in between is no resume by itself.
   state_ = state;

@@ -41,7 +41,8 @@ constexpr double kBaselineUm = 400.0, kNarrowedUm = 360.0;  // −10 %: past the
 constexpr double kWindowS = 1.0;
 // The measurement's accuracy on these rendered frames: a pixel at 3 µm/px (0.8 % of the strand).
 constexpr double kToleranceUm = kScaleUmPerPx;
-constexpr const char* kToken = "page-test-token-0123456789";
+// As `base64` makes them: with "+" and "/", which a form decoder would spoil.
+constexpr const char* kToken = "page+test/token-0123456789==";
 // The page's colours (watch/web/index.html): the diameter line, and clog's.
 const cv::Vec3b kLineBgr(180, 119, 31);
 const cv::Vec3b kClogBgr(40, 39, 214);

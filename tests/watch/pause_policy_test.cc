@@ -147,6 +147,22 @@ TEST(PausePolicyTest, AJobThatEndsWhilePausedIsNoResume) {
   EXPECT_FALSE(p.holdoff_until_s());
 }
 
+// Resumed, then cancelled and a new print started within the resume's hold-off: the new job's
+// clog pauses it at once (the hold-off, and the episode's pause, were the old job's).
+TEST(PausePolicyTest, ANewJobWithinTheOldOnesHoldOffIsPausedOnItsClog) {
+  Sim sim;  // hold-off 60 s
+  sim.Run(0, 5, L::kOk, P::kPrinting);
+  sim.Run(5, 6, L::kClog, P::kPrinting);  // paused at 5 s
+  sim.Run(6, 8, L::kClog, P::kPaused);
+  sim.Run(8, 10, L::kClog, P::kPrinting);  // resumed at 8 s: held off until 68 s
+  ASSERT_EQ(sim.pauses_s.size(), 1u);
+  sim.Run(10, 12, L::kClog, P::kIdle);  // cancelled
+  sim.Run(12, 15, L::kOk, P::kPrinting);
+  sim.Run(15, 16, L::kClog, P::kPrinting);
+  ASSERT_EQ(sim.pauses_s.size(), 2u);
+  EXPECT_DOUBLE_EQ(sim.pauses_s[1], 15.0);
+}
+
 TEST(PausePolicyTest, OptionsNameTheirFlag) {
   std::string why;
   PausePolicyOptions o;
