@@ -51,6 +51,9 @@ void RefitAsCylinders(const GreyImage& img, const AxisFrame& f, const ClipLevels
     const bool ok = cyl.converged && std::abs(cyl.left_px - l) < outer - 1.0 &&
                     std::abs(cyl.right_px - r) < outer - 1.0;
     cf.left.converged = cf.right.converged = ok;
+    cyl.converged = ok;
+    // A caliper whose fit failed loses its template: counted as none, not as refused every frame.
+    if (memory) memory->Keep({s0, s0 + spacing, l, r, sigma_px, {}}, samples, cyl);
     if (ok) sigma_start = cyl.sigma_px;
     if (!ok) continue;
     for (int side = 0; side < 2 && structure_doubt_px; ++side) {
@@ -65,7 +68,6 @@ void RefitAsCylinders(const GreyImage& img, const AxisFrame& f, const ClipLevels
       per_unit[side].push_back(SharedStructureEdgeDoubtPx(
           1.0, cyl.rms, side == 0 ? cyl.left_sigma_px : cyl.right_sigma_px, near, 2 * outer));
     }
-    if (memory) memory->Keep({s0, s0 + spacing, l, r, sigma_px, {}}, samples, cyl);
     TakeCylinder(cyl, &cf);
   }
   for (int side = 0; side < 2 && structure_doubt_px; ++side) {

@@ -104,7 +104,7 @@ TrackedCylinders TrackCylinders(const GreyImage& img, const AxisFrame& f, const 
     const double outer = CylinderReachPx(slab.sigma_px);
     fit.converged = fit.converged && std::abs(fit.left_px - slab.left_px) < outer - 1.0 &&
                     std::abs(fit.right_px - slab.right_px) < outer - 1.0;
-    if (fit.converged) memory->Keep(slab, samples, fit);
+    memory->Keep(slab, samples, fit);  // a failed fit drops the caliper's template
   }
   return out;
 }

@@ -37,7 +37,8 @@ class CylinderMemory {
 
   // The caliper starting at s0_px, or null.
   const Caliper* Find(double s0_px) const;
-  // Keeps a caliper's full fit on `samples` (gathered as GatherCylinderSamples with its slab).
+  // Keeps a caliper's full fit on `samples` (gathered as GatherCylinderSamples with its slab) as
+  // its template; a fit that did not converge drops the template it had.
   void Keep(const Caliper& slab, const std::vector<EdgeSample>& samples, const CylinderFit& fit);
 
   // What the full measurement that made the templates found beyond the fits: the edge lines
