@@ -107,6 +107,10 @@ WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* s
   events.on_report = [&](const std::string&, const watch::WatchStatus& s,
                          const std::optional<watch::ClogIndex>& clog) {
     if (mqtt) mqtt->Update(s, clog);
+  };
+  // The printer link follows every state: a pause, a retry or the end of a hold-off is decided on
+  // the watch's clock as it goes, not at the next status report.
+  events.on_state = [&](const watch::WatchStatus& s) {
     if (printer) printer->Update(s);
   };
   events.on_level_change = [&](const watch::WatchStatus& s,

@@ -276,8 +276,8 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
     counters.uptime_s = Seconds(Clock::now() - started);
   };
   // After each update of the state: its clog index and counters, the level's line, the board
-  // (`publish`), then the level change told (a reader of /status sees the new level by then), then
-  // the periodic status line.
+  // (`publish`), the state to on_state, then the level change told (a reader of /status sees the
+  // new level by then), then the periodic status line.
   const auto after_update = [&](bool changed, double t, const auto& publish) {
     if (options.extruder) {
       std::string no_index;
@@ -286,6 +286,7 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
     update_counters();
     if (changed) emit("level");
     if (board) publish();
+    if (events.on_state) events.on_state(state.status());  // before a change's listeners wait
     if (changed && events.on_level_change) events.on_level_change(state.status(), clog);
     if (!next_report_s) next_report_s = t + report_every;
     if (t >= *next_report_s) {

@@ -78,6 +78,9 @@ struct LiveWatchEvents {
   // /metrics and /frame.jpg serve); the watch waits for it, so the board holds that state
   // meanwhile.
   std::function<void(const WatchStatus&, const std::optional<ClogIndex>&)> on_level_change;
+  // The state after every update (each frame, and time passing without one): for what must follow
+  // the watch's clock closely (the printer link's pause, its hold-off and retries). Must be cheap.
+  std::function<void(const WatchStatus&)> on_state;
   // Warnings worth a log line (the source dropped, reconnecting, a frame that could not be
   // measured).
   std::function<void(const std::string& message)> on_warning;

@@ -115,6 +115,7 @@ struct PrinterLink::Impl {
   bool stopping = false;
   bool update_due = false;
   double latest_time_s = 0;
+  bool has_state = false;  // an Update came
   WatchLevel latest_level = WatchLevel::kStarting;
   std::string latest_reason;
   double latest_drift_pct = NAN;  // the alert window's; NaN while not known
@@ -246,6 +247,8 @@ struct PrinterLink::Impl {
         Poll();
         lock.lock();
         next_poll = Clock::now() + Seconds(options.poll_interval_s);
+        // The printer's state may have armed the link: the latest level is decided again.
+        if (has_state) update_due = true;
       }
       if (update_due) {
         update_due = false;
@@ -320,6 +323,7 @@ void PrinterLink::Update(const WatchStatus& status) {
     impl_->latest_level = status.level;
     impl_->latest_reason = status.reason;
     impl_->latest_drift_pct = status.has_recent ? status.recent_drift_pct : NAN;
+    impl_->has_state = true;
     impl_->update_due = true;
   }
   impl_->wake.notify_all();

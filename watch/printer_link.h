@@ -71,8 +71,9 @@ class PrinterLink {
   // had (OctoPrint: never asked; the source is required there).
   std::string WebcamSource();
 
-  // The watch's state (every status report and level change): its level at its time_s. Never
-  // waits for the network; the latest one wins.
+  // The watch's state after each of its updates (LiveWatchEvents::on_state): its level at its
+  // time_s, the clock the hold-off and retries are on. Never waits for the network; the latest one
+  // wins.
   void Update(const WatchStatus& status);
 
   const char* api_name() const;  // "Moonraker" or "OctoPrint"
