@@ -120,7 +120,9 @@ TEST_F(WatchHttpTest, TwoHundredSlowClientsLeaveStatusAnswering) {
   const double latency_s = SecondsSince(t0);
   EXPECT_EQ(r.status, 200) << "no /status within 1 s while 200 slow clients are held";
   std::cout << "/status with 200 slow clients held: " << latency_s * 1e3 << " ms\n";
-  EXPECT_EQ(server->connections(), 200u);  // the slow ones are still held
+  // The slow ones are still held (the probe's own connection may not be closed on the server's
+  // side yet: at least 200).
+  EXPECT_GE(server->connections(), 200u);
 }
 
 // One address cannot take every connection: past its share it is closed at once, others served.
