@@ -54,6 +54,21 @@ HostPort ParseAddress(const std::string& address) {
   return out;
 }
 
+// A Host header a browser on this machine sends to a loopback address: an IP literal or localhost,
+// with or without a port. (A page elsewhere that points its own name at 127.0.0.1 — DNS
+// rebinding — sends its name.) No header at all (HTTP/1.0): not a browser's request.
+bool HostIsThisMachine(const char* host_header) {
+  if (!host_header) return true;
+  std::string host = host_header;
+  if (!host.empty() && host[0] == '[') return host.find(']') != std::string::npos;  // IPv6
+  if (const size_t colon = host.rfind(':'); colon != std::string::npos) host.resize(colon);
+  in_addr v4{};
+  if (inet_pton(AF_INET, host.c_str(), &v4) == 1) return true;
+  std::transform(host.begin(), host.end(), host.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
+  return host == "localhost";
+}
+
 bool IsLoopback(const sockaddr_storage& a) {
   if (a.ss_family == AF_INET)
     return (ntohl(reinterpret_cast<const sockaddr_in&>(a).sin_addr.s_addr) >> 24) == 127;
@@ -180,6 +195,13 @@ struct WatchHttpServer::Impl {
     if ((length && std::strcmp(length, "0") != 0) ||
         MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Transfer-Encoding"))
       return Refusal(MHD_HTTP_CONTENT_TOO_LARGE, "request bodies are refused");
+    // A loopback watch without a token answers only to this machine's own names: a web page
+    // elsewhere cannot read it through a name of its own pointed at 127.0.0.1.
+    if (token.empty() && loopback_only &&
+        !HostIsThisMachine(MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Host")))
+      return Refusal(MHD_HTTP_FORBIDDEN,
+                     "this watch answers to 127.0.0.1, [::1] or localhost only (a guard against "
+                     "DNS rebinding; --http-token-file lets other names in)");
     // /metrics stays open: a Prometheus scraper without the token still sees the level. So does
     // the page at /, which holds no data: it asks for the rest with the token it was given.
     if (!token.empty() && path != "/metrics" && path != "/" && !Authorized(c, token)) {

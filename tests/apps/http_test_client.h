@@ -92,15 +92,19 @@ inline HttpReply ParseReply(const std::string& raw) {
 }
 
 // `request` ("GET /status" and any header lines, each ending in \r\n) sent whole, with
-// "Connection: close"; the reply read until the server closes.
+// "Connection: close" and, unless the lines give one, "Host: 127.0.0.1:PORT" (as a browser on this
+// machine sends); the reply read until the server closes.
 inline HttpReply Request(int port, const std::string& request, double timeout_s = 10,
                          const std::string& from = "127.0.0.1") {
   TestSocket s(port, from);
   const size_t line_end = request.find("\r\n");
   const std::string first = line_end == std::string::npos ? request : request.substr(0, line_end);
   const std::string rest = line_end == std::string::npos ? "" : request.substr(line_end + 2);
-  if (!s.Send(first + " HTTP/1.1\r\nHost: test\r\nConnection: close\r\n" + rest + "\r\n"))
-    return {};
+  const std::string host =
+      rest.rfind("Host:", 0) == 0 || rest.find("\r\nHost:") != std::string::npos
+          ? ""
+          : "Host: 127.0.0.1:" + std::to_string(port) + "\r\n";
+  if (!s.Send(first + " HTTP/1.1\r\n" + host + "Connection: close\r\n" + rest + "\r\n")) return {};
   return ParseReply(s.ReadUntilClosed(timeout_s));
 }
 

@@ -109,6 +109,28 @@ TEST_F(WatchHttpTest, PortZeroIsTheBoundPortAndAPortAloneIsThisMachineOnly) {
     EXPECT_THROW(Start(bad), std::invalid_argument) << bad;
 }
 
+// A loopback watch without a token answers to this machine's own names only: a page elsewhere
+// whose name was pointed at 127.0.0.1 (DNS rebinding) sends its name and is refused. With a token,
+// the token decides.
+TEST_F(WatchHttpTest, ALoopbackWatchWithoutATokenAnswersOnlyToThisMachinesNames) {
+  const auto server = Start();
+  const int port = server->port();
+  const std::string p = ":" + std::to_string(port);
+  for (const std::string& host :
+       std::vector<std::string>{"127.0.0.1" + p, "localhost" + p, "LocalHost", "[::1]" + p})
+    EXPECT_EQ(Get(port, "/status", "Host: " + host + "\r\n").status, 200) << host;
+  for (const std::string& host :
+       std::vector<std::string>{"attacker.example" + p, "attacker.example", "127.0.0.1.nip.io"})
+    for (const std::string path : {"/status", "/frame.jpg", "/history.json", "/", "/metrics"})
+      EXPECT_EQ(Get(port, path, "Host: " + host + "\r\n").status, 403) << host << path;
+  const std::string token = "0123456789abcdefXYZ+/=";
+  const auto guarded = Start("127.0.0.1:0", token);
+  EXPECT_EQ(Get(guarded->port(), "/status",
+                "Host: printer.lan\r\nAuthorization: Bearer " + token + "\r\n")
+                .status,
+            200);
+}
+
 // Slow clients hold sockets, not threads: with 200 of them sending half a request, a new client's
 // /status is answered at once (cpp-httplib 0.11 answered none within 20 s with 8 of them).
 TEST_F(WatchHttpTest, TwoHundredSlowClientsLeaveStatusAnswering) {
