@@ -294,10 +294,10 @@ TEST_F(WatchCommandTest, SigintEndsTheWatchWithinTwoSecondsWhateverClientsDo) {
   std::vector<testing::TestSocket> slow;
   for (int i = 0; i < 20; ++i) {
     slow.emplace_back(port, "127.0.0." + std::to_string(2 + i / 10));
-    slow.back().Send("GET /status HTTP/1.1\r\nHost: t\r\nX-Slow: ");
+    slow.back().Send("GET /status HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Slow: ");
   }
   testing::TestSocket reader(port, "127.0.0.1", /*receive_bytes=*/4096);
-  reader.Send("GET /frame.jpg HTTP/1.1\r\nHost: t\r\n\r\n");
+  reader.Send("GET /frame.jpg HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n");
   EXPECT_EQ(testing::Get(port, "/status").status, 200);  // served while they are held
 
   const auto t0 = std::chrono::steady_clock::now();

@@ -53,7 +53,7 @@ long RssKb() {
 }
 
 // A partial request: the line and a header begun, never ended.
-const std::string kPartialRequest = "GET /status HTTP/1.1\r\nHost: test\r\nX-Slow: ";
+const std::string kPartialRequest = "GET /status HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Slow: ";
 
 class WatchHttpTest : public ::testing::Test {
  protected:
@@ -194,23 +194,24 @@ TEST_F(WatchHttpTest, HostileRequestsAreRefusedWithinBoundedMemory) {
   };
   // 0: the server's refusal may be lost to the reset of a connection closed with data unread.
   check("a 256 MB request line", flood("GET /", chunk, k256Mb), {414, 0});
-  check(
-      "a 256 MB body",
-      flood("POST /status HTTP/1.1\r\nHost: a\r\nContent-Length: 268435456\r\n\r\n", chunk, k256Mb),
-      {405, 0});
-  check(
-      "a 256 MB GET body",
-      flood("GET /status HTTP/1.1\r\nHost: a\r\nContent-Length: 268435456\r\n\r\n", chunk, k256Mb),
-      {413, 0});
+  check("a 256 MB body",
+        flood("POST /status HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: 268435456\r\n\r\n",
+              chunk, k256Mb),
+        {405, 0});
+  check("a 256 MB GET body",
+        flood("GET /status HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: 268435456\r\n\r\n", chunk,
+              k256Mb),
+        {413, 0});
   check("a chunked body",
-        flood("GET /status HTTP/1.1\r\nHost: a\r\nTransfer-Encoding: chunked\r\n\r\n",
+        flood("GET /status HTTP/1.1\r\nHost: 127.0.0.1\r\nTransfer-Encoding: chunked\r\n\r\n",
               "10000\r\n" + chunk + "\r\n", k256Mb),
         {413, 0});
-  check("a gzip body",
-        flood("GET /status HTTP/1.1\r\nHost: a\r\nContent-Encoding: gzip\r\nContent-Length: "
-              "534528\r\n\r\n",
-              std::string(1024, '\x1f'), 534528),
-        {413, 0});
+  check(
+      "a gzip body",
+      flood("GET /status HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Encoding: gzip\r\nContent-Length: "
+            "534528\r\n\r\n",
+            std::string(1024, '\x1f'), 534528),
+      {413, 0});
   std::string header_lines;
   for (int i = 0; i < 2000; ++i) header_lines += "X-H" + std::to_string(i) + ": v\r\n";
   check("200,000 headers",
@@ -347,7 +348,7 @@ TEST_F(WatchHttpTest, StoppingClosesEveryConnectionAtOnce) {
   const int port = server->port();
   auto slow = SlowClients(port, 50, 25);
   TestSocket reader(port, "127.0.0.1", /*receive_bytes=*/4096);
-  reader.Send("GET /frame.jpg HTTP/1.1\r\nHost: t\r\n\r\n");
+  reader.Send("GET /frame.jpg HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n");
   ASSERT_TRUE(WaitForConnections(*server, 51));
   const auto t0 = Clock::now();
   server.reset();
