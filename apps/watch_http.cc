@@ -59,14 +59,17 @@ HostPort ParseAddress(const std::string& address) {
 // rebinding — sends its name.) No header at all (HTTP/1.0): not a browser's request.
 bool HostIsThisMachine(const char* host_header) {
   if (!host_header) return true;
-  std::string host = host_header;
-  if (!host.empty() && host[0] == '[') return host.find(']') != std::string::npos;  // IPv6
-  if (const size_t colon = host.rfind(':'); colon != std::string::npos) host.resize(colon);
+  HostPort hp;
+  std::string why;
+  if (!SplitHostPort(host_header, 0, &hp, &why)) return false;
   in_addr v4{};
-  if (inet_pton(AF_INET, host.c_str(), &v4) == 1) return true;
-  std::transform(host.begin(), host.end(), host.begin(),
+  in6_addr v6{};
+  if (inet_pton(AF_INET, hp.host.c_str(), &v4) == 1 ||
+      inet_pton(AF_INET6, hp.host.c_str(), &v6) == 1)
+    return true;
+  std::transform(hp.host.begin(), hp.host.end(), hp.host.begin(),
                  [](unsigned char c) { return std::tolower(c); });
-  return host == "localhost";
+  return hp.host == "localhost";
 }
 
 bool IsLoopback(const sockaddr_storage& a) {

@@ -35,9 +35,9 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 using nlohmann::json;
 
-constexpr double kScaleUmPerPx = 3.0;
-constexpr double kNarrowAtS = 4.0;
-constexpr double kBaselineUm = 400.0, kNarrowedUm = 360.0;  // −10 %: past the clog threshold
+constexpr double kScaleUmPerPx = testing::kClipScaleUmPerPx;
+constexpr double kNarrowAtS = testing::kClipNarrowAtS;
+constexpr double kBaselineUm = testing::kClipBaselineUm, kNarrowedUm = testing::kClipNarrowedUm;
 constexpr double kWindowS = 1.0;
 // The measurement's accuracy on these rendered frames: a pixel at 3 µm/px (0.8 % of the strand).
 constexpr double kToleranceUm = kScaleUmPerPx;
@@ -105,12 +105,7 @@ class WatchPageTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new fs::path(testing::FreshDir("clogscope_page_" + std::to_string(getpid())));
-    // 10 s at 25 frames/s of a 400 µm strand (3 µm/px, 2 µm jitter) narrowing to 360 µm at 4 s.
-    synthetic::SceneParams s = testing::WatchCameraScene(17);
-    for (int i = 0; i < 250; ++i)
-      s.frame_width_um.push_back(i / 25.0 >= kNarrowAtS ? kNarrowedUm : kBaselineUm);
-    truth_ = new std::vector<synthetic::FrameTruth>(synthetic::RenderSequence(
-        s, 250, 25, (*dir_ / "clog.avi").string(), (*dir_ / "clog.truth.json").string()));
+    truth_ = new std::vector<synthetic::FrameTruth>(testing::RenderNarrowingClip(*dir_, 17));
     std::ofstream(*dir_ / "token") << kToken << "\n";
   }
   static void TearDownTestSuite() {
@@ -121,14 +116,7 @@ class WatchPageTest : public ::testing::Test {
 
   // The true mean diameter, µm (or its apparent width in px), of the frames within [from_s, to_s].
   static double TruthMeanUm(double from_s, double to_s, bool px = false) {
-    double sum = 0;
-    int n = 0;
-    for (const synthetic::FrameTruth& f : *truth_) {
-      if (f.time_s < from_s - 1e-9 || f.time_s > to_s + 1e-9) continue;
-      sum += px ? f.width_px : f.width_um;
-      ++n;
-    }
-    return n ? sum / n : NAN;
+    return testing::TruthMean(*truth_, from_s, to_s, px);
   }
 
   // Watches the video with --http 127.0.0.1:0 (with the token file, with the pixel scale when

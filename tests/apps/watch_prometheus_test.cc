@@ -34,9 +34,9 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 using nlohmann::json;
 
-constexpr double kScaleUmPerPx = 3.0;
-constexpr double kNarrowAtS = 4.0;
-constexpr double kBaselineUm = 400.0, kNarrowedUm = 360.0;  // −10 %: past the clog threshold
+constexpr double kScaleUmPerPx = testing::kClipScaleUmPerPx;
+constexpr double kNarrowAtS = testing::kClipNarrowAtS;
+constexpr double kBaselineUm = testing::kClipBaselineUm, kNarrowedUm = testing::kClipNarrowedUm;
 // The measurement's accuracy on these rendered frames: a pixel at 3 µm/px (0.8 % of the strand).
 constexpr double kToleranceM = kScaleUmPerPx * 1e-6;
 
@@ -173,12 +173,7 @@ class WatchPrometheusTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new fs::path(testing::FreshDir("clogscope_prometheus_" + std::to_string(getpid())));
-    // 10 s at 25 frames/s of a 400 µm strand (3 µm/px, 2 µm jitter) narrowing to 360 µm at 4 s.
-    synthetic::SceneParams s = testing::WatchCameraScene(11);
-    for (int i = 0; i < 250; ++i)
-      s.frame_width_um.push_back(i / 25.0 >= kNarrowAtS ? kNarrowedUm : kBaselineUm);
-    truth_ = new std::vector<synthetic::FrameTruth>(synthetic::RenderSequence(
-        s, 250, 25, (*dir_ / "clog.avi").string(), (*dir_ / "clog.truth.json").string()));
+    truth_ = new std::vector<synthetic::FrameTruth>(testing::RenderNarrowingClip(*dir_, 11));
   }
   static void TearDownTestSuite() {
     fs::remove_all(*dir_);
@@ -188,14 +183,7 @@ class WatchPrometheusTest : public ::testing::Test {
 
   // The true mean diameter, m, of the frames within [from_s, to_s].
   static double TruthMeanM(double from_s, double to_s) {
-    double sum = 0;
-    int n = 0;
-    for (const synthetic::FrameTruth& f : *truth_) {
-      if (f.time_s < from_s - 1e-9 || f.time_s > to_s + 1e-9) continue;
-      sum += f.width_um;
-      ++n;
-    }
-    return n ? 1e-6 * sum / n : NAN;
+    return 1e-6 * testing::TruthMean(*truth_, from_s, to_s);
   }
 
   // Watches the video with --http 127.0.0.1:0 and calls check(port, state) at the first level

@@ -4,11 +4,44 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cmath>
+#include <filesystem>
 #include <functional>
+#include <vector>
 
 #include "apps/watch_command.h"
+#include "synthetic/synthetic.h"
+#include "tests/apps/cli_test_util.h"
 
 namespace clogscope::apps::testing {
+
+// The clip the HTTP tests watch: 10 s at 25 frames/s of a 400 µm strand (3 µm/px, 2 µm jitter,
+// the watch camera's scene with `seed`) narrowing to 360 µm at 4 s (−10 %: past the clog
+// threshold), rendered to DIR/clog.avi; the frames' truths.
+inline constexpr double kClipScaleUmPerPx = 3.0;
+inline constexpr double kClipNarrowAtS = 4.0;
+inline constexpr double kClipBaselineUm = 400.0, kClipNarrowedUm = 360.0;
+inline std::vector<synthetic::FrameTruth> RenderNarrowingClip(const std::filesystem::path& dir,
+                                                              uint64_t seed) {
+  synthetic::SceneParams s = WatchCameraScene(seed);
+  for (int i = 0; i < 250; ++i)
+    s.frame_width_um.push_back(i / 25.0 >= kClipNarrowAtS ? kClipNarrowedUm : kClipBaselineUm);
+  return synthetic::RenderSequence(s, 250, 25, (dir / "clog.avi").string(),
+                                   (dir / "clog.truth.json").string());
+}
+
+// The true mean diameter, µm (or the apparent width in px), of the frames within [from_s, to_s].
+inline double TruthMean(const std::vector<synthetic::FrameTruth>& truths, double from_s,
+                        double to_s, bool px = false) {
+  double sum = 0;
+  int n = 0;
+  for (const synthetic::FrameTruth& f : truths) {
+    if (f.time_s < from_s - 1e-9 || f.time_s > to_s + 1e-9) continue;
+    sum += px ? f.width_px : f.width_um;
+    ++n;
+  }
+  return n ? sum / n : NAN;
+}
 
 // Runs the watch `o` with --http 127.0.0.1:0 and calls check(port, state) at its first level
 // change, while the server serves that state (the watch waits for check); fails the test when the

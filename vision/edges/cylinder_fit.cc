@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "common/robust.h"
 #include "vision/edges/cylinder_model.h"
@@ -216,7 +217,7 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   out.shading = p[kK];
   out.tilt = p[kL];
   out.noise = noise;
-  if (residuals_out) *residuals_out = residuals;
+  if (residuals_out) *residuals_out = std::move(residuals);  // not used here again
   out.rms = std::sqrt(wrss / std::max(wsum, 1.0));
   // Covariance from the weighted normal matrix, scaled by the weighted residual variance.
   const double dof = wsum * (1.0 - static_cast<double>(kN) / samples.size());
