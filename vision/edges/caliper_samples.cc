@@ -107,11 +107,22 @@ bool GatherEdgeSamples(const GreyImage& img, const AxisFrame& f, double s0, doub
       const double u = rx * f.dy - ry * f.dx;
       if (u < u0 || u > u1) continue;
       const float v = img.At(x, y);
-      if (v <= clip.low || v >= clip.high) ++*saturated;
+      if (Clipped(v, clip)) ++*saturated;
       out->push_back({static_cast<float>(u), v});
     }
   }
   return true;
+}
+
+ClippedCount CountClippedNear(const std::vector<EdgeSample>& samples, const ClipLevels& clip,
+                              double edge_u, double half_px) {
+  ClippedCount n;
+  for (const EdgeSample& smp : samples) {
+    if (std::abs(smp.u_px - edge_u) > half_px) continue;
+    ++n.samples;
+    n.clipped += Clipped(smp.value, clip);
+  }
+  return n;
 }
 
 double InnerEdgeDistance(const GreyImage& img, const AxisFrame& f, double s0, double s1,

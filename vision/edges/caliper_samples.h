@@ -29,6 +29,17 @@ bool GatherEdgeSamples(const GreyImage& img, const AxisFrame& f, double s0, doub
                        double u1, const ClipLevels& clip, std::vector<EdgeSample>* out,
                        int* saturated);
 
+// Whether a value is at or beyond the clip levels.
+inline bool Clipped(float v, const ClipLevels& clip) { return v <= clip.low || v >= clip.high; }
+
+// Of the samples within half_px of an edge at edge_u (its transition, where the edge's position
+// is read), how many there are and how many are clipped.
+struct ClippedCount {
+  int samples = 0, clipped = 0;
+};
+ClippedCount CountClippedNear(const std::vector<EdgeSample>& samples, const ClipLevels& clip,
+                              double edge_u, double half_px);
+
 // How far inside the object, from an edge at edge_u (the object toward `inward`, ±1), the next
 // edge lies: a stripe, a lens's core, a clear strand's inner line. Read from the profile across
 // the axis averaged over the band s0..s1: past the edge's own gradient peak the gradient falls,

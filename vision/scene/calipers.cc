@@ -26,6 +26,9 @@ constexpr double kRadToDeg = 180.0 / M_PI;
 // A side is shaded only when its edge also moves out by more than this under the shading model.
 constexpr double kMinShadingShiftPx = 0.1;
 constexpr int kReferenceCalipers = 5;  // outside the band, for the occlusion check
+// An edge's transition, where clipping is judged: this many blurs either side of it, and a margin
+// for the pixel footprint. (A clipped object or background reaching into it biases the edge.)
+constexpr double kClipZoneBlurs = 2.0, kClipZoneMarginPx = 1.0;
 // Tracking from templates: more of the band's calipers than this refusing theirs (the scene
 // changed) and the frame is measured as the first was.
 constexpr double kMaxRefusedTemplates = 0.25;
@@ -178,11 +181,11 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       for (int side = 0; side < 2; ++side) {
         const double e0 = (side == 0 ? left_guess : right_guess) + slope_guess * sc;
         const auto [u0, u1] = window(side, e0, outer, inner);
-        if (!GatherEdgeSamples(img, f, s0, s1, u0, u1, clip, &samples, &cf.saturated)) {
+        int window_clipped = 0;
+        if (!GatherEdgeSamples(img, f, s0, s1, u0, u1, clip, &samples, &window_clipped)) {
           cf.inside_roi = false;
           break;
         }
-        cf.samples += static_cast<int>(samples.size());
         // Reject fits that wandered out of their window or have the wrong sign of step.
         const int expected = side == 0 ? g.left_sign : g.right_sign;
         const auto usable = [&](const EdgeFit& fit) { return UsableFit(fit, u0, u1, expected); };
@@ -218,6 +221,16 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
         (side == 0 ? cf.left_shaded : cf.right_shaded) = shaded;
         const EdgeFit fit = model == 1 || (model < 0 && !plain.converged) ? shaded : plain;
         (side == 0 ? cf.left : cf.right) = fit;
+        // Clipping is judged where the edge's position is read, its transition: a background
+        // clipped at black by texture or noise a few blurs away moves its plateau's level by a
+        // fraction of a grey level, and the edge by far less than its σ. Without an edge, the
+        // whole window.
+        const ClippedCount near =
+            fit.converged ? CountClippedNear(samples, clip, fit.edge_px,
+                                             kClipZoneBlurs * fit.sigma_px + kClipZoneMarginPx)
+                          : ClippedCount{static_cast<int>(samples.size()), window_clipped};
+        cf.samples += near.samples;
+        cf.saturated += near.clipped;
       }
       if (!cf.inside_roi) border = true;
       total_samples += cf.samples;
@@ -304,15 +317,18 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     return fail(FrameStatus::kSaturated,
                 fmt::format("{} of {} edge pixels clipped", total_saturated, total_samples));
   }
-  // The shading model reads the strand's lit interior: clipped there (at the object's end of the
-  // range; a dark background clipped at 0 is no matter), it cannot be fitted.
+  // A strand's interior clipped at the object's end of the range (a dark background clipped at 0
+  // is no matter) may hide the lit ramp that sets where a shaded edge lies: the shading model
+  // cannot be fitted to it, nor can the plain step tell it is missing (a bright strand lit down
+  // to 0.4 at its rim, clipped 9 px in, came out 1.4 px narrow as a plain step), however clean
+  // the transitions are.
   const double object_clipped = g.polarity == Polarity::kBrightOnDark ? clip.clipped_high_fraction
                                 : g.polarity == Polarity::kDarkOnBright
                                     ? clip.clipped_low_fraction
                                     : clip.clipped_low_fraction + clip.clipped_high_fraction;
-  if ((shade[0] == 1 || shade[1] == 1) && object_clipped > opt.max_saturated_fraction) {
+  if (object_clipped > opt.max_saturated_fraction) {
     return fail(FrameStatus::kSaturated,
-                fmt::format("{:.0f} % of the band clipped: its shading cannot be fitted",
+                fmt::format("{:.0f} % of the band clipped: its shading cannot be judged",
                             100 * object_clipped));
   }
   // A lit object on both sides (a front-lit strand or filament): one cylinder per caliper.
