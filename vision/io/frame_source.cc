@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <deque>
 #include <stdexcept>
+#include <thread>
 #include <vector>
 
 #include "common/path_check.h"
@@ -124,12 +125,18 @@ std::unique_ptr<FrameSource> OneImage(const std::string& path) {
 }
 
 std::unique_ptr<FrameSource> VideoWithAFrame(const std::string& path) {
-  auto v = std::make_unique<VideoSource>(path, VideoReadOptions{});
+  VideoReadOptions options;
+  options.decoder_threads = DecoderThreadsBesideMeasuring();
+  auto v = std::make_unique<VideoSource>(path, options);
   v->RequireAFrame();
   return v;
 }
 
 }  // namespace
+
+int DecoderThreadsBesideMeasuring() {
+  return std::max(1, static_cast<int>(std::thread::hardware_concurrency()) - 1);
+}
 
 const char* SourceKindName(SourceKind kind) {
   switch (kind) {
