@@ -121,13 +121,18 @@ bool StrandTracker::Follow(const cv::Mat& frame, StrandMeasurement* out) {
     const int n = short_straight_frames_;
     if (short_part && ((n & (n - 1)) == 0 || n % kRegrowAtMostFrames == 0)) {
       // Perhaps straight again beyond it: the whole stretch's longest straight part, if longer.
+      // A look not taken leaves the templates, lines and doubt of the part that was measured
+      // (the look's come from the whole stretch, gear marks and all).
       StrandGeometry whole = g;
       whole.straight_s0_px = whole.straight_s1_px = 0;
+      CylinderMemory kept = cylinders_;
       cylinders_.fit_in_full_once = true;
       StrandMeasurement w = MeasureInScene(channel, data_max, FrameStatus::kValid, "", whole, roi,
                                            options_, cylinders);
       if (w.valid() && StraightCalipers(w, spacing) > StraightCalipers(m, spacing))
         m = std::move(w);
+      else
+        cylinders_ = std::move(kept);
     }
   }
   // A frame that does not measure like the last one is looked at afresh.
