@@ -91,6 +91,19 @@ cameras:
   EXPECT_DOUBLE_EQ(c.cameras[0].options.measure.calibration->scale_um_per_px, 3.1);
 }
 
+TEST_F(WatchConfigTest, TheExampleInTheDocsIsAGoodFile) {
+  const std::string path = std::string(CLOGSCOPE_TESTDATA_DIR) + "/../examples/cameras.yaml";
+  const WatchFarmOptions f = LoadWatchConfig(path);
+  EXPECT_EQ(f.http, "127.0.0.1:8090");
+  ASSERT_EQ(f.cameras.size(), 3u);
+  EXPECT_EQ(f.cameras[1].name, "mk3-right");
+  EXPECT_EQ(f.cameras[1].options.measure.scale_um_per_px, 3.1);
+  EXPECT_EQ(f.cameras[0].options.measure.scale_um_per_px, 3.0);
+  EXPECT_TRUE(f.cameras[2].options.live.source.empty());  // Moonraker's webcam
+  EXPECT_EQ(f.cameras[2].options.printer.pause.pause_level, watch::WatchLevel::kWarn);
+  EXPECT_EQ(f.cameras[2].options.temperature_c, 240.0);
+}
+
 struct BadCase {
   const char* what;
   const char* yaml;
