@@ -11,10 +11,10 @@
 #include <fstream>
 #include <map>
 #include <mutex>
-#include <tuple>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "common/atomic_file.h"
 #include "common/spawn.h"
