@@ -216,6 +216,41 @@ TEST_F(WatchFarmTest, OnlyTheNarrowingCameraClogsAndStatusAndMetricsSaySoUnderIt
   }
 }
 
+TEST_F(WatchFarmTest, OneCameraBehindATokenIsServedUnderItsName) {
+  const std::string token = "farm-token-0123456789abcdef";
+  std::ofstream(*dir_ / "token") << token << "\n";
+  const WatchFarmOptions farm = Config("http: 127.0.0.1:0\nhttp_token_file: token\n",
+                                       "  - {name: solo, source: steady.avi, log: steady.jsonl}\n");
+  bool checked = false;
+  WatchFarmObservers observers;
+  observers.on_finished = [&](int port) {
+    checked = true;
+    // The page of the one camera is where / sends a browser (the token's fragment follows).
+    const testing::HttpReply root = testing::Get(port, "/");
+    EXPECT_EQ(root.status, 302);
+    EXPECT_NE(root.head.find("Location: /cameras/solo/\r\n"), std::string::npos) << root.head;
+    // The token guards the state, not the page nor /metrics.
+    EXPECT_EQ(testing::Get(port, "/cameras/solo/").status, 200);
+    EXPECT_EQ(testing::Get(port, "/metrics").status, 200);
+    EXPECT_EQ(testing::Get(port, "/cameras/solo/status").status, 401);
+    EXPECT_EQ(testing::Get(port, "/status").status, 401);
+    const std::string bearer = "Authorization: Bearer " + token + "\r\n";
+    const testing::HttpReply status = testing::Get(port, "/cameras/solo/status", bearer);
+    ASSERT_EQ(status.status, 200);
+    const json j = json::parse(status.body);
+    EXPECT_EQ(j["printer"], "solo");
+    EXPECT_EQ(j["level"], "ok");
+    EXPECT_NEAR(j["diameter"]["um"].get<double>(), LastWindowTruthUm(truths_->at("steady")),
+                kToleranceUm);
+    const testing::HttpReply history = testing::Get(port, "/cameras/solo/history.json", bearer);
+    EXPECT_EQ(history.status, 200);
+    EXPECT_NO_THROW(json::parse(history.body));
+  };
+  std::atomic<bool> stop{false};
+  WatchFarm(farm, &stop, observers);
+  EXPECT_TRUE(checked);
+}
+
 TEST_F(WatchFarmTest, MqttCarriesEachCameraUnderItsNameOverOneConnection) {
   if (MosquittoBinary().empty()) GTEST_SKIP() << "no mosquitto broker (Debian package mosquitto)";
   Broker broker(*dir_, testing::FreeLoopbackPort());
