@@ -1,6 +1,7 @@
 #include "apps/watch_command.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -9,6 +10,9 @@
 
 #include "apps/cli_util.h"
 #include "apps/measure_options.h"
+#include "apps/watch_camera.h"
+#include "apps/watch_config.h"
+#include "apps/watch_farm.h"
 #include "apps/watch_http.h"
 #include "apps/watch_outputs.h"
 #include "model/prediction_run.h"
@@ -30,60 +34,73 @@ watch::MqttPublisher::Log MqttLog() {
           [](const std::string& m) { spdlog::warn("{}", m); }};
 }
 
-watch::PrinterLink::Log PrinterLog() {
-  return {[](const std::string& m) { spdlog::info("{}", m); },
-          [](const std::string& m) { spdlog::warn("{}", m); }};
+// Installs the stop on Ctrl-C and SIGTERM for the duration of `run`.
+template <typename Run>
+auto WithStopSignals(Run run) {
+  g_stop_watch.store(false);
+  std::signal(SIGINT, OnWatchSignal);
+  std::signal(SIGTERM, OnWatchSignal);
+  try {
+    auto result = run();
+    std::signal(SIGINT, SIG_DFL);
+    std::signal(SIGTERM, SIG_DFL);
+    return result;
+  } catch (...) {
+    std::signal(SIGINT, SIG_DFL);
+    std::signal(SIGTERM, SIG_DFL);
+    throw;
+  }
+}
+
+// `watch --config FILE`: every camera's options come from the file; the command line may only
+// add --duration-s.
+int RunWatchFarm(const CLI::App& app, const std::string& config, double duration_s) {
+  for (const CLI::Option* o : app.get_options()) {
+    if (o->count() == 0 || o->get_name() == "--config" || o->get_name() == "--duration-s") continue;
+    const std::string name = o->get_name() == "source" ? "a source" : o->get_name();
+    throw std::invalid_argument(fmt::format(
+        "--config {} and {}: with --config, every camera's source and options are in the file "
+        "(only --duration-s may be added)",
+        config, name));
+  }
+  WatchFarmOptions farm = LoadWatchConfig(config);
+  farm.duration_s = duration_s;
+  const WatchFarmReport r = WithStopSignals([&] { return WatchFarm(farm, &g_stop_watch); });
+  for (size_t i = 0; i < r.names.size(); ++i) {
+    const watch::LiveWatchSummary& s = r.cameras[i].summary;
+    spdlog::info(
+        "{}: watch ended ({}): {} frames, {} valid, {} skipped, {} reconnect(s), {} level "
+        "change(s), final level {}; latency median {:.1f} ms, p95 {:.1f} ms",
+        r.names[i], s.ended_because.empty() ? "not started" : s.ended_because, s.frames,
+        s.valid_frames, s.skipped_frames, s.reconnects, s.level_changes,
+        watch::WatchLevelName(s.final_level), s.latency_median_ms, s.latency_p95_ms);
+  }
+  if (!r.errors.empty())
+    throw std::invalid_argument(fmt::format("{} of {} cameras failed: {}", r.errors.size(),
+                                            r.names.size(), fmt::join(r.errors, "; ")));
+  return 0;
 }
 
 }  // namespace
 
 WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* stop,
                         const WatchObservers& observers) {
-  pipeline::MeasureInputsOptions m = options.measure;
-  m.ResolveBand();
-  watch::LiveWatchOptions live = options.live;
-  std::string why;
-  // The printer first: its options checked, then (with no source) its webcam is the source.
-  if (!options.printer.Validate(&why)) throw std::invalid_argument(why);
-  if (live.source.empty() && options.printer.moonraker_url.empty())
-    throw std::invalid_argument(
-        "no source: a device, stream URL, video file or folder (or --moonraker to watch its "
-        "webcam)");
-  live.strand = m.strand;
-  live.conversion = m.Conversion();
-  if (!options.extruder.empty()) {
-    live.extruder = model::LoadExtruderWithOverrides(options.extruder, options.set);
-    live.temperature_c =
-        options.temperature_c.value_or(live.extruder->Get(model::Param::kReferenceTemperatureC));
-  } else if (options.temperature_c || !options.set.empty()) {
-    throw std::invalid_argument("--temperature-c and --set go with --extruder");
-  }
-  std::optional<watch::PrinterLink> printer;
-  if (options.printer.enabled()) {
-    printer.emplace(options.printer, PrinterLog(), observers.on_printer);
-    if (live.source.empty()) live.source = printer->WebcamSource();
-  }
-  if (!live.Validate(&why)) throw std::invalid_argument(why);
-
+  CameraWatch camera(options, "", observers.on_printer);
+  const std::optional<calib::ScaleCalibration>& conversion = camera.live().conversion;
   if (!options.http_token_file.empty() && options.http.empty())
     throw std::invalid_argument("--http-token-file goes with --http");
   WatchHttpOptions http_options;
   http_options.address = options.http;
   if (!options.http_token_file.empty()) http_options.token = ReadHttpToken(options.http_token_file);
 
-  LineLog log(options.log_path);
-  watch::WatchBoard board;
   std::optional<WatchHttpServer> http;
-  if (!options.http.empty()) http.emplace(http_options, &board, live.conversion);
-  std::optional<AlertCommand> alert;
-  if (!options.on_alert.empty()) alert.emplace(options.on_alert);
+  if (!options.http.empty()) http.emplace(http_options, &camera.board(), conversion);
   std::optional<watch::MqttPublisher> mqtt;
   if (!options.mqtt.url.empty() || !options.mqtt.credentials_file.empty())
-    mqtt.emplace(options.mqtt, &board, live.conversion, MqttLog());
-  WatchReport report;
-  report.http_port = http ? http->port() : 0;
+    mqtt.emplace(options.mqtt, &camera.board(), conversion, MqttLog());
+  const int http_port = http ? http->port() : 0;
   if (http) {
-    live.http_url = http->url();
+    camera.SetHttpUrl(http->url());
     spdlog::info("serving the page at /, /status, /history.json, /metrics and /frame.jpg on {}{}",
                  http->url(),
                  http_options.token.empty()
@@ -96,49 +113,14 @@ WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* s
           "the port sees the camera's frames and the state",
           options.http);
   }
-  if (observers.on_started) observers.on_started(report.http_port);
-
-  watch::LiveWatchEvents events;
-  std::string last_line;
-  events.on_line = [&](const std::string& line) {
-    log.Write(line);
-    last_line = line;
-  };
-  events.on_report = [&](const std::string&, const watch::WatchStatus& s,
-                         const std::optional<watch::ClogIndex>& clog) {
-    if (mqtt) mqtt->Update(s, clog);
-  };
-  // The printer link follows every state: a pause, a retry or the end of a hold-off is decided on
-  // the watch's clock as it goes, not at the next status report.
-  events.on_state = [&](const watch::WatchStatus& s) {
-    if (printer) printer->Update(s);
-  };
-  events.on_level_change = [&](const watch::WatchStatus& s,
-                               const std::optional<watch::ClogIndex>& clog) {
-    spdlog::log(s.level == watch::WatchLevel::kOk ? spdlog::level::info : spdlog::level::warn,
-                "{:.1f} s: {} → {}: {}", s.time_s, watch::WatchLevelName(s.previous_level),
-                watch::WatchLevelName(s.level), s.reason);
-    if (alert) {
-      std::string no_start;
-      if (!alert->Run(s, clog, live.source, last_line, &no_start)) {
-        spdlog::error("{}", no_start);
-        report.alert_failures.push_back(no_start);
-      }
-      for (const std::string& f : alert->Reap()) {
-        spdlog::warn("{}", f);
-        report.alert_failures.push_back(f);
-      }
-    }
-    if (observers.on_level_change) observers.on_level_change(s);
-  };
-  events.on_warning = [](const std::string& message) { spdlog::warn("{}", message); };
-  report.summary = watch::RunLiveWatch(live, events, &board, stop);
-  if (alert) {
-    for (const std::string& f : alert->Reap(/*wait=*/true)) {
-      spdlog::warn("{}", f);
-      report.alert_failures.push_back(f);
-    }
-  }
+  if (observers.on_started) observers.on_started(http_port);
+  WatchReport report = camera.Run(
+      stop,
+      [&](const watch::WatchStatus& s, const std::optional<watch::ClogIndex>& clog) {
+        if (mqtt) mqtt->Update(s, clog);
+      },
+      observers.on_level_change);
+  report.http_port = http_port;
   return report;
 }
 
@@ -232,6 +214,11 @@ int RunWatch(int argc, char** argv) {
                  "A Klipper macro run after a pause (NAME LEVEL=… TIME_S=… DRIFT_PCT=…), e.g. one "
                  "that calls Moonraker's notifier");
   app.add_option("--duration-s", live.duration_s, "Stop after this long (default: until Ctrl-C)");
+  std::string config;
+  app.add_option("--config", config,
+                 "A YAML file of many cameras watched by this one process (docs/watch.md): "
+                 "http, mqtt and defaults at its top, then each camera's name, source and "
+                 "options; with it, no source and no other option but --duration-s");
   app.footer(
       "Examples:\n"
       "  clogscope watch http://printer.local/webcam/?action=stream --calib calib.yaml \\\n"
@@ -248,22 +235,11 @@ int RunWatch(int argc, char** argv) {
       "Exit status: 0 after Ctrl-C, the file's end or --duration-s; 1 when nothing could be "
       "watched or the source failed.");
   if (!ParseCommandLine(app, argc, argv)) return 0;
+  if (!config.empty()) return RunWatchFarm(app, config, live.duration_s);
   ApplyMeasurementOptions(app, text, &o.measure);
   if (!watch::ParsePauseLevel(pause_level, &p.pause.pause_level))
     throw std::invalid_argument("--pause-level " + pause_level + ": warn or clog");
-  g_stop_watch.store(false);
-  std::signal(SIGINT, OnWatchSignal);
-  std::signal(SIGTERM, OnWatchSignal);
-  WatchReport r;
-  try {
-    r = WatchNozzle(o, &g_stop_watch);
-  } catch (...) {
-    std::signal(SIGINT, SIG_DFL);
-    std::signal(SIGTERM, SIG_DFL);
-    throw;
-  }
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
+  const WatchReport r = WithStopSignals([&] { return WatchNozzle(o, &g_stop_watch); });
   const watch::LiveWatchSummary& s = r.summary;
   spdlog::info(
       "watch ended ({}): {} frames, {} valid, {} skipped, {} reconnect(s), {} level change(s), "

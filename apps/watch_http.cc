@@ -107,6 +107,14 @@ struct Reply {
   bool close = false;  // a refused request: its connection is closed after the answer
 };
 
+Reply Redirect(const std::string& location) {
+  Reply r;
+  r.status = MHD_HTTP_FOUND;
+  r.body = location + "\n";
+  r.headers.emplace_back(MHD_HTTP_HEADER_LOCATION, location);
+  return r;
+}
+
 Reply Refusal(unsigned status, std::string text) {
   Reply r;
   r.status = status;
@@ -178,14 +186,21 @@ std::string ReadHttpToken(const std::string& path) {
 }
 
 struct WatchHttpServer::Impl {
-  const watch::WatchBoard* board;
-  std::optional<calib::ScaleCalibration> conversion;
-  std::unique_ptr<watch::OverlayJpegCache> frames;
+  struct Feed {
+    std::string name;
+    const watch::WatchBoard* board;
+    std::optional<calib::ScaleCalibration> conversion;
+    std::unique_ptr<watch::OverlayJpegCache> frames;
+  };
+  std::vector<Feed> cameras;
+  bool farm = false;  // --config: the cameras' paths under /cameras/NAME/, labelled metrics
   std::string token;
   MHD_Daemon* daemon = nullptr;
   int port = 0;
   std::string url;
   bool loopback_only = false;
+
+  void Start(const WatchHttpOptions& options, std::vector<Camera> feeds, bool farm_paths);
 
   Reply Route(MHD_Connection* c, const std::string& path, const std::string& method) const {
     if (method != MHD_HTTP_METHOD_GET && method != MHD_HTTP_METHOD_HEAD) {
@@ -205,26 +220,89 @@ struct WatchHttpServer::Impl {
       return Refusal(MHD_HTTP_FORBIDDEN,
                      "this watch answers to 127.0.0.1, [::1] or localhost only (a guard against "
                      "DNS rebinding; --http-token-file lets other names in)");
+    // A farm's camera: /cameras/NAME/PATH is that camera's PATH.
+    const Feed* camera = farm ? nullptr : &cameras.front();
+    std::string inner = path;
+    const std::string under = "/cameras/";
+    if (farm && path.rfind(under, 0) == 0) {
+      const size_t slash = path.find('/', under.size());
+      const std::string name = path.substr(under.size(), slash - under.size());
+      for (const Feed& f : cameras)
+        if (f.name == name) camera = &f;
+      if (!camera) return Refusal(MHD_HTTP_NOT_FOUND, "no camera named '" + name + "'");
+      // The page asks for status, history.json and frame.jpg beside itself: it needs the slash.
+      if (slash == std::string::npos) return Redirect(path + "/");
+      inner = path.substr(slash);
+    }
     // /metrics stays open: a Prometheus scraper without the token still sees the level. So does
     // the page at /, which holds no data: it asks for the rest with the token it was given.
-    if (!token.empty() && path != "/metrics" && path != "/" && !Authorized(c, token)) {
+    if (!token.empty() && inner != "/metrics" && inner != "/" && !Authorized(c, token)) {
       Reply r = Refusal(MHD_HTTP_UNAUTHORIZED, "a bearer token is required (--http-token-file)");
       r.headers.emplace_back("WWW-Authenticate", "Bearer realm=\"clogscope watch\"");
       return r;
     }
+    if (!camera) return FarmRoute(path);
+    return CameraRoute(c, *camera, inner);
+  }
+
+  // The farm's own paths: every camera's state and metrics, and where the pages are.
+  Reply FarmRoute(const std::string& path) const {
+    Reply r;
+    if (path == "/status") {
+      // Names are [A-Za-z0-9_-]: JSON keys as they are.
+      r.content_type = "application/json";
+      r.body = "{\"cameras\":{";
+      for (const Feed& f : cameras) {
+        const watch::WatchSnapshot s = f.board->Read();
+        r.body += (&f == &cameras.front() ? "\"" : ",\"") + f.name +
+                  "\":" + watch::StatusJson(s.status, s.clog, s.counters, "status");
+      }
+      r.body += "}}\n";
+    } else if (path == "/metrics") {
+      std::vector<watch::PrometheusCamera> all;
+      for (const Feed& f : cameras) {
+        const watch::WatchSnapshot s = f.board->Read();
+        all.push_back({f.name, s.status, s.clog, s.counters});
+      }
+      r.content_type = "text/plain; version=0.0.4; charset=utf-8";
+      r.body = watch::PrometheusText(all);
+    } else if (path == "/" && cameras.size() == 1) {
+      return Redirect("/cameras/" + cameras.front().name + "/");
+    } else if (path == "/") {
+      // The list holds the names only: the pages ask for the rest (with the token, if any).
+      r.content_type = "text/html; charset=utf-8";
+      r.body =
+          "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>clogscope watch</title>"
+          "</head><body><h1>Cameras</h1><ul>";
+      for (const Feed& f : cameras)
+        r.body += fmt::format("<li><a href=\"cameras/{0}/\">{0}</a></li>", f.name);
+      r.body += "</ul></body></html>\n";
+      r.headers.emplace_back("Content-Security-Policy", kPageSecurityPolicy);
+      r.headers.emplace_back("Referrer-Policy", "no-referrer");
+    } else {
+      return Refusal(MHD_HTTP_NOT_FOUND,
+                     "not found: / /status /metrics /cameras/NAME/ /cameras/NAME/status "
+                     "/cameras/NAME/history.json /cameras/NAME/frame.jpg");
+    }
+    return r;
+  }
+
+  // One camera's paths (all of a single watch's).
+  Reply CameraRoute(MHD_Connection* c, const Feed& camera, const std::string& path) const {
+    const watch::WatchBoard* board = camera.board;
     Reply r;
     if (path == "/status") {
       const watch::WatchSnapshot s = board->Read();
       r.content_type = "application/json";
       r.body = watch::StatusJson(s.status, s.clog, s.counters, "status") + "\n";
-    } else if (path == "/metrics") {
+    } else if (path == "/metrics" && !farm) {
       const watch::WatchSnapshot s = board->Read();
       r.content_type = "text/plain; version=0.0.4; charset=utf-8";
       r.body = watch::PrometheusText(s.status, s.clog, s.counters);
     } else if (path == "/frame.jpg") {
       // Drawn on request, once a frame: the measuring thread never pays for a picture nobody
       // looks at. Ranges are not served: the whole picture or nothing.
-      const auto jpeg = frames->Latest();
+      const auto jpeg = camera.frames->Latest();
       if (!jpeg) return Refusal(MHD_HTTP_SERVICE_UNAVAILABLE, "no frame yet");
       r.content_type = "image/jpeg";
       r.body.assign(jpeg->begin(), jpeg->end());
@@ -239,7 +317,7 @@ struct WatchHttpServer::Impl {
       }
       r.content_type = "application/json";
       r.body = watch::HistoryJson(board->History(since_s), board->history_options(),
-                                  conversion.has_value()) +
+                                  camera.conversion.has_value()) +
                "\n";
     } else if (path == "/") {
       r.content_type = "text/html; charset=utf-8";
@@ -248,6 +326,9 @@ struct WatchHttpServer::Impl {
       // else to send the token to.
       r.headers.emplace_back("Content-Security-Policy", kPageSecurityPolicy);
       r.headers.emplace_back("Referrer-Policy", "no-referrer");
+    } else if (farm) {
+      return Refusal(MHD_HTTP_NOT_FOUND,
+                     "not found: /cameras/NAME/, status, history.json, frame.jpg under it");
     } else {
       return Refusal(MHD_HTTP_NOT_FOUND, "not found: / /status /history.json /metrics /frame.jpg");
     }
@@ -276,10 +357,24 @@ struct WatchHttpServer::Impl {
 WatchHttpServer::WatchHttpServer(const WatchHttpOptions& options, const watch::WatchBoard* board,
                                  std::optional<calib::ScaleCalibration> conversion)
     : impl_(std::make_unique<Impl>()) {
-  Impl& d = *impl_;
-  d.board = board;
-  d.conversion = conversion;
-  d.frames = std::make_unique<watch::OverlayJpegCache>(board, conversion);
+  impl_->Start(options, {Camera{"", board, std::move(conversion)}}, /*farm=*/false);
+}
+
+WatchHttpServer::WatchHttpServer(const WatchHttpOptions& options, std::vector<Camera> cameras)
+    : impl_(std::make_unique<Impl>()) {
+  if (cameras.empty()) throw std::invalid_argument("--http: no camera to serve");
+  impl_->Start(options, std::move(cameras), /*farm=*/true);
+}
+
+// Set up before the daemon starts: its threads read all this without a lock.
+void WatchHttpServer::Impl::Start(const WatchHttpOptions& options, std::vector<Camera> feeds,
+                                  bool farm_paths) {
+  Impl& d = *this;
+  d.farm = farm_paths;
+  for (Camera& c : feeds) {
+    auto frames = std::make_unique<watch::OverlayJpegCache>(c.board, c.conversion);
+    d.cameras.push_back({std::move(c.name), c.board, std::move(c.conversion), std::move(frames)});
+  }
   d.token = options.token;
   const HostPort hp = ParseAddress(options.address);
   const auto cannot = [&](const std::string& why) {
@@ -324,9 +419,9 @@ WatchHttpServer::WatchHttpServer(const WatchHttpOptions& options, const watch::W
   unsigned flags = MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_EPOLL | MHD_USE_ERROR_LOG;
   if (addr.ss_family == AF_INET6) flags |= MHD_USE_IPv6;
   d.daemon = MHD_start_daemon(
-      flags, 0, nullptr, nullptr, &Impl::Answer, impl_.get(), MHD_OPTION_EXTERNAL_LOGGER,
-      &LogFromLibrary, nullptr, MHD_OPTION_LISTEN_SOCKET, fd, MHD_OPTION_THREAD_POOL_SIZE,
-      l.threads, MHD_OPTION_CONNECTION_LIMIT, l.max_connections, MHD_OPTION_PER_IP_CONNECTION_LIMIT,
+      flags, 0, nullptr, nullptr, &Impl::Answer, this, MHD_OPTION_EXTERNAL_LOGGER, &LogFromLibrary,
+      nullptr, MHD_OPTION_LISTEN_SOCKET, fd, MHD_OPTION_THREAD_POOL_SIZE, l.threads,
+      MHD_OPTION_CONNECTION_LIMIT, l.max_connections, MHD_OPTION_PER_IP_CONNECTION_LIMIT,
       l.max_connections_per_ip, MHD_OPTION_CONNECTION_MEMORY_LIMIT, l.connection_max_bytes,
       MHD_OPTION_CONNECTION_TIMEOUT, l.idle_timeout_s, MHD_OPTION_END);
   // From here the daemon owns the socket and closes it when stopped. Should it fail to start, the

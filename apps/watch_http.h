@@ -11,6 +11,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "calib/pixel_scale.h"
 #include "watch/live_watch.h"
@@ -51,6 +52,16 @@ class WatchHttpServer {
   // --http when the address is malformed, its host unknown, or the port cannot be bound.
   WatchHttpServer(const WatchHttpOptions& options, const watch::WatchBoard* board,
                   std::optional<calib::ScaleCalibration> conversion);
+  // A camera of a farm (`watch --config`).
+  struct Camera {
+    std::string name;  // [A-Za-z0-9_-]+: its paths /cameras/NAME/… and label printer="NAME"
+    const watch::WatchBoard* board = nullptr;
+    std::optional<calib::ScaleCalibration> conversion;
+  };
+  // Many cameras: /cameras/NAME/ (the page), /cameras/NAME/status, /history.json and /frame.jpg
+  // for each; /status, every camera's state by name; /metrics, every camera's series labelled
+  // printer="NAME"; / the page of the one camera (a redirect), or a list of the cameras.
+  WatchHttpServer(const WatchHttpOptions& options, std::vector<Camera> cameras);
   ~WatchHttpServer();  // closes every connection at once, whatever its client is doing
   WatchHttpServer(const WatchHttpServer&) = delete;
   WatchHttpServer& operator=(const WatchHttpServer&) = delete;

@@ -64,6 +64,7 @@ bool AlertCommand::Run(const watch::WatchStatus& s, const std::optional<watch::C
   add("BACK_PRESSURE_RATIO", clog ? CsvNumber(clog->back_pressure_ratio, 5) : "");
   add("VIBRATION_INCREASE_PCT", clog ? CsvNumber(clog->vibration_increase_pct, 3) : "");
   add("SOURCE", vision::RedactCredentials(source));  // a child may log it: no password
+  if (!printer_.empty()) add("PRINTER", printer_);
   add("STATUS_JSON", status_json);
   SpawnOptions run;
   run.argv = {"/bin/sh", "-c", command_};

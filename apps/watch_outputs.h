@@ -25,10 +25,11 @@ class LineLog {
 // --on-alert: runs `sh -c COMMAND` on every level change without waiting for it, the state in
 // CLOGSCOPE_* environment variables (LEVEL, PREVIOUS_LEVEL, TIME_S, REASON, DIAMETER_UM,
 // DRIFT_PCT, DRIFT_CI95_PCT, BASELINE_UM, BACK_PRESSURE_RATIO, VIBRATION_INCREASE_PCT, SOURCE
-// with a URL's password hidden, STATUS_JSON).
+// with a URL's password hidden, STATUS_JSON; in a farm, PRINTER: the camera's name).
 class AlertCommand {
  public:
-  explicit AlertCommand(std::string command) : command_(std::move(command)) {}
+  explicit AlertCommand(std::string command, std::string printer = "")
+      : command_(std::move(command)), printer_(std::move(printer)) {}
   ~AlertCommand();  // waits (up to 10 s) for the commands still running
   // Starts the command; false with *why when it could not be started.
   bool Run(const watch::WatchStatus& status, const std::optional<watch::ClogIndex>& clog,
@@ -38,6 +39,7 @@ class AlertCommand {
 
  private:
   std::string command_;
+  std::string printer_;
   std::vector<int> running_;  // pids
 };
 

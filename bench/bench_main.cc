@@ -1,6 +1,6 @@
 // clogscope_bench: the speed and accuracy figures quoted in issue closing notes.
 //   clogscope_bench [measure|accuracy|video|experiment|lag|speed|speed-codec [FIRST_SEED]|watch|
-//                    adversarial [SCENES_PER_CLASS] [--list]|filament VIDEO|all] [--pi]
+//                    watch-farm|adversarial [SCENES_PER_CLASS] [--list]|filament VIDEO|all] [--pi]
 //                    (default all)
 // --pi adds, beside every frames/s of `measure` and `video`, what a Raspberry Pi 5 and 4 would
 // give on one core (this machine's figure ÷ 3 and ÷ 4) and whether that keeps up with 30 frames/s.
@@ -669,6 +669,7 @@ void BenchFeedSpeedCodec(int first_seed) {
 }  // namespace
 
 void BenchWatch();                             // watch_bench.cc
+void BenchWatchFarm();                         // watch_farm_bench.cc
 void BenchFilament(const std::string& video);  // filament_bench.cc
 void BenchAdversarial(int argc, char** argv);  // adversarial_bench.cc
 
@@ -686,11 +687,13 @@ int main(int argc, char** argv) {
   const std::string what = argc > 1 ? argv[1] : "all";
   if (what != "all" && what != "measure" && what != "accuracy" && what != "video" &&
       what != "experiment" && what != "lag" && what != "speed" && what != "speed-codec" &&
-      what != "watch" && what != "adversarial" && !(what == "filament" && argc > 2)) {
-    std::fprintf(stderr,
-                 "usage: clogscope_bench [measure|accuracy|video|experiment|lag|speed|speed-codec "
-                 "[FIRST_SEED]|watch|adversarial [SCENES_PER_CLASS] [--list]|filament VIDEO|all] "
-                 "[--pi]\n");
+      what != "watch" && what != "watch-farm" && what != "adversarial" &&
+      !(what == "filament" && argc > 2)) {
+    std::fprintf(
+        stderr,
+        "usage: clogscope_bench [measure|accuracy|video|experiment|lag|speed|speed-codec "
+        "[FIRST_SEED]|watch|watch-farm|adversarial [SCENES_PER_CLASS] [--list]|filament VIDEO|all] "
+        "[--pi]\n");
     return 2;
   }
   fmt::print("# clogscope benchmarks ({} hardware threads)\n", std::thread::hardware_concurrency());
@@ -707,6 +710,7 @@ int main(int argc, char** argv) {
   if (what == "all" || what == "speed-codec")
     BenchFeedSpeedCodec(what == "speed-codec" && argc > 2 ? std::atoi(argv[2]) : 1);
   if (what == "all" || what == "watch") BenchWatch();
+  if (what == "all" || what == "watch-farm") BenchWatchFarm();
   if (what == "all" || what == "adversarial") BenchAdversarial(argc, argv);
   if (what == "filament") BenchFilament(argv[2]);
   return 0;

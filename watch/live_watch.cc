@@ -249,6 +249,7 @@ LiveWatchSummary RunLiveWatch(const LiveWatchOptions& options, const LiveWatchEv
       2, live || options.source_options.realtime ? QueueFull::kDropOldest : QueueFull::kWait);
   reader.queue = &queue;
   WatchCounters counters;
+  counters.printer = options.printer;
   counters.source = vision::RedactCredentials(options.source);
   counters.http_url = options.http_url;
   counters.source_kind = vision::SourceKindName(reader.source->kind());

@@ -31,6 +31,7 @@ struct LiveWatchOptions {
   double duration_s = 0;                          // stop after this long; 0: until stopped/ended
   double reconnect_initial_s = 0.5;               // back-off after a drop: doubles up to max
   double reconnect_max_s = 10;
+  std::string printer;   // the camera's name in a farm (`watch --config`): in every line; or empty
   std::string http_url;  // where /status is served ("http://127.0.0.1:8090"), told in every line
   bool Validate(std::string* why) const;
 };

@@ -143,22 +143,35 @@ bool MqttOptions::Resolve(MqttEndpoint* endpoint, std::optional<MqttCredentials>
 // refused login, and sleeps through its back-off where a stop cannot wake it); the publishing
 // thread sends what Update left and draws the picture. Update only swaps the latest messages in.
 struct MqttPublisher::Impl {
-  Impl(const MqttOptions& o, const MqttEndpoint& e, const WatchBoard* b,
-       std::optional<calib::ScaleCalibration> c, Log l)
-      : options(o),
-        endpoint(e),
-        topics(e.prefix),
-        conversion(c),
-        frames(b, std::move(c)),
-        log(std::move(l)) {}
+  // One camera's topics, picture and latest state (its fields after `frames` under `mutex`).
+  struct Feed {
+    Feed(const std::string& prefix, const std::string& availability, const Camera& c)
+        : topics(prefix), frames(c.board, c.conversion) {
+      topics.availability = availability;  // one for the process: its last will
+    }
+    MqttTopics topics;
+    std::vector<MqttMessage> discovery;
+    OverlayJpegCache frames;
+    std::vector<MqttMessage> latest;  // the latest state's messages
+    bool state_due = false, frame_due = false;
+    Clock::time_point last_frame{};
+  };
+
+  Impl(const MqttOptions& o, const MqttEndpoint& e, const std::vector<Camera>& cameras, Log l)
+      : options(o), endpoint(e), availability(e.prefix + "/availability"), log(std::move(l)) {
+    for (const Camera& c : cameras) {
+      const std::string prefix = c.name.empty() ? e.prefix : e.prefix + "/" + c.name;
+      feeds.push_back(std::make_unique<Feed>(prefix, availability, c));
+      feeds.back()->discovery =
+          HaDiscoveryMessages(feeds.back()->topics, o.discovery_prefix, c.conversion.has_value());
+    }
+  }
 
   MqttOptions options;
   MqttEndpoint endpoint;
   std::optional<MqttCredentials> credentials;
-  MqttTopics topics;
-  std::vector<MqttMessage> discovery;
-  std::optional<calib::ScaleCalibration> conversion;
-  OverlayJpegCache frames;  // the camera's picture
+  std::string availability;  // <prefix>/availability
+  std::vector<std::unique_ptr<Feed>> feeds;
   Log log;
   mosquitto* mosq = nullptr;
 
@@ -172,9 +185,6 @@ struct MqttPublisher::Impl {
   bool ever_connected = false;  // once at least
   bool announce = false;        // (re)connected: availability, discovery and the latest state due
   bool warned = false;          // a connection problem was told since the last connection
-  std::vector<MqttMessage> latest;  // the latest state's messages
-  bool state_due = false, frame_due = false;
-  Clock::time_point last_frame{};
   std::optional<int> offline_mid;
   bool offline_acked = false;
   bool publisher_done = false, network_done = false;
@@ -274,35 +284,56 @@ struct MqttPublisher::Impl {
     wake.notify_all();
   }
 
+  // The states due, taken (under `mutex`).
+  std::vector<MqttMessage> TakeStates(bool all) {
+    std::vector<MqttMessage> out;
+    for (auto& f : feeds) {
+      if (!f->state_due && !all) continue;
+      f->state_due = false;
+      out.insert(out.end(), f->latest.begin(), f->latest.end());
+    }
+    return out;
+  }
+
   void RunPublisher() {
     std::unique_lock<std::mutex> lock(mutex);
     while (!stopping) {
-      const Clock::time_point frame_at = last_frame + Seconds(options.frame_min_interval_s);
+      // The camera whose picture is due soonest (frame_at), if any.
+      Feed* picture = nullptr;
+      Clock::time_point frame_at = Clock::time_point::max();
+      bool state_due = false;
+      for (auto& f : feeds) {
+        state_due = state_due || f->state_due;
+        const Clock::time_point at = f->last_frame + Seconds(options.frame_min_interval_s);
+        if (f->frame_due && at < frame_at) {
+          picture = f.get();
+          frame_at = at;
+        }
+      }
       if (connected && announce) {
         announce = false;
-        state_due = false;
-        frame_due = true;  // the picture too, once a frame is there
-        const std::vector<MqttMessage> state = latest;
+        for (auto& f : feeds) f->frame_due = true;  // the pictures too, once frames are there
+        const std::vector<MqttMessage> state = TakeStates(/*all=*/true);
         lock.unlock();
-        Send({topics.availability, kMqttOnline});
-        for (const MqttMessage& m : discovery) Send(m);
+        Send({availability, kMqttOnline});
+        for (auto& f : feeds)
+          for (const MqttMessage& m : f->discovery) Send(m);
         for (const MqttMessage& m : state) Send(m);
         lock.lock();
       } else if (connected && state_due) {
-        state_due = false;
-        const std::vector<MqttMessage> state = latest;
+        const std::vector<MqttMessage> state = TakeStates(/*all=*/false);
         lock.unlock();
         for (const MqttMessage& m : state) Send(m);
         lock.lock();
-      } else if (connected && frame_due && Clock::now() >= frame_at) {
-        frame_due = false;
+      } else if (connected && picture && Clock::now() >= frame_at) {
+        picture->frame_due = false;
         lock.unlock();
         // Drawn here, never on the measuring thread. No frame yet: the next update asks again.
-        const auto jpeg = frames.Latest();
-        if (jpeg) Send({topics.frame, std::string(jpeg->begin(), jpeg->end()), /*qos=*/0});
+        const auto jpeg = picture->frames.Latest();
+        if (jpeg) Send({picture->topics.frame, std::string(jpeg->begin(), jpeg->end()), /*qos=*/0});
         lock.lock();
-        if (jpeg) last_frame = Clock::now();
-      } else if (connected && frame_due) {
+        if (jpeg) picture->last_frame = Clock::now();
+      } else if (connected && picture) {
         wake.wait_until(lock, frame_at);
       } else {
         wake.wait(lock);
@@ -312,9 +343,8 @@ struct MqttPublisher::Impl {
     // yet sent), then "offline" (retained) while still connected, and its acknowledgement awaited,
     // so that it is there before the disconnection; then a clean disconnection (no last will).
     const auto deadline = Clock::now() + Seconds(options.stop_timeout_s * 0.7);
-    if (connected && state_due) {
-      state_due = false;
-      const std::vector<MqttMessage> state = latest;
+    if (connected) {
+      const std::vector<MqttMessage> state = TakeStates(/*all=*/false);
       lock.unlock();
       for (const MqttMessage& m : state) Send(m);
       lock.lock();
@@ -323,7 +353,7 @@ struct MqttPublisher::Impl {
       int mid = 0;
       const std::string offline = kMqttOffline;
       lock.unlock();
-      const int rc = mosquitto_publish(mosq, &mid, topics.availability.c_str(),
+      const int rc = mosquitto_publish(mosq, &mid, availability.c_str(),
                                        static_cast<int>(offline.size()), offline.data(), 1, true);
       lock.lock();
       if (rc == MOSQ_ERR_SUCCESS) {
@@ -349,19 +379,22 @@ struct MqttPublisher::Impl {
 };
 
 MqttPublisher::MqttPublisher(const MqttOptions& options, const WatchBoard* board,
-                             std::optional<calib::ScaleCalibration> conversion, Log log) {
+                             std::optional<calib::ScaleCalibration> conversion, Log log)
+    : MqttPublisher(options, {Camera{"", board, std::move(conversion)}}, std::move(log)) {}
+
+MqttPublisher::MqttPublisher(const MqttOptions& options, std::vector<Camera> cameras, Log log) {
   std::string why;
   MqttEndpoint endpoint;
   std::optional<MqttCredentials> credentials;
   if (!options.Resolve(&endpoint, &credentials, &why)) throw std::invalid_argument(why);
-  impl_ = std::make_shared<Impl>(options, endpoint, board, std::move(conversion), std::move(log));
+  if (cameras.empty()) throw std::invalid_argument("MQTT: no camera to publish");
+  impl_ = std::make_shared<Impl>(options, endpoint, cameras, std::move(log));
   Impl& m = *impl_;
   m.credentials = std::move(credentials);
-  m.discovery = HaDiscoveryMessages(m.topics, options.discovery_prefix, m.conversion.has_value());
   InitLibrary();
   // One client id per prefix: a watch started again takes its predecessor's session over (the
   // broker sends that one's last will first), so "online" is never overwritten by a stale will.
-  const std::string client_id = "clogscope-" + m.topics.node_id;
+  const std::string client_id = "clogscope-" + MqttTopics(endpoint.prefix).node_id;
   m.mosq = mosquitto_new(client_id.c_str(), /*clean_session=*/true, &m);
   if (!m.mosq) throw std::runtime_error("MQTT: cannot create the client (out of memory)");
   mosquitto_threaded_set(m.mosq, true);
@@ -369,8 +402,8 @@ MqttPublisher::MqttPublisher(const MqttOptions& options, const WatchBoard* board
   mosquitto_disconnect_callback_set(m.mosq, &Impl::OnDisconnect);
   mosquitto_publish_callback_set(m.mosq, &Impl::OnPublish);
   // Set before connecting: the broker publishes it when this client vanishes without a word.
-  mosquitto_will_set(m.mosq, m.topics.availability.c_str(),
-                     static_cast<int>(std::strlen(kMqttOffline)), kMqttOffline, 1, true);
+  mosquitto_will_set(m.mosq, m.availability.c_str(), static_cast<int>(std::strlen(kMqttOffline)),
+                     kMqttOffline, 1, true);
   if (m.credentials)
     mosquitto_username_pw_set(m.mosq, m.credentials->user.c_str(), m.credentials->password.c_str());
   // The threads share the Impl: if a stop gives up on them (a name lookup that hangs), they finish
@@ -399,11 +432,17 @@ MqttPublisher::~MqttPublisher() {
 }
 
 void MqttPublisher::Update(const WatchStatus& status, const std::optional<ClogIndex>& clog) {
-  std::vector<MqttMessage> messages = MqttStateMessages(impl_->topics, status, clog);
+  Update(0, status, clog);
+}
+
+void MqttPublisher::Update(size_t camera, const WatchStatus& status,
+                           const std::optional<ClogIndex>& clog) {
+  Impl::Feed& f = *impl_->feeds.at(camera);
+  std::vector<MqttMessage> messages = MqttStateMessages(f.topics, status, clog);
   {
     std::lock_guard<std::mutex> lock(impl_->mutex);
-    impl_->latest = std::move(messages);
-    impl_->state_due = impl_->frame_due = true;
+    f.latest = std::move(messages);
+    f.state_due = f.frame_due = true;
   }
   impl_->wake.notify_all();
 }

@@ -7,6 +7,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "calib/pixel_scale.h"
 #include "watch/live_watch.h"
@@ -70,6 +71,15 @@ class MqttPublisher {
   // must outlive the publisher.
   MqttPublisher(const MqttOptions& options, const WatchBoard* board,
                 std::optional<calib::ScaleCalibration> conversion, Log log);
+  // A camera of a farm (`watch --config`): its topics are <prefix>/<name>/state, /level,
+  // /diameter_mm and /frame, its Home Assistant device <prefix>_<name>.
+  struct Camera {
+    std::string name;  // [A-Za-z0-9_-]+
+    const WatchBoard* board = nullptr;
+    std::optional<calib::ScaleCalibration> conversion;
+  };
+  // Many cameras over one connection: one <prefix>/availability (one last will) for them all.
+  MqttPublisher(const MqttOptions& options, std::vector<Camera> cameras, Log log);
   // Publishes "offline", disconnects and ends the threads, waiting at most about stop_timeout_s
   // (a broker that does not answer is left to its keepalive and the last will).
   ~MqttPublisher();
@@ -80,6 +90,8 @@ class MqttPublisher {
   // (the watch's measuring thread calls it). A new picture goes with it, at most one per
   // frame_min_interval_s.
   void Update(const WatchStatus& status, const std::optional<ClogIndex>& clog);
+  // The same for camera `camera` (its index in the cameras given).
+  void Update(size_t camera, const WatchStatus& status, const std::optional<ClogIndex>& clog);
 
  private:
   struct Impl;

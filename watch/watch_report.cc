@@ -3,8 +3,10 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
+#include <vector>
 
 #include "common/version.h"
 #include "model/predictor.h"
@@ -59,6 +61,7 @@ std::string StatusJson(const WatchStatus& s, const std::optional<ClogIndex>& clo
   j["previous_level"] = WatchLevelName(s.previous_level);
   j["level_since_s"] = RoundDecimals(s.level_since_s, 3);
   j["reason"] = s.reason;
+  if (!c.printer.empty()) j["printer"] = c.printer;
   j["source"] = c.source;
   j["source_kind"] = c.source_kind;
   j["source_up"] = s.source_up;
@@ -132,24 +135,59 @@ void LatencyHistogram::Add(double seconds) {
   sum_s += seconds;
 }
 
-std::string PrometheusText(const WatchStatus& s, const std::optional<ClogIndex>& clog,
-                           const WatchCounters& c) {
+namespace {
+
+// Prometheus text grouped by metric family: each family's HELP and TYPE once, then its samples of
+// every camera (promtool refuses a family split in two). Families come in the order first seen.
+class Families {
+ public:
+  void Head(const std::string& name, const char* type, const char* help) {
+    if (index_.emplace(name, families_.size()).second)
+      families_.push_back(
+          fmt::format("# HELP clogscope_{0} {1}\n# TYPE clogscope_{0} {2}\n", name, help, type));
+  }
+  // A sample of `family` (its head written first): clogscope_SERIES{LABELS} VALUE, the camera's
+  // label first.
+  void Sample(const std::string& family, const std::string& series, const std::string& labels,
+              const std::string& value) {
+    const std::string all = printer_.empty() ? labels
+                            : labels.empty() ? printer_
+                                             : printer_ + "," + labels;
+    families_[index_.at(family)] +=
+        fmt::format("clogscope_{}{} {}\n", series, all.empty() ? "" : "{" + all + "}", value);
+  }
+  void SetPrinter(const std::string& name) {
+    printer_ = name.empty() ? "" : fmt::format("printer=\"{}\"", name);
+  }
+  std::string Text() const {
+    std::string out;
+    for (const std::string& f : families_) out += f;
+    return out;
+  }
+
+ private:
+  std::vector<std::string> families_;
+  std::map<std::string, size_t> index_;
+  std::string printer_;  // printer="NAME", or empty
+};
+
+void AddBuildInfo(Families* f) {
+  f->Head("build_info", "gauge", "The watch's version, as labels; always 1.");
+  f->Sample("build_info", "build_info", fmt::format("version=\"{}\"", kVersion), "1");
+}
+
+void AddSamples(const WatchStatus& s, const std::optional<ClogIndex>& clog, const WatchCounters& c,
+                Families* f) {
   constexpr double kPerUm = 1e-6, kPerPct = 1e-2;  // µm → m, % → ratio
-  std::string out;
-  const auto head = [&](const char* name, const char* type, const char* help) {
-    out += fmt::format("# HELP clogscope_{0} {1}\n# TYPE clogscope_{0} {2}\n", name, help, type);
-  };
   const auto metric = [&](const char* name, const char* type, const char* help, double value) {
     if (!std::isfinite(value)) return;  // unknown: absent, as Prometheus expects
-    head(name, type, help);
-    out += fmt::format("clogscope_{} {}\n", name, value);
+    f->Head(name, type, help);
+    f->Sample(name, name, "", fmt::format("{}", value));
   };
-  head("build_info", "gauge", "The watch's version, as labels; always 1.");
-  out += fmt::format("clogscope_build_info{{version=\"{}\"}} 1\n", kVersion);
-  head("level", "gauge", "1 for the current alert level, 0 for the others.");
+  f->Head("level", "gauge", "1 for the current alert level, 0 for the others.");
   for (WatchLevel l : kWatchLevels) {
-    out += fmt::format("clogscope_level{{level=\"{}\"}} {}\n", WatchLevelName(l),
-                       l == s.level ? 1 : 0);
+    f->Sample("level", "level", fmt::format("level=\"{}\"", WatchLevelName(l)),
+              l == s.level ? "1" : "0");
   }
   metric("source_up", "gauge", "1 when the source delivers frames.", s.source_up ? 1 : 0);
   metric("window_frames", "gauge", "Frames in the rolling window.", s.frames);
@@ -206,27 +244,45 @@ std::string PrometheusText(const WatchStatus& s, const std::optional<ClogIndex>&
   metric("reconnects_total", "counter", "Times the source was reopened.", c.reconnects_total);
   metric("level_changes_total", "counter",
          "Level changes, returns to ok included (each runs --on-alert).", s.level_changes);
-  head("alerts_total", "counter",
-       "Level changes into an alert level (warn, clog, not_extruding, no_view), by that level.");
+  f->Head("alerts_total", "counter",
+          "Level changes into an alert level (warn, clog, not_extruding, no_view), by that level.");
   for (WatchLevel l : kWatchLevels) {
     if (!IsAlertLevel(l)) continue;
-    out += fmt::format("clogscope_alerts_total{{level=\"{}\"}} {}\n", WatchLevelName(l),
-                       s.changes_into[static_cast<size_t>(l)]);
+    f->Sample("alerts_total", "alerts_total", fmt::format("level=\"{}\"", WatchLevelName(l)),
+              std::to_string(s.changes_into[static_cast<size_t>(l)]));
   }
-  head("frame_latency_seconds", "histogram",
-       "Time from a frame's arrival to the state it updated being published.");
+  const std::string h = "frame_latency_seconds";
+  f->Head(h, "histogram", "Time from a frame's arrival to the state it updated being published.");
   long long cumulative = 0;
   for (size_t i = 0; i < c.latency.bucket_counts.size(); ++i) {
     cumulative += c.latency.bucket_counts[i];
-    out += fmt::format("clogscope_frame_latency_seconds_bucket{{le=\"{}\"}} {}\n",
-                       kLatencyBucketsS[i], cumulative);
+    f->Sample(h, h + "_bucket", fmt::format("le=\"{}\"", kLatencyBucketsS[i]),
+              std::to_string(cumulative));
   }
-  out += fmt::format(
-      "clogscope_frame_latency_seconds_bucket{{le=\"+Inf\"}} {0}\n"
-      "clogscope_frame_latency_seconds_sum {1}\nclogscope_frame_latency_seconds_count {0}\n",
-      c.latency.count, c.latency.sum_s);
+  f->Sample(h, h + "_bucket", "le=\"+Inf\"", std::to_string(c.latency.count));
+  f->Sample(h, h + "_sum", "", fmt::format("{}", c.latency.sum_s));
+  f->Sample(h, h + "_count", "", std::to_string(c.latency.count));
   metric("uptime_seconds", "gauge", "Seconds since the watch started.", c.uptime_s);
-  return out;
+}
+
+}  // namespace
+
+std::string PrometheusText(const WatchStatus& s, const std::optional<ClogIndex>& clog,
+                           const WatchCounters& c) {
+  Families f;
+  AddBuildInfo(&f);
+  AddSamples(s, clog, c, &f);
+  return f.Text();
+}
+
+std::string PrometheusText(const std::vector<PrometheusCamera>& cameras) {
+  Families f;
+  AddBuildInfo(&f);  // the process's, once: no printer label
+  for (const PrometheusCamera& camera : cameras) {
+    f.SetPrinter(camera.printer);
+    AddSamples(camera.status, camera.clog, camera.counters, &f);
+  }
+  return f.Text();
 }
 
 }  // namespace clogscope::watch

@@ -4,6 +4,7 @@
 #include <iterator>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "model/parameters.h"
 #include "watch/watch_state.h"
@@ -41,7 +42,8 @@ struct LatencyHistogram {
 
 // Counters of the watch run that go with the state.
 struct WatchCounters {
-  std::string source;  // as shown: a URL's password hidden (vision::RedactCredentials)
+  std::string printer;  // the camera's name in a farm (`watch --config`), or empty
+  std::string source;   // as shown: a URL's password hidden (vision::RedactCredentials)
   std::string source_kind;
   std::string http_url;              // where /status is served, or empty
   long long frames_total = 0;        // frames received
@@ -68,5 +70,16 @@ std::string StatusJson(const WatchStatus& status, const std::optional<ClogIndex>
 // base units (metres, seconds, ratios); what is not known yet is absent (docs/watch.md lists them).
 std::string PrometheusText(const WatchStatus& status, const std::optional<ClogIndex>& clog,
                            const WatchCounters& counters);
+
+// One camera of a farm (`watch --config`), for the Prometheus text of them all.
+struct PrometheusCamera {
+  std::string printer;  // its name, the `printer` label of each of its series
+  WatchStatus status;
+  std::optional<ClogIndex> clog;
+  WatchCounters counters;
+};
+// Every camera's series in one exposition, labelled printer="NAME" (each family's HELP and TYPE
+// once); clogscope_build_info once, unlabelled.
+std::string PrometheusText(const std::vector<PrometheusCamera>& cameras);
 
 }  // namespace clogscope::watch
