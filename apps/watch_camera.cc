@@ -38,20 +38,36 @@ CameraWatch::CameraWatch(const WatchCommandOptions& options, std::string printer
     watch::PrinterLink::Log log{[tag](const std::string& s) { spdlog::info("{}{}", tag, s); },
                                 [tag](const std::string& s) { spdlog::warn("{}{}", tag, s); }};
     link_.emplace(options.printer, log, std::move(on_printer));
-    if (live_.source.empty()) live_.source = link_->WebcamSource();
+    // A farm's printer may be off when the farm starts: its webcam is asked for as the camera
+    // starts (and again while it cannot be), not here, where it would stop every camera.
+    webcam_from_printer_ = live_.source.empty() && !printer_.empty();
+    if (live_.source.empty() && !webcam_from_printer_) live_.source = link_->WebcamSource();
   }
-  if (!live_.Validate(&why)) throw std::invalid_argument(why);
+  if (webcam_from_printer_) {
+    watch::LiveWatchOptions checked = live_;
+    checked.source = "the printer's webcam";  // the rest of the options checked now
+    if (!checked.Validate(&why)) throw std::invalid_argument(why);
+  } else if (!live_.Validate(&why)) {
+    throw std::invalid_argument(why);
+  }
   log_ = std::make_unique<LineLog>(options.log_path);
   if (!options.on_alert.empty()) alert_.emplace(options.on_alert, printer_);
 }
 
 CameraWatch::~CameraWatch() = default;
 
+bool CameraWatch::StartMayBeRetried() const {
+  const std::string& source = live_.source;
+  return webcam_from_printer_ || source.find("://") != std::string::npos ||
+         source.rfind("/dev/", 0) == 0;
+}
+
 WatchReport CameraWatch::Run(
     std::atomic<bool>* stop,
     std::function<void(const watch::WatchStatus&, const std::optional<watch::ClogIndex>&)>
         on_report,
     std::function<void(const watch::WatchStatus&)> on_level_change) {
+  if (webcam_from_printer_) live_.source = link_->WebcamSource();
   WatchReport report;
   watch::LiveWatchEvents events;
   std::string last_line;

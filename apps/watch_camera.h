@@ -21,8 +21,9 @@ class CameraWatch {
  public:
   // Checks and resolves the per-camera options of `options` (its http and mqtt are not looked
   // at): the scale and band, the extruder, the printer link (with no source, its webcam is the
-  // source), then opens its log. `printer` names the camera in a farm (in its lines and log
-  // lines), or is empty. Throws std::invalid_argument (one line naming the option or file).
+  // source: asked for here, or in a farm as Run starts), then opens its log. `printer` names the
+  // camera in a farm (in its lines and log lines), or is empty. Throws std::invalid_argument (one
+  // line naming the option or file).
   CameraWatch(const WatchCommandOptions& options, std::string printer,
               std::function<void(const watch::PrinterEvent&)> on_printer);
   ~CameraWatch();
@@ -32,6 +33,10 @@ class CameraWatch {
   const std::string& printer() const { return printer_; }
   const watch::LiveWatchOptions& live() const { return live_; }
   const watch::WatchBoard& board() const { return board_; }
+  // Whether a start that failed may succeed later: a stream or device (its printer switched off),
+  // or a farm's camera whose source is its printer's webcam (asked for as it starts). A file or
+  // folder that cannot be opened will not come back by waiting.
+  bool StartMayBeRetried() const;
   // Where /status is served, told in every line.
   void SetHttpUrl(const std::string& url) { live_.http_url = url; }
 
@@ -53,6 +58,7 @@ class CameraWatch {
   std::unique_ptr<LineLog> log_;
   std::optional<AlertCommand> alert_;
   watch::WatchBoard board_;
+  bool webcam_from_printer_ = false;  // a farm's camera with no source: its printer's webcam
 };
 
 }  // namespace clogscope::apps

@@ -21,12 +21,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// A stream or device may be off when the farm starts (its printer switched off): tried again.
-// A file or folder that cannot be opened will not come back by waiting.
-bool WorthRetrying(const std::string& source) {
-  return source.find("://") != std::string::npos || source.rfind("/dev/", 0) == 0;
-}
-
 // One camera's thread: its watch, started again with back-off while its stream cannot be opened.
 WatchReport RunCamera(CameraWatch* camera, std::atomic<bool>* stop, watch::MqttPublisher* mqtt,
                       size_t index, const WatchFarmObservers& observers, std::string* error) {
@@ -44,7 +38,7 @@ WatchReport RunCamera(CameraWatch* camera, std::atomic<bool>* stop, watch::MqttP
           });
     } catch (const std::exception& e) {
       // Only the start throws (the watch reports later failures in its summary).
-      if (!WorthRetrying(live.source) || stop->load()) {
+      if (!camera->StartMayBeRetried() || stop->load()) {
         *error = e.what();
         return {};
       }

@@ -305,14 +305,20 @@ TEST_F(WatchFarmTest, MqttCarriesEachCameraUnderItsNameOverOneConnection) {
 
 TEST_F(WatchFarmTest, AFailedCameraLeavesTheOthersAndAStopEndsEveryCameraWithItsStopLine) {
   // "broken" is not a video: it fails at the start. "idle" is a folder no camera writes into: it
-  // never ends by itself. "narrowing" goes on to clog; the stop comes there, as Ctrl-C would.
+  // never ends by itself. "off" is to watch its printer's webcam, and its Moonraker does not
+  // answer (a port nothing listens on): the farm starts all the same, and it is asked again until
+  // the stop. "narrowing" goes on to clog; the stop comes there, as Ctrl-C would.
   fs::create_directories(*dir_ / "idle");
   std::ofstream(*dir_ / "broken.avi") << "not a video";
+  const std::string dead_moonraker =
+      "http://127.0.0.1:" + std::to_string(testing::FreeLoopbackPort());
   const WatchFarmOptions farm =
       Config("",
              "  - {name: broken, source: broken.avi}\n"
              "  - {name: idle, source: idle, log: idle.jsonl}\n"
-             "  - {name: narrowing, source: narrowing.avi, log: narrowing.jsonl}\n");
+             "  - {name: narrowing, source: narrowing.avi, log: narrowing.jsonl}\n"
+             "  - {name: off, moonraker: '" +
+                 dead_moonraker + "'}\n");
   std::atomic<bool> stop{false};
   WatchFarmObservers observers;
   observers.on_level_change = [&](const std::string& printer, const watch::WatchStatus& s) {
@@ -325,6 +331,7 @@ TEST_F(WatchFarmTest, AFailedCameraLeavesTheOthersAndAStopEndsEveryCameraWithIts
   EXPECT_EQ(report.cameras[2].summary.final_level, watch::WatchLevel::kClog);
   EXPECT_EQ(report.cameras[1].summary.ended_because, "stopped");
   EXPECT_EQ(report.cameras[1].summary.frames, 0);
+  EXPECT_EQ(report.cameras[3].summary.frames, 0);  // stopped while waiting to ask again
   for (const std::string name : {"idle", "narrowing"}) {
     const std::vector<json> lines = Lines(*dir_ / (name + ".jsonl"));
     ASSERT_FALSE(lines.empty()) << name;
