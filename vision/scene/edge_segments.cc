@@ -1,7 +1,6 @@
 #include "vision/scene/edge_segments.h"
 
 #include <algorithm>
-#include <cassert>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
@@ -179,19 +178,6 @@ class SobelRows {
 
 }  // namespace
 
-cv::Mat HalveToFloat(const cv::Mat& channel) {
-  assert(channel.type() == CV_8UC1 && channel.cols % 2 == 0 && channel.rows % 2 == 0);
-  cv::Mat out(channel.rows / 2, channel.cols / 2, CV_32F);
-  for (int y = 0; y < out.rows; ++y) {
-    const uint8_t* a = channel.ptr<uint8_t>(2 * y);
-    const uint8_t* b = channel.ptr<uint8_t>(2 * y + 1);
-    float* o = out.ptr<float>(y);
-    for (int x = 0; x < out.cols; ++x)
-      o[x] = static_cast<float>((a[2 * x] + a[2 * x + 1] + b[2 * x] + b[2 * x + 1] + 2) >> 2);
-  }
-  return out;
-}
-
 void Piece::Fit() {
   double n = 0, sy = 0, sx = 0, syy = 0, sxy = 0;
   for (const auto& p : pts) {
@@ -213,29 +199,24 @@ Detection DetectEdgePoints(const cv::Mat& channel, const SceneOptions& o) {
   Detection d;
   d.factor = std::min(channel.cols, channel.rows) >= 240 ? 2 : 1;
   d.row_step = std::max(1, 4 / d.factor);
-  // 8-bit data at the detection scale is whole grey levels (INTER_AREA rounds).
-  const bool whole_levels = channel.depth() == CV_8U;
-  cv::Mat f32;
-  if (d.factor == 2 && whole_levels && channel.cols % 2 == 0 && channel.rows % 2 == 0) {
-    f32 = HalveToFloat(channel);
+  cv::Mat small;
+  if (d.factor == 2) {
+    cv::resize(channel, small, cv::Size(channel.cols / 2, channel.rows / 2), 0, 0, cv::INTER_AREA);
   } else {
-    cv::Mat small;
-    if (d.factor == 2) {
-      cv::resize(channel, small, cv::Size(channel.cols / 2, channel.rows / 2), 0, 0,
-                 cv::INTER_AREA);
-    } else {
-      small = channel;
-    }
-    small.convertTo(f32, CV_32F);
+    small = channel;
   }
+  cv::Mat f32;
+  small.convertTo(f32, CV_32F);
   d.image = f32;
 
   // Pixel noise by Immerkær's mask [1 −2 1; −2 4 −2; 1 −2 1] (σ of its response is 6σ for white
   // noise), robustly through the median: a second difference hardly sees smooth texture or
   // straight edges, whereas a median gradient would count a textured scene as noise. The Sobel
   // gradient scaled by 1/8 carries 0.433σ of it.
-  // On whole grey levels the mask's responses are integers up to 16·255 and their median is read
-  // off their counts: a selection over 57 600 of them was most of a 720p frame's search.
+  // 8-bit data at the detection scale is whole grey levels (INTER_AREA rounds), so the mask's
+  // responses are integers up to 16·255 and their median is read off their counts: a selection
+  // over 57 600 of them was most of a 720p frame's search.
+  const bool whole_levels = small.depth() == CV_8U;
   constexpr int kLevels = 16 * 255 + 1, kLanes = 4;  // lanes: no wait on the last count's store
   std::vector<double> lap;
   std::vector<int> lane_counts(whole_levels ? kLanes * kLevels : 0, 0);

@@ -45,10 +45,6 @@ struct Detection {
 // weakest accepted step, oriented within max_tilt_deg + 10° of upright, with sub-pixel positions.
 Detection DetectEdgePoints(const cv::Mat& channel, const SceneOptions& options);
 
-// An 8-bit channel of even size at half resolution, as float: each 2×2 block's mean rounded to a
-// whole grey level, as cv::resize with INTER_AREA gives it, in one pass.
-cv::Mat HalveToFloat(const cv::Mat& channel);
-
 // The straight pieces of the detection's edges (at least kMinPiecePoints points each).
 std::vector<Piece> StraightPieces(const Detection& d, double max_tilt_deg);
 

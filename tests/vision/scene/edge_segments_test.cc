@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <opencv2/imgproc.hpp>
 
 #include "synthetic/synthetic.h"
 #include "vision/scene/strand_measure.h"
@@ -43,28 +42,13 @@ TEST(DetectEdgePointsTest, NoiseAndEdgesAreTheRenderedOnes) {
         ++rows;
         bool found_left = false, found_right = false;
         for (const EdgePoint& e : d.rows[r]) {
-          found_left =
-              found_left || (std::abs(e.x - left) < 0.35 && e.sign == +1);  // brighter to +x
+          found_left = found_left || (std::abs(e.x - left) < 0.35 && e.sign == +1);  // brighter to +x
           found_right = found_right || (std::abs(e.x - right) < 0.35 && e.sign == -1);
         }
         EXPECT_TRUE(found_left && found_right) << "row " << d.row_y[r] << ", noise " << noise;
       }
       EXPECT_GT(rows, 50);
     }
-  }
-}
-
-// OpenCV's INTER_AREA halving is the truth, on random data and on a view into a larger image.
-TEST(HalveToFloatTest, IsOpenCvsAreaResize) {
-  cv::Mat big(124, 98, CV_8U);
-  cv::randu(big, 0, 256);
-  for (const cv::Mat& m : {big, big(cv::Rect(3, 5, 64, 42))}) {
-    cv::Mat area, expected;
-    cv::resize(m, area, cv::Size(m.cols / 2, m.rows / 2), 0, 0, cv::INTER_AREA);
-    area.convertTo(expected, CV_32F);
-    const cv::Mat got = HalveToFloat(m);
-    ASSERT_EQ(got.size(), expected.size());
-    EXPECT_EQ(cv::norm(got, expected, cv::NORM_INF), 0.0);
   }
 }
 
