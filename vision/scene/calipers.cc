@@ -318,18 +318,27 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
                 fmt::format("{} of {} edge pixels clipped", total_saturated, total_samples));
   }
   // A strand's interior clipped at the object's end of the range (a dark background clipped at 0
-  // is no matter) may hide the lit ramp that sets where a shaded edge lies: the shading model
-  // cannot be fitted to it, nor can the plain step tell it is missing (a bright strand lit down
-  // to 0.4 at its rim, clipped 9 px in, came out 1.4 px narrow as a plain step), however clean
-  // the transitions are.
+  // is no matter): the shading model reads the lit interior, and cannot be fitted to it clipped.
+  // A plain step only reads its plateau's level: clipped there by noise about a level just inside
+  // the range it moves by a fraction of a grey level, but when most of the interior is clipped
+  // (its median), the level itself is out of range: a lit ramp the plain step cannot tell is
+  // there (a bright strand lit down to 0.4 at its rim, clipped 9 px in, came out 1.4 px narrow),
+  // or a dark strand below a codec's black losing the foot of its edges.
+  const double slab_px = width0 + 2 * reach_px;  // FindClipLevels' slab across the band
+  const double object_share = slab_px > 0 ? std::clamp(width0 / slab_px, 0.0, 1.0) : 1.0;
+  const bool shaded = shade[0] == 1 || shade[1] == 1;
+  const double max_object_clipped = shaded
+                                        ? opt.max_saturated_fraction
+                                        : std::max(opt.max_saturated_fraction, 0.5 * object_share);
   const double object_clipped = g.polarity == Polarity::kBrightOnDark ? clip.clipped_high_fraction
                                 : g.polarity == Polarity::kDarkOnBright
                                     ? clip.clipped_low_fraction
                                     : clip.clipped_low_fraction + clip.clipped_high_fraction;
-  if (object_clipped > opt.max_saturated_fraction) {
+  if (object_clipped > max_object_clipped) {
     return fail(FrameStatus::kSaturated,
-                fmt::format("{:.0f} % of the band clipped: its shading cannot be judged",
-                            100 * object_clipped));
+                fmt::format("{:.0f} % of the band clipped: {}", 100 * object_clipped,
+                            shaded ? "its shading cannot be fitted"
+                                   : "the strand's level is out of range"));
   }
   // A lit object on both sides (a front-lit strand or filament): one cylinder per caliper.
   // Only on an object the per-edge fits already saw as one (enough consistent calipers): a wrong
