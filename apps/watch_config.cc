@@ -15,6 +15,7 @@
 #include "common/atomic_file.h"
 #include "common/csv.h"
 #include "common/path_check.h"
+#include "common/yaml_fields.h"
 #include "pipeline/band.h"
 #include "vision/edges/polarity.h"
 #include "vision/scene/frame_status.h"
@@ -25,48 +26,13 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Reads typed values out of the file's nodes; every refusal is "PATH:LINE: problem".
-class Reader {
+// Reads typed values out of the file's nodes (YamlFields), and its paths relative to its folder;
+// every refusal is "PATH:LINE: problem".
+class Reader : public YamlFields {
  public:
-  Reader(std::string path, fs::path base) : path_(std::move(path)), base_(std::move(base)) {}
+  Reader(std::string path, fs::path base) : YamlFields(std::move(path)), base_(std::move(base)) {}
 
-  const std::string& path() const { return path_; }
-  [[noreturn]] void Fail(const YAML::Node& n, const std::string& problem) const {
-    throw std::invalid_argument(fmt::format("{}:{}: {}", path_, n.Mark().line + 1, problem));
-  }
-  void CheckKeys(const YAML::Node& map, const std::function<bool(const std::string&)>& known,
-                 const std::string& where, const std::string& hint) const {
-    for (const auto& kv : map) {
-      if (!kv.first.IsScalar()) Fail(kv.first, where + ": a key must be a plain name");
-      if (!known(kv.first.Scalar()))
-        Fail(kv.first, fmt::format("unknown key '{}' {} ({})", kv.first.Scalar(), where, hint));
-    }
-  }
-  std::string Text(const YAML::Node& n, const std::string& key) const {
-    if (!n.IsScalar()) Fail(n, key + ": expected a single value");
-    return n.Scalar();
-  }
-  double Number(const YAML::Node& n, const std::string& key) const {
-    const std::string text = Text(n, key);
-    try {
-      return ParseNumberField(text, path_, key);  // the one number parser of files
-    } catch (const std::invalid_argument&) {
-      Fail(n, fmt::format("{}: '{}' is not a number", key, text));
-    }
-  }
-  bool Flag(const YAML::Node& n, const std::string& key) const {
-    const std::string text = Text(n, key);
-    if (text == "true") return true;
-    if (text == "false") return false;
-    Fail(n, fmt::format("{}: '{}': expected true or false", key, text));
-  }
-  std::vector<std::string> TextList(const YAML::Node& n, const std::string& key) const {
-    if (n.IsScalar()) return {n.Scalar()};
-    if (!n.IsSequence()) Fail(n, key + ": expected a value or a list");
-    std::vector<std::string> out;
-    for (const auto& item : n) out.push_back(Text(item, key));
-    return out;
-  }
+  const std::string& path() const { return source(); }
   // A path in the file: relative to the file's folder.
   std::string Path(const YAML::Node& n, const std::string& key) const {
     const std::string p = Text(n, key);
@@ -80,7 +46,6 @@ class Reader {
   }
 
  private:
-  std::string path_;
   fs::path base_;
 };
 
@@ -254,12 +219,7 @@ bool WatchFarmOptions::Validate(std::string* why) const {
 WatchFarmOptions LoadWatchConfig(const std::string& path) {
   RequireInputPath("--config", path, PathExpect::kFile);
   const std::string text = ReadFile(path);
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw std::invalid_argument(fmt::format("{}:{}: {}", path, e.mark.line + 1, e.msg));
-  }
+  const YAML::Node root = LoadYamlText(text, path);
   if (!root.IsMap()) throw std::invalid_argument(path + ": expected a mapping (" + kTopKeys + ")");
   const Reader r(path, fs::path(path).parent_path());
   const std::set<std::string> top = {"http",     "http_token_file", "mqtt", "mqtt_credentials_file",

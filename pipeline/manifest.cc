@@ -13,6 +13,7 @@
 #include "common/atomic_file.h"
 #include "common/csv.h"
 #include "common/path_check.h"
+#include "common/yaml_fields.h"
 #include "pipeline/statistics.h"
 #include "vision/io/video_io.h"
 
@@ -21,52 +22,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class YamlReader {
- public:
-  explicit YamlReader(std::string source) : source_(std::move(source)) {}
-
-  [[noreturn]] void Fail(const YAML::Node& n, const std::string& msg) const {
-    throw std::invalid_argument(fmt::format("{}:{}: {}", source_, n.Mark().line + 1, msg));
-  }
-  void CheckKeys(const YAML::Node& map, const std::set<std::string>& known) const {
-    for (const auto& kv : map) {
-      const std::string key = kv.first.Scalar();
-      if (!known.count(key)) {
-        std::string list;
-        for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-        Fail(kv.first, fmt::format("unknown key '{}' (known: {})", key, list));
-      }
-    }
-  }
-  double Number(const YAML::Node& n, const std::string& key) const {
-    if (!n.IsScalar()) Fail(n, key + ": expected a number");
-    try {
-      return ParseNumberField(n.Scalar(), source_, key);  // the one number parser of files
-    } catch (const std::invalid_argument&) {
-      Fail(n, fmt::format("{}: '{}' is not a number", key, n.Scalar()));
-    }
-  }
-  int Whole(const YAML::Node& n, const std::string& key) const {
-    const double v = Number(n, key);
-    if (v != std::floor(v) || std::abs(v) > 1e9)
-      Fail(n, fmt::format("{}: expected a whole number", key));
-    return static_cast<int>(v);
-  }
-  std::string Text(const YAML::Node& n, const std::string& key) const {
-    if (!n.IsScalar()) Fail(n, key + ": expected a single value");
-    return n.Scalar();
-  }
-  std::vector<std::string> TextList(const YAML::Node& n, const std::string& key) const {
-    if (n.IsScalar()) return {n.Scalar()};
-    if (!n.IsSequence()) Fail(n, key + ": expected a value or a list");
-    std::vector<std::string> out;
-    for (const auto& item : n) out.push_back(Text(item, key));
-    return out;
-  }
-
- private:
-  std::string source_;
-};
+using YamlReader = YamlFields;
 
 std::string Resolve(const fs::path& base, const std::string& p) {
   if (p.empty() || fs::path(p).is_absolute()) return p;
@@ -152,12 +108,7 @@ Manifest LoadManifest(const std::string& path) {
     m = LoadCsvManifest(path);
   } else {
     const std::string text = ReadFile(path);
-    YAML::Node root;
-    try {
-      root = YAML::Load(text);
-    } catch (const YAML::Exception& e) {
-      throw std::invalid_argument(fmt::format("{}:{}: {}", path, e.mark.line + 1, e.msg));
-    }
+    const YAML::Node root = LoadYamlText(text, path);
     const YamlReader y(path);
     if (!root.IsMap())
       throw std::invalid_argument(path + ": expected a mapping (name:, steps:, …)");

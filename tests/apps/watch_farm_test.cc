@@ -45,24 +45,6 @@ double LastWindowTruthUm(const std::vector<synthetic::FrameTruth>& truths) {
   return testing::TruthMean(truths, end_s - kWindowS + 1e-6, end_s);
 }
 
-std::map<std::string, double> ParseMetrics(const std::string& text) {
-  std::map<std::string, double> out;
-  std::istringstream in(text);
-  for (std::string line; std::getline(in, line);) {
-    if (line.empty() || line[0] == '#') continue;
-    const size_t space = line.rfind(' ');
-    out[line.substr(0, space)] = std::stod(line.substr(space + 1));
-  }
-  return out;
-}
-
-double At(const std::map<std::string, double>& m, const std::string& sample) {
-  const auto it = m.find(sample);
-  if (it != m.end()) return it->second;
-  ADD_FAILURE() << sample << " is not in /metrics";
-  return NAN;
-}
-
 // The JSON lines of a log.
 std::vector<json> Lines(const fs::path& log) {
   std::vector<json> out;
@@ -170,24 +152,25 @@ TEST_F(WatchFarmTest, OnlyTheNarrowingCameraClogsAndStatusAndMetricsSaySoUnderIt
         testing::RunWithInput({promtool, "check", "metrics"}, r.body);
     EXPECT_EQ(check.exit_code, 0) << check.output << "\n" << r.body;
     EXPECT_EQ(check.output, "") << "lint remarks";
-    const std::map<std::string, double> m = ParseMetrics(r.body);
+    const std::map<std::string, double> m = testing::ParseMetrics(r.body);
     for (const std::string name : {"narrowing", "steady"}) {
       const std::string p = "printer=\"" + name + "\"";
       const double truth_um = LastWindowTruthUm(truths_->at(name));
       const double baseline_truth_um = testing::TruthMean(truths_->at(name), 0, 3.0 - 1e-6);
-      EXPECT_NEAR(At(m, "clogscope_strand_diameter_meters{" + p + "}"), truth_um * 1e-6,
+      EXPECT_NEAR(testing::At(m, "clogscope_strand_diameter_meters{" + p + "}"), truth_um * 1e-6,
                   kToleranceUm * 1e-6)
           << name;
-      EXPECT_NEAR(At(m, "clogscope_strand_drift_ratio{" + p + "}"),
+      EXPECT_NEAR(testing::At(m, "clogscope_strand_drift_ratio{" + p + "}"),
                   truth_um / baseline_truth_um - 1, kDriftTolerance)
           << name;
       const bool clog = name == "narrowing";
-      EXPECT_EQ(At(m, "clogscope_level{" + p + ",level=\"clog\"}"), clog ? 1 : 0) << name;
-      EXPECT_EQ(At(m, "clogscope_level{" + p + ",level=\"ok\"}"), clog ? 0 : 1) << name;
-      EXPECT_EQ(At(m, "clogscope_alerts_total{" + p + ",level=\"clog\"}"), clog ? 1 : 0) << name;
-      EXPECT_EQ(At(m, "clogscope_frames_total{" + p + "}"), 250) << name;
+      EXPECT_EQ(testing::At(m, "clogscope_level{" + p + ",level=\"clog\"}"), clog ? 1 : 0) << name;
+      EXPECT_EQ(testing::At(m, "clogscope_level{" + p + ",level=\"ok\"}"), clog ? 0 : 1) << name;
+      EXPECT_EQ(testing::At(m, "clogscope_alerts_total{" + p + ",level=\"clog\"}"), clog ? 1 : 0)
+          << name;
+      EXPECT_EQ(testing::At(m, "clogscope_frames_total{" + p + "}"), 250) << name;
     }
-    EXPECT_EQ(At(m, std::string("clogscope_build_info{version=\"") + kVersion + "\"}"), 1);
+    EXPECT_EQ(testing::At(m, std::string("clogscope_build_info{version=\"") + kVersion + "\"}"), 1);
     // Each family once: as many HELP lines as families.
     std::set<std::string> helps;
     std::istringstream in(r.body);

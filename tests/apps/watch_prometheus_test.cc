@@ -33,32 +33,14 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 using nlohmann::json;
+using testing::At;
+using testing::ParseMetrics;
 
 constexpr double kScaleUmPerPx = testing::kClipScaleUmPerPx;
 constexpr double kNarrowAtS = testing::kClipNarrowAtS;
 constexpr double kBaselineUm = testing::kClipBaselineUm, kNarrowedUm = testing::kClipNarrowedUm;
 // The measurement's accuracy on these rendered frames: a pixel at 3 µm/px (0.8 % of the strand).
 constexpr double kToleranceM = kScaleUmPerPx * 1e-6;
-
-// One sample of the text format: `name{labels}` → value.
-std::map<std::string, double> ParseMetrics(const std::string& text) {
-  std::map<std::string, double> out;
-  std::istringstream in(text);
-  for (std::string line; std::getline(in, line);) {
-    if (line.empty() || line[0] == '#') continue;
-    const size_t space = line.rfind(' ');
-    out[line.substr(0, space)] = std::stod(line.substr(space + 1));
-  }
-  return out;
-}
-
-// The sample's value; a failure when it is absent.
-double At(const std::map<std::string, double>& metrics, const std::string& sample) {
-  const auto it = metrics.find(sample);
-  if (it != metrics.end()) return it->second;
-  ADD_FAILURE() << sample << " is not in /metrics";
-  return NAN;
-}
 
 // The clogscope_ names a text refers to, a histogram's series by the histogram's name.
 std::set<std::string> MetricNames(const std::string& text) {

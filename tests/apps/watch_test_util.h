@@ -7,6 +7,9 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <map>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #include "apps/watch_command.h"
@@ -61,6 +64,26 @@ inline void WatchHeldAtFirstChange(
   std::atomic<bool> stop{false};
   WatchNozzle(o, &stop, observers);
   EXPECT_TRUE(called) << "the watch never changed level";
+}
+
+// One sample of the text format: `name{labels}` → value.
+inline std::map<std::string, double> ParseMetrics(const std::string& text) {
+  std::map<std::string, double> out;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    const size_t space = line.rfind(' ');
+    out[line.substr(0, space)] = std::stod(line.substr(space + 1));
+  }
+  return out;
+}
+
+// The sample's value; a failure when it is absent.
+inline double At(const std::map<std::string, double>& metrics, const std::string& sample) {
+  const auto it = metrics.find(sample);
+  if (it != metrics.end()) return it->second;
+  ADD_FAILURE() << sample << " is not in /metrics";
+  return NAN;
 }
 
 }  // namespace clogscope::apps::testing
