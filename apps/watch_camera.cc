@@ -56,6 +56,13 @@ CameraWatch::CameraWatch(const WatchCommandOptions& options, std::string printer
 
 CameraWatch::~CameraWatch() = default;
 
+watch::WatchSnapshot CameraWatch::PublishEnded() {
+  watch::WatchSnapshot s = board_.Read();
+  s.status.source_up = false;
+  board_.PublishState(s.status, s.clog, s.counters);
+  return s;
+}
+
 bool CameraWatch::StartMayBeRetried() const {
   const std::string& source = live_.source;
   return webcam_from_printer_ || source.find("://") != std::string::npos ||

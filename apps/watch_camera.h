@@ -37,6 +37,9 @@ class CameraWatch {
   // or a farm's camera whose source is its printer's webcam (asked for as it starts). A file or
   // folder that cannot be opened will not come back by waiting.
   bool StartMayBeRetried() const;
+  // After Run: the board's last state with its source down (a farm goes on serving the others;
+  // the last level and diameter stay, as measured). The state published.
+  watch::WatchSnapshot PublishEnded();
   // Where /status is served, told in every line.
   void SetHttpUrl(const std::string& url) { live_.http_url = url; }
 

@@ -66,13 +66,18 @@ const std::map<std::string, Setter>& CameraKeys() {
       map<std::string, Setter>
           keys =
               {
+                  // A camera's own scale or calibration replaces the other from defaults.
                   {"scale_um_per_px",
-                   Num([](O* o) -> std::optional<double>& { return o->measure.scale_um_per_px; })},
+                   [](const Reader& r, const YAML::Node& n, const std::string& k, O* o) {
+                     o->measure.scale_um_per_px = r.Number(n, k);
+                     o->measure.calibration.reset();
+                   }},
                   {"calib",
                    [](const Reader& r, const YAML::Node& n, const std::string& k, O* o) {
                      const std::string path = r.Path(n, k);
                      RequireInputPath("calib", path, PathExpect::kFile);
                      o->measure.calibration = calib::ReadCalibrationFile(path);
+                     o->measure.scale_um_per_px.reset();
                    }},
                   {"roi", [](const Reader& r, const YAML::Node& n, const std::string& k,
                              O* o) { o->measure.strand.roi = pipeline::ParseRoi(r.Text(n, k)); }},
@@ -159,6 +164,8 @@ const std::map<std::string, Setter>& CameraKeys() {
 
 // The keys of `map` into *o; a value the option's own parser refuses is told at its line.
 void Apply(const Reader& r, const YAML::Node& map, WatchCommandOptions* o) {
+  if (map["calib"] && map["scale_um_per_px"])
+    r.Fail(map["scale_um_per_px"], "give either calib or scale_um_per_px, not both");
   for (const auto& kv : map) {
     const std::string key = kv.first.Scalar();
     const auto it = CameraKeys().find(key);

@@ -129,6 +129,9 @@ WatchFarmReport WatchFarm(const WatchFarmOptions& options, std::atomic<bool>* st
         errors[i] = e.what();
       }
       if (!report.cameras[i].summary.error.empty()) errors[i] = report.cameras[i].summary.error;
+      // Served on as ended, not as a source still up: /status, /metrics and MQTT say so.
+      const watch::WatchSnapshot last = cameras[i]->PublishEnded();
+      if (mqtt) mqtt->Update(i, last.status, last.clog);
       stops[i] = true;
       std::lock_guard<std::mutex> lock(mutex);
       --running;
@@ -137,9 +140,15 @@ WatchFarmReport WatchFarm(const WatchFarmOptions& options, std::atomic<bool>* st
   }
   {
     std::unique_lock<std::mutex> lock(mutex);
-    // A signal handler cannot notify: the farm's flag is looked at every 50 ms.
+    // A signal handler cannot notify: the farm's flag is looked at every 50 ms. --duration-s
+    // ends the farm too, cameras still waiting to start included (a camera's own watch counts it
+    // from its own start).
+    const auto started = Clock::now();
+    const auto deadline =
+        started + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
+                      options.duration_s > 0 ? options.duration_s : 0.0));
     while (running > 0) {
-      if (stop->load())
+      if (stop->load() || (options.duration_s > 0 && Clock::now() >= deadline))
         for (auto& s : stops) s = true;
       ended.wait_for(lock, std::chrono::milliseconds(50));
     }

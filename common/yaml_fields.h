@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <functional>
+#include <map>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -41,15 +42,20 @@ class YamlFields {
     CheckKeys(
         map, [&](const std::string& key) { return known.count(key) > 0; }, "", "known: " + list);
   }
-  // Every key of `map` plain and `known`: "unknown key 'K' WHERE (HINT)".
+  // Every key of `map` plain, `known` and given once ("unknown key 'K' WHERE (HINT)"; yaml-cpp
+  // keeps a repeated key, and which one a reader took would depend on how it looked).
   void CheckKeys(const YAML::Node& map, const std::function<bool(const std::string&)>& known,
                  const std::string& where, const std::string& hint) const {
+    std::map<std::string, int> seen;  // key -> its line
     for (const auto& kv : map) {
       if (!kv.first.IsScalar()) Fail(kv.first, "a key must be a plain name");
       const std::string key = kv.first.Scalar();
       if (!known(key))
         Fail(kv.first,
              fmt::format("unknown key '{}'{}{} ({})", key, where.empty() ? "" : " ", where, hint));
+      const auto [it, first] = seen.emplace(key, kv.first.Mark().line + 1);
+      if (!first)
+        Fail(kv.first, fmt::format("'{}' given twice (also at line {})", key, it->second));
     }
   }
   std::string Text(const YAML::Node& n, const std::string& key) const {

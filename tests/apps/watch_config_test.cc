@@ -89,6 +89,17 @@ cameras:
       Write("cameras:\n  - {name: a, source: a.mp4, calib: calib.yaml}\n", "c.yaml"));
   ASSERT_TRUE(c.cameras[0].options.measure.calibration.has_value());
   EXPECT_DOUBLE_EQ(c.cameras[0].options.measure.calibration->scale_um_per_px, 3.1);
+
+  // A camera's own scale replaces the calibration of the defaults, and the other way round.
+  const WatchFarmOptions d = LoadWatchConfig(
+      Write("defaults:\n  calib: calib.yaml\ncameras:\n  - {name: a, source: a.mp4, "
+            "scale_um_per_px: 2.5}\n  - {name: b, source: b.mp4}\n",
+            "d.yaml"));
+  EXPECT_FALSE(d.cameras[0].options.measure.calibration.has_value());
+  EXPECT_EQ(d.cameras[0].options.measure.scale_um_per_px, 2.5);
+  ASSERT_TRUE(d.cameras[1].options.measure.calibration.has_value());
+  EXPECT_FALSE(d.cameras[1].options.measure.scale_um_per_px.has_value());
+  EXPECT_TRUE(d.Validate(&why)) << why;
 }
 
 TEST_F(WatchConfigTest, TheExampleInTheDocsIsAGoodFile) {
@@ -144,6 +155,13 @@ TEST_F(WatchConfigTest, EachBadInputIsRefusedNamingTheFileAndTheLine) {
       {"cameras not a list", "cameras:\n  name: a\n", 2, "cameras: expected a list of cameras"},
       {"empty list", "cameras: []\n", 1, "cameras: expected a list of cameras"},
       {"YAML syntax", "cameras:\n  - name: a\n    source: [a.mp4\n", 4, ""},
+      {"scale and calibration",
+       "cameras:\n  - name: a\n    source: a.mp4\n    calib: c.yaml\n    scale_um_per_px: 3\n", 5,
+       "give either calib or scale_um_per_px, not both"},
+      {"a key twice", "cameras:\n  - name: a\n    source: a.mp4\n    source: b.mp4\n", 4,
+       "'source' given twice (also at line 3)"},
+      {"a top key twice", "http: 8090\nhttp: 8091\ncameras:\n  - {name: a, source: a.mp4}\n", 2,
+       "'http' given twice (also at line 1)"},
   };
   for (const BadCase& c : cases) {
     const std::string path = Write(c.yaml);

@@ -169,6 +169,8 @@ TEST_F(WatchFarmTest, OnlyTheNarrowingCameraClogsAndStatusAndMetricsSaySoUnderIt
       EXPECT_EQ(testing::At(m, "clogscope_alerts_total{" + p + ",level=\"clog\"}"), clog ? 1 : 0)
           << name;
       EXPECT_EQ(testing::At(m, "clogscope_frames_total{" + p + "}"), 250) << name;
+      // Its file ended: served on as a source that is down, with what it last measured.
+      EXPECT_EQ(testing::At(m, "clogscope_source_up{" + p + "}"), 0) << name;
     }
     EXPECT_EQ(testing::At(m, std::string("clogscope_build_info{version=\"") + kVersion + "\"}"), 1);
     // Each family once: as many HELP lines as families.
@@ -284,6 +286,17 @@ TEST_F(WatchFarmTest, MqttCarriesEachCameraUnderItsNameOverOneConnection) {
     ASSERT_FALSE(levels.empty()) << name;
     EXPECT_EQ(levels.back().payload, name == "narrowing" ? "clog" : "ok") << name;
   }
+}
+
+// --duration-s ends the farm even while a camera still waits to start (its Moonraker silent).
+TEST_F(WatchFarmTest, TheDurationEndsAFarmWhoseCameraNeverStarts) {
+  WatchFarmOptions farm = Config("", "  - {name: off, moonraker: 'http://127.0.0.1:" +
+                                         std::to_string(testing::FreeLoopbackPort()) + "'}\n");
+  farm.duration_s = 0.3;
+  std::atomic<bool> stop{false};
+  const WatchFarmReport report = WatchFarm(farm, &stop, {});
+  ASSERT_EQ(report.cameras.size(), 1u);
+  EXPECT_EQ(report.cameras[0].summary.frames, 0);
 }
 
 TEST_F(WatchFarmTest, AFailedCameraLeavesTheOthersAndAStopEndsEveryCameraWithItsStopLine) {
