@@ -276,7 +276,11 @@ struct WatchHttpServer::Impl {
           "</head><body><h1>Cameras</h1><ul>";
       for (const Feed& f : cameras)
         r.body += fmt::format("<li><a href=\"cameras/{0}/\">{0}</a></li>", f.name);
-      r.body += "</ul></body></html>\n";
+      // A list opened as /#token=T hands its fragment on to each page, which reads the token
+      // there (the fragment never reaches the server).
+      r.body +=
+          "</ul><script>for (const a of document.querySelectorAll('a')) a.href += "
+          "location.hash;</script></body></html>\n";
       r.headers.emplace_back("Content-Security-Policy", kPageSecurityPolicy);
       r.headers.emplace_back("Referrer-Policy", "no-referrer");
     } else {

@@ -53,11 +53,18 @@ TEST(WatchFarmPageTest, TheListLinksEachCameraAndACamerasPageDrawsItsOwnState) {
   observers.on_level_change = [&](const std::string& printer, const watch::WatchStatus& s) {
     if (printer != "held" || checked) return;
     checked = true;
-    // The list: a link to each camera's page, relative to it.
-    const std::string list =
-        testing::Chromium(dir, runs++, fmt::format("http://127.0.0.1:{}/", port), "--dump-dom");
-    EXPECT_NE(list.find("href=\"cameras/held/\""), std::string::npos) << list;
-    EXPECT_NE(list.find("href=\"cameras/other/\""), std::string::npos) << list;
+    // The list: a link to each camera's page, handing on the list's fragment (where a token
+    // goes: /#token=T).
+    const std::string list = testing::Chromium(
+        dir, runs++, fmt::format("http://127.0.0.1:{}/#token=probe", port), "--dump-dom");
+    EXPECT_NE(
+        list.find(fmt::format("href=\"http://127.0.0.1:{}/cameras/held/#token=probe\"", port)),
+        std::string::npos)
+        << list;
+    EXPECT_NE(
+        list.find(fmt::format("href=\"http://127.0.0.1:{}/cameras/other/#token=probe\"", port)),
+        std::string::npos)
+        << list;
 
     // The held camera's page draws its state: level, and its diameters through the page's axes.
     const std::string base = "/cameras/held/";
