@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "model/prediction_run.h"
+#include "vision/io/live_source.h"
 
 namespace clogscope::apps {
 
@@ -50,6 +51,7 @@ CameraWatch::CameraWatch(const WatchCommandOptions& options, std::string printer
   } else if (!live_.Validate(&why)) {
     throw std::invalid_argument(why);
   }
+  frames_ = std::make_shared<watch::OverlayJpegCache>(&board_, live_.conversion);
   log_ = std::make_unique<LineLog>(options.log_path);
   if (!options.on_alert.empty()) alert_.emplace(options.on_alert, printer_);
 }
@@ -64,9 +66,9 @@ watch::WatchSnapshot CameraWatch::PublishEnded() {
 }
 
 bool CameraWatch::StartMayBeRetried() const {
-  const std::string& source = live_.source;
-  return webcam_from_printer_ || source.find("://") != std::string::npos ||
-         source.rfind("/dev/", 0) == 0;
+  if (webcam_from_printer_) return true;
+  const vision::SourceKind kind = vision::LiveSourceKindOf(live_.source);
+  return kind == vision::SourceKind::kStream || kind == vision::SourceKind::kDevice;
 }
 
 WatchReport CameraWatch::Run(

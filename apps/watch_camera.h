@@ -12,6 +12,7 @@
 
 #include "apps/watch_command.h"
 #include "apps/watch_outputs.h"
+#include "watch/frame_jpeg.h"
 #include "watch/live_watch.h"
 #include "watch/printer_link.h"
 
@@ -33,6 +34,8 @@ class CameraWatch {
   const std::string& printer() const { return printer_; }
   const watch::LiveWatchOptions& live() const { return live_; }
   const watch::WatchBoard& board() const { return board_; }
+  // The camera for the outputs: its name, board, scale and the overlay pictures they share.
+  watch::CameraFeed Feed() const { return {printer_, &board_, live_.conversion, frames_}; }
   // Whether a start that failed may succeed later: a stream or device (its printer switched off),
   // or a farm's camera whose source is its printer's webcam (asked for as it starts). A file or
   // folder that cannot be opened will not come back by waiting.
@@ -61,6 +64,7 @@ class CameraWatch {
   std::unique_ptr<LineLog> log_;
   std::optional<AlertCommand> alert_;
   watch::WatchBoard board_;
+  std::shared_ptr<watch::OverlayJpegCache> frames_;  // of board_, drawn once for every output
   bool webcam_from_printer_ = false;  // a farm's camera with no source: its printer's webcam
 };
 

@@ -28,12 +28,6 @@ extern "C" void OnWatchSignal(int) {
   if (g_stop_watch.exchange(true)) _exit(130);
 }
 
-// The MQTT publisher's lines, from its own threads: nothing of the watch's stack is captured.
-watch::MqttPublisher::Log MqttLog() {
-  return {[](const std::string& m) { spdlog::info("{}", m); },
-          [](const std::string& m) { spdlog::warn("{}", m); }};
-}
-
 // Installs the stop on Ctrl-C and SIGTERM for the duration of `run`.
 template <typename Run>
 auto WithStopSignals(Run run) {
@@ -66,15 +60,8 @@ int RunWatchFarm(const CLI::App& app, const std::string& config, double duration
   WatchFarmOptions farm = LoadWatchConfig(config);
   farm.duration_s = duration_s;
   const WatchFarmReport r = WithStopSignals([&] { return WatchFarm(farm, &g_stop_watch); });
-  for (size_t i = 0; i < r.names.size(); ++i) {
-    const watch::LiveWatchSummary& s = r.cameras[i].summary;
-    spdlog::info(
-        "{}: watch ended ({}): {} frames, {} valid, {} skipped, {} reconnect(s), {} level "
-        "change(s), final level {}; latency median {:.1f} ms, p95 {:.1f} ms",
-        r.names[i], s.ended_because.empty() ? "not started" : s.ended_because, s.frames,
-        s.valid_frames, s.skipped_frames, s.reconnects, s.level_changes,
-        watch::WatchLevelName(s.final_level), s.latency_median_ms, s.latency_p95_ms);
-  }
+  for (size_t i = 0; i < r.names.size(); ++i)
+    LogWatchEnded(r.names[i] + ": ", r.cameras[i].summary);
   if (!r.errors.empty())
     throw std::invalid_argument(fmt::format("{} of {} cameras failed: {}", r.errors.size(),
                                             r.names.size(), fmt::join(r.errors, "; ")));
@@ -94,10 +81,11 @@ WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* s
   if (!options.http_token_file.empty()) http_options.token = ReadHttpToken(options.http_token_file);
 
   std::optional<WatchHttpServer> http;
-  if (!options.http.empty()) http.emplace(http_options, &camera.board(), conversion);
+  const watch::CameraFeed feed = camera.Feed();
+  if (!options.http.empty()) http.emplace(http_options, feed.board, conversion, feed.frames);
   std::optional<watch::MqttPublisher> mqtt;
   if (!options.mqtt.url.empty() || !options.mqtt.credentials_file.empty())
-    mqtt.emplace(options.mqtt, &camera.board(), conversion, MqttLog());
+    mqtt.emplace(options.mqtt, feed.board, conversion, MqttLog(), feed.frames);
   const int http_port = http ? http->port() : 0;
   if (http) {
     camera.SetHttpUrl(http->url());
@@ -240,13 +228,8 @@ int RunWatch(int argc, char** argv) {
   if (!watch::ParsePauseLevel(pause_level, &p.pause.pause_level))
     throw std::invalid_argument("--pause-level " + pause_level + ": warn or clog");
   const WatchReport r = WithStopSignals([&] { return WatchNozzle(o, &g_stop_watch); });
-  const watch::LiveWatchSummary& s = r.summary;
-  spdlog::info(
-      "watch ended ({}): {} frames, {} valid, {} skipped, {} reconnect(s), {} level change(s), "
-      "final level {}; latency median {:.1f} ms, p95 {:.1f} ms",
-      s.ended_because, s.frames, s.valid_frames, s.skipped_frames, s.reconnects, s.level_changes,
-      watch::WatchLevelName(s.final_level), s.latency_median_ms, s.latency_p95_ms);
-  if (!s.error.empty()) throw std::invalid_argument(s.error);
+  LogWatchEnded("", r.summary);
+  if (!r.summary.error.empty()) throw std::invalid_argument(r.summary.error);
   return 0;
 }
 

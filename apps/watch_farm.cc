@@ -13,6 +13,7 @@
 
 #include "apps/watch_camera.h"
 #include "apps/watch_http.h"
+#include "apps/watch_outputs.h"
 #include "vision/io/live_source.h"
 #include "watch/mqtt_publisher.h"
 
@@ -51,11 +52,6 @@ WatchReport RunCamera(CameraWatch* camera, std::atomic<bool>* stop, watch::MqttP
   }
 }
 
-watch::MqttPublisher::Log MqttLog() {
-  return {[](const std::string& m) { spdlog::info("{}", m); },
-          [](const std::string& m) { spdlog::warn("{}", m); }};
-}
-
 }  // namespace
 
 WatchFarmReport WatchFarm(const WatchFarmOptions& options, std::atomic<bool>* stop,
@@ -77,20 +73,12 @@ WatchFarmReport WatchFarm(const WatchFarmOptions& options, std::atomic<bool>* st
   WatchHttpOptions http_options;
   http_options.address = options.http;
   if (!options.http_token_file.empty()) http_options.token = ReadHttpToken(options.http_token_file);
+  std::vector<watch::CameraFeed> feeds;
+  for (const auto& c : cameras) feeds.push_back(c->Feed());
   std::optional<WatchHttpServer> http;
-  if (!options.http.empty()) {
-    std::vector<WatchHttpServer::Camera> served;
-    for (const auto& c : cameras)
-      served.push_back({c->printer(), &c->board(), c->live().conversion});
-    http.emplace(http_options, std::move(served));
-  }
+  if (!options.http.empty()) http.emplace(http_options, feeds);
   std::optional<watch::MqttPublisher> mqtt;
-  if (!options.mqtt.url.empty()) {
-    std::vector<watch::MqttPublisher::Camera> published;
-    for (const auto& c : cameras)
-      published.push_back({c->printer(), &c->board(), c->live().conversion});
-    mqtt.emplace(options.mqtt, std::move(published), MqttLog());
-  }
+  if (!options.mqtt.url.empty()) mqtt.emplace(options.mqtt, feeds, MqttLog());
   WatchFarmReport report;
   report.http_port = http ? http->port() : 0;
   if (http) {

@@ -186,13 +186,7 @@ std::string ReadHttpToken(const std::string& path) {
 }
 
 struct WatchHttpServer::Impl {
-  struct Feed {
-    std::string name;
-    const watch::WatchBoard* board;
-    std::optional<calib::ScaleCalibration> conversion;
-    std::unique_ptr<watch::OverlayJpegCache> frames;
-  };
-  std::vector<Feed> cameras;
+  std::vector<Camera> cameras;  // each with its pictures
   bool farm = false;  // --config: the cameras' paths under /cameras/NAME/, labelled metrics
   std::string token;
   MHD_Daemon* daemon = nullptr;
@@ -221,13 +215,13 @@ struct WatchHttpServer::Impl {
                      "this watch answers to 127.0.0.1, [::1] or localhost only (a guard against "
                      "DNS rebinding; --http-token-file lets other names in)");
     // A farm's camera: /cameras/NAME/PATH is that camera's PATH.
-    const Feed* camera = farm ? nullptr : &cameras.front();
+    const Camera* camera = farm ? nullptr : &cameras.front();
     std::string inner = path;
     const std::string under = "/cameras/";
     if (farm && path.rfind(under, 0) == 0) {
       const size_t slash = path.find('/', under.size());
       const std::string name = path.substr(under.size(), slash - under.size());
-      for (const Feed& f : cameras)
+      for (const Camera& f : cameras)
         if (f.name == name) camera = &f;
       if (!camera) return Refusal(MHD_HTTP_NOT_FOUND, "no camera named '" + name + "'");
       // The page asks for status, history.json and frame.jpg beside itself: it needs the slash.
@@ -252,7 +246,7 @@ struct WatchHttpServer::Impl {
       // Names are [A-Za-z0-9_-]: JSON keys as they are.
       r.content_type = "application/json";
       r.body = "{\"cameras\":{";
-      for (const Feed& f : cameras) {
+      for (const Camera& f : cameras) {
         const watch::WatchSnapshot s = f.board->Read();
         r.body += (&f == &cameras.front() ? "\"" : ",\"") + f.name +
                   "\":" + watch::StatusJson(s.status, s.clog, s.counters, "status");
@@ -260,7 +254,7 @@ struct WatchHttpServer::Impl {
       r.body += "}}\n";
     } else if (path == "/metrics") {
       std::vector<watch::PrometheusCamera> all;
-      for (const Feed& f : cameras) {
+      for (const Camera& f : cameras) {
         const watch::WatchSnapshot s = f.board->Read();
         all.push_back({f.name, s.status, s.clog, s.counters});
       }
@@ -274,7 +268,7 @@ struct WatchHttpServer::Impl {
       r.body =
           "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>clogscope watch</title>"
           "</head><body><h1>Cameras</h1><ul>";
-      for (const Feed& f : cameras)
+      for (const Camera& f : cameras)
         r.body += fmt::format("<li><a href=\"cameras/{0}/\">{0}</a></li>", f.name);
       // A list opened as /#token=T hands its fragment on to each page, which reads the token
       // there (the fragment never reaches the server).
@@ -292,7 +286,7 @@ struct WatchHttpServer::Impl {
   }
 
   // One camera's paths (all of a single watch's).
-  Reply CameraRoute(MHD_Connection* c, const Feed& camera, const std::string& path) const {
+  Reply CameraRoute(MHD_Connection* c, const Camera& camera, const std::string& path) const {
     const watch::WatchBoard* board = camera.board;
     Reply r;
     if (path == "/status") {
@@ -359,9 +353,11 @@ struct WatchHttpServer::Impl {
 };
 
 WatchHttpServer::WatchHttpServer(const WatchHttpOptions& options, const watch::WatchBoard* board,
-                                 std::optional<calib::ScaleCalibration> conversion)
+                                 std::optional<calib::ScaleCalibration> conversion,
+                                 std::shared_ptr<watch::OverlayJpegCache> frames)
     : impl_(std::make_unique<Impl>()) {
-  impl_->Start(options, {Camera{"", board, std::move(conversion)}}, /*farm=*/false);
+  impl_->Start(options, {Camera{"", board, std::move(conversion), std::move(frames)}},
+               /*farm=*/false);
 }
 
 WatchHttpServer::WatchHttpServer(const WatchHttpOptions& options, std::vector<Camera> cameras)
@@ -376,8 +372,8 @@ void WatchHttpServer::Impl::Start(const WatchHttpOptions& options, std::vector<C
   Impl& d = *this;
   d.farm = farm_paths;
   for (Camera& c : feeds) {
-    auto frames = std::make_unique<watch::OverlayJpegCache>(c.board, c.conversion);
-    d.cameras.push_back({std::move(c.name), c.board, std::move(c.conversion), std::move(frames)});
+    if (!c.frames) c.frames = std::make_shared<watch::OverlayJpegCache>(c.board, c.conversion);
+    d.cameras.push_back(std::move(c));
   }
   d.token = options.token;
   const HostPort hp = ParseAddress(options.address);

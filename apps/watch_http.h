@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "calib/pixel_scale.h"
+#include "watch/frame_jpeg.h"
 #include "watch/live_watch.h"
 
 namespace clogscope::apps {
@@ -51,13 +52,10 @@ class WatchHttpServer {
   // Binds at once and serves on its own threads from then on. Throws std::invalid_argument naming
   // --http when the address is malformed, its host unknown, or the port cannot be bound.
   WatchHttpServer(const WatchHttpOptions& options, const watch::WatchBoard* board,
-                  std::optional<calib::ScaleCalibration> conversion);
-  // A camera of a farm (`watch --config`).
-  struct Camera {
-    std::string name;  // [A-Za-z0-9_-]+: its paths /cameras/NAME/… and label printer="NAME"
-    const watch::WatchBoard* board = nullptr;
-    std::optional<calib::ScaleCalibration> conversion;
-  };
+                  std::optional<calib::ScaleCalibration> conversion,
+                  std::shared_ptr<watch::OverlayJpegCache> frames = nullptr);
+  // A camera of a farm (`watch --config`): its paths /cameras/NAME/… and label printer="NAME".
+  using Camera = watch::CameraFeed;
   // Many cameras: /cameras/NAME/ (the page), /cameras/NAME/status, /history.json and /frame.jpg
   // for each; /status, every camera's state by name; /metrics, every camera's series labelled
   // printer="NAME"; / the page of the one camera (a redirect), or a list of the cameras.

@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -101,5 +102,19 @@ std::vector<std::string> AlertCommand::Reap(bool wait) {
 }
 
 AlertCommand::~AlertCommand() { Reap(/*wait=*/true); }
+
+watch::MqttPublisher::Log MqttLog() {
+  return {[](const std::string& m) { spdlog::info("{}", m); },
+          [](const std::string& m) { spdlog::warn("{}", m); }};
+}
+
+void LogWatchEnded(const std::string& prefix, const watch::LiveWatchSummary& s) {
+  spdlog::info(
+      "{}watch ended ({}): {} frames, {} valid, {} skipped, {} reconnect(s), {} level change(s), "
+      "final level {}; latency median {:.1f} ms, p95 {:.1f} ms",
+      prefix, s.ended_because.empty() ? "not started" : s.ended_because, s.frames, s.valid_frames,
+      s.skipped_frames, s.reconnects, s.level_changes, watch::WatchLevelName(s.final_level),
+      s.latency_median_ms, s.latency_p95_ms);
+}
 
 }  // namespace clogscope::apps

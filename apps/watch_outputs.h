@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "watch/live_watch.h"
+#include "watch/mqtt_publisher.h"
 
 namespace clogscope::apps {
 
@@ -21,6 +22,13 @@ class LineLog {
   int fd_ = 1;
   bool own_ = false;
 };
+
+// The MQTT publisher's lines, from its own threads: nothing of the watch's stack is captured.
+watch::MqttPublisher::Log MqttLog();
+
+// The log's last line of a watch: how it ended, its frames, levels and latency. `prefix` names the
+// camera in a farm ("NAME: "), or is empty.
+void LogWatchEnded(const std::string& prefix, const watch::LiveWatchSummary& s);
 
 // --on-alert: runs `sh -c COMMAND` on every level change without waiting for it, the state in
 // CLOGSCOPE_* environment variables (LEVEL, PREVIOUS_LEVEL, TIME_S, REASON, DIAMETER_UM,

@@ -3,6 +3,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "calib/pixel_scale.h"
@@ -32,6 +33,16 @@ class OverlayJpegCache {
   std::mutex mutex_;  // held while drawing: a second reader of the same frame waits for it
   long long sequence_ = -1;
   std::shared_ptr<const std::vector<unsigned char>> jpeg_;
+};
+
+// A camera as the watch's outputs see it (the HTTP server, the MQTT publisher): its name in a farm
+// (empty for a single watch), its board, its scale, and its overlay pictures, shared by every
+// output so that each frame is drawn once.
+struct CameraFeed {
+  std::string name;  // [A-Za-z0-9_-]+ in a farm
+  const WatchBoard* board = nullptr;
+  std::optional<calib::ScaleCalibration> conversion;
+  std::shared_ptr<OverlayJpegCache> frames;  // null: the output draws its own
 };
 
 }  // namespace clogscope::watch

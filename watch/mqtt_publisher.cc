@@ -146,12 +146,13 @@ struct MqttPublisher::Impl {
   // One camera's topics, picture and latest state (its fields after `frames` under `mutex`).
   struct Feed {
     Feed(const std::string& prefix, const std::string& availability, const Camera& c)
-        : topics(prefix), frames(c.board, c.conversion) {
+        : topics(prefix),
+          frames(c.frames ? c.frames : std::make_shared<OverlayJpegCache>(c.board, c.conversion)) {
       topics.availability = availability;  // one for the process: its last will
     }
     MqttTopics topics;
     std::vector<MqttMessage> discovery;
-    OverlayJpegCache frames;
+    std::shared_ptr<OverlayJpegCache> frames;
     std::vector<MqttMessage> latest;  // the latest state's messages
     bool state_due = false, frame_due = false;
     Clock::time_point last_frame{};
@@ -329,7 +330,7 @@ struct MqttPublisher::Impl {
         picture->frame_due = false;
         lock.unlock();
         // Drawn here, never on the measuring thread. No frame yet: the next update asks again.
-        const auto jpeg = picture->frames.Latest();
+        const auto jpeg = picture->frames->Latest();
         if (jpeg) Send({picture->topics.frame, std::string(jpeg->begin(), jpeg->end()), /*qos=*/0});
         lock.lock();
         if (jpeg) picture->last_frame = Clock::now();
@@ -379,8 +380,10 @@ struct MqttPublisher::Impl {
 };
 
 MqttPublisher::MqttPublisher(const MqttOptions& options, const WatchBoard* board,
-                             std::optional<calib::ScaleCalibration> conversion, Log log)
-    : MqttPublisher(options, {Camera{"", board, std::move(conversion)}}, std::move(log)) {}
+                             std::optional<calib::ScaleCalibration> conversion, Log log,
+                             std::shared_ptr<OverlayJpegCache> frames)
+    : MqttPublisher(options, {Camera{"", board, std::move(conversion), std::move(frames)}},
+                    std::move(log)) {}
 
 MqttPublisher::MqttPublisher(const MqttOptions& options, std::vector<Camera> cameras, Log log) {
   std::string why;

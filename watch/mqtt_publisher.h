@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "calib/pixel_scale.h"
+#include "watch/frame_jpeg.h"
 #include "watch/live_watch.h"
 #include "watch/mqtt_messages.h"
 
@@ -70,14 +71,11 @@ class MqttPublisher {
   // the option) when the options do not validate. `board` gives the picture for the camera and
   // must outlive the publisher.
   MqttPublisher(const MqttOptions& options, const WatchBoard* board,
-                std::optional<calib::ScaleCalibration> conversion, Log log);
+                std::optional<calib::ScaleCalibration> conversion, Log log,
+                std::shared_ptr<OverlayJpegCache> frames = nullptr);
   // A camera of a farm (`watch --config`): its topics are <prefix>/<name>/state, /level,
   // /diameter_mm and /frame, its Home Assistant device <prefix>_<name>.
-  struct Camera {
-    std::string name;  // [A-Za-z0-9_-]+
-    const WatchBoard* board = nullptr;
-    std::optional<calib::ScaleCalibration> conversion;
-  };
+  using Camera = CameraFeed;
   // Many cameras over one connection: one <prefix>/availability (one last will) for them all.
   MqttPublisher(const MqttOptions& options, std::vector<Camera> cameras, Log log);
   // Publishes "offline", disconnects and ends the threads, waiting at most about stop_timeout_s

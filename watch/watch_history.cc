@@ -6,17 +6,10 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
+#include "watch/json_number.h"
 #include "watch/watch_report.h"
 
 namespace clogscope::watch {
-namespace {
-
-// JSON has no NaN: a quantity not known is null.
-nlohmann::json Number(double v, int digits) {
-  return std::isfinite(v) ? nlohmann::json(RoundDecimals(v, digits)) : nlohmann::json();
-}
-
-}  // namespace
 
 bool WatchHistoryOptions::Validate(std::string* why) const {
   if (!(period_s >= 0.01 && period_s <= 3600))
@@ -77,15 +70,15 @@ std::string HistoryJson(const std::vector<HistoryPoint>& points, const WatchHist
   for (const HistoryPoint& p : points) {
     list.push_back({{"time_s", RoundDecimals(p.time_s, 3)},
                     {"level", WatchLevelName(p.level)},
-                    {"diameter_px", Number(p.diameter_px, 4)},
-                    {"ci95_low_px", Number(p.diameter_px - p.diameter_ci95_px, 4)},
-                    {"ci95_high_px", Number(p.diameter_px + p.diameter_ci95_px, 4)},
-                    {"diameter_um", Number(p.diameter_um, 3)},
-                    {"ci95_low_um", Number(p.diameter_um - p.diameter_ci95_um, 3)},
-                    {"ci95_high_um", Number(p.diameter_um + p.diameter_ci95_um, 3)},
-                    {"baseline_px", Number(p.baseline_px, 4)},
-                    {"baseline_um", Number(p.baseline_um, 3)},
-                    {"drift_pct", Number(p.drift_pct, 4)},
+                    {"diameter_px", JsonNumber(p.diameter_px, 4)},
+                    {"ci95_low_px", JsonNumber(p.diameter_px - p.diameter_ci95_px, 4)},
+                    {"ci95_high_px", JsonNumber(p.diameter_px + p.diameter_ci95_px, 4)},
+                    {"diameter_um", JsonNumber(p.diameter_um, 3)},
+                    {"ci95_low_um", JsonNumber(p.diameter_um - p.diameter_ci95_um, 3)},
+                    {"ci95_high_um", JsonNumber(p.diameter_um + p.diameter_ci95_um, 3)},
+                    {"baseline_px", JsonNumber(p.baseline_px, 4)},
+                    {"baseline_um", JsonNumber(p.baseline_um, 3)},
+                    {"drift_pct", JsonNumber(p.drift_pct, 4)},
                     {"valid_fraction", RoundDecimals(p.valid_fraction, 4)}});
   }
   const nlohmann::json j = {{"period_s", options.period_s},

@@ -10,15 +10,9 @@
 
 #include "common/version.h"
 #include "model/predictor.h"
+#include "watch/json_number.h"
 
 namespace clogscope::watch {
-namespace {
-
-// JSON has no NaN: a quantity not known yet is null.
-nlohmann::json Number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
-
-}  // namespace
-
 double RoundDecimals(double v, int digits) {
   const double f = std::pow(10.0, digits);
   return std::isfinite(v) ? std::round(v * f) / f : v;
@@ -74,9 +68,9 @@ std::string StatusJson(const WatchStatus& s, const std::optional<ClogIndex>& clo
   nlohmann::json d;
   if (s.has_diameter) {
     d["px"] = RoundDecimals(s.diameter_px, 4);
-    d["um"] = Number(RoundDecimals(s.diameter_um, 3));
-    d["ci95_um"] = Number(RoundDecimals(s.diameter_ci95_um, 3));
-    d["std_um"] = Number(RoundDecimals(s.diameter_std_um, 3));
+    d["um"] = JsonNumber(s.diameter_um, 3);
+    d["ci95_um"] = JsonNumber(s.diameter_ci95_um, 3);
+    d["std_um"] = JsonNumber(s.diameter_std_um, 3);
     d["n_used"] = s.n_used;
     d["n_rejected"] = s.n_rejected;
     d["n_effective"] = RoundDecimals(s.n_effective, 1);
@@ -86,20 +80,20 @@ std::string StatusJson(const WatchStatus& s, const std::optional<ClogIndex>& clo
   if (s.baseline_ready) {
     b["source"] = s.baseline_source;
     b["px"] = RoundDecimals(s.baseline_px, 4);
-    b["um"] = Number(RoundDecimals(s.baseline_um, 3));
-    b["ci95_um"] = Number(RoundDecimals(s.baseline_ci95_um, 3));
+    b["um"] = JsonNumber(s.baseline_um, 3);
+    b["ci95_um"] = JsonNumber(s.baseline_ci95_um, 3);
   }
   j["baseline"] = b;
   nlohmann::json dr;
   if (s.baseline_ready && s.has_diameter) {
-    dr["um"] = Number(RoundDecimals(s.drift_um, 3));
+    dr["um"] = JsonNumber(s.drift_um, 3);
     dr["pct"] = RoundDecimals(s.drift_pct, 4);
     dr["ci95_pct"] = RoundDecimals(s.drift_ci95_pct, 4);
   }
   if (s.has_recent) {
     dr["recent_pct"] = RoundDecimals(s.recent_drift_pct, 4);
     dr["recent_ci95_pct"] = RoundDecimals(s.recent_drift_ci95_pct, 4);
-    dr["recent_um"] = Number(RoundDecimals(s.recent_diameter_um, 3));
+    dr["recent_um"] = JsonNumber(s.recent_diameter_um, 3);
   }
   j["drift"] = dr;
   nlohmann::json ci;
