@@ -22,8 +22,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-using YamlReader = YamlFields;
-
 std::string Resolve(const fs::path& base, const std::string& p) {
   if (p.empty() || fs::path(p).is_absolute()) return p;
   return (base / p).lexically_normal().string();
@@ -109,7 +107,7 @@ Manifest LoadManifest(const std::string& path) {
   } else {
     const std::string text = ReadFile(path);
     const YAML::Node root = LoadYamlText(text, path);
-    const YamlReader y(path);
+    const YamlFields y(path);
     if (!root.IsMap())
       throw std::invalid_argument(path + ": expected a mapping (name:, steps:, …)");
     y.CheckKeys(root, {"name",

@@ -20,6 +20,7 @@ using fitcore::cylinder::kLit;
 using fitcore::cylinder::kMinSigmaPx;
 using fitcore::cylinder::kShapes;
 using fitcore::cylinder::kTilt;
+using fitcore::cylinder::RobustScale;
 using fitcore::cylinder::Shapes;
 
 // The parameters: the backgrounds' (kBg = 4: each side its own line, the object opaque; kBg = 2:
@@ -117,13 +118,7 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
       residuals[i] = Model<kBg>(samples[i], q, u_ref, root, j) - samples[i].value;
     }
   };
-  // The residuals' robust scale (1.4826·MAD), and Cauchy weights from the residuals at a scale.
-  const auto robust_scale = [&]() {
-    std::vector<double> abs_r(residuals.size());
-    std::transform(residuals.begin(), residuals.end(), abs_r.begin(),
-                   [](double r) { return std::abs(r); });
-    return std::max(kMadToSigma * Median(abs_r), 1e-6);
-  };
+  // Cauchy weights from the residuals at a scale (RobustScale).
   const auto reweight = [&](double scale) {
     for (size_t i = 0; i < samples.size(); ++i) {
       const double z = residuals[i] / (kCauchyC * scale);
@@ -136,7 +131,7 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   SolveAmplitudes<kBg>(samples, w, u_ref, &p);
   for (int round = 0; round < 2; ++round) {
     residuals_at(p);
-    reweight(robust_scale());
+    reweight(RobustScale(residuals));
     SolveAmplitudes<kBg>(samples, w, u_ref, &p);
   }
 
@@ -185,7 +180,7 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   out.iterations = lm.iterations;
   if (!lm.converged) return out;
   residuals_at(lm.p);
-  const double noise = robust_scale();
+  const double noise = RobustScale(residuals);
   cauchy_scale = noise;
   lm = fitcore::MinimiseLm<kN>(lm.p, evaluate, bound, small_step);
   out.iterations += lm.iterations;

@@ -2,11 +2,19 @@
 
 // The lit cylinder's model (cylinder_fit.h), shared by its full fit and by its fit as a template
 // in later frames (cylinder_track.h). Internal to the vision module.
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
+#include "common/robust.h"
 #include "vision/edges/fit_shapes.h"
 
 namespace clogscope::vision::fitcore::cylinder {
+
+// A fit's residuals' robust scale: 1.4826·MAD about 0, at least 1e-6 grey levels.
+inline double RobustScale(const std::vector<double>& residuals) {
+  return std::max(kMadToSigma * Mad(residuals, 0.0), 1e-6);
+}
 
 constexpr double kMinSigmaPx = 0.15;  // the narrowest blur a fit may take
 // Cauchy weights 1/(1 + (r/(c·s))²) with c = 2.385: 95 % efficiency on Gaussian noise.

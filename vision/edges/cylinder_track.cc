@@ -15,6 +15,7 @@ using fitcore::Vec;
 using fitcore::cylinder::EvalShapes;
 using fitcore::cylinder::kCauchyC;
 using fitcore::cylinder::kMinSigmaPx;
+using fitcore::cylinder::RobustScale;
 using fitcore::cylinder::Shapes;
 
 // The template's parameters: the one background line b₀ + b₁·(u − u_ref), amplitudes a, k, l as
@@ -68,13 +69,6 @@ System Evaluate(const CylinderTemplate& t, const std::vector<EdgeSample>& sample
   }
   fitcore::Symmetric<kN>(h, g, &out.jtj, &out.jtr);
   return out;
-}
-
-double RobustScale(const std::vector<double>& residuals) {
-  std::vector<double> a(residuals.size());
-  std::transform(residuals.begin(), residuals.end(), a.begin(),
-                 [](double r) { return std::abs(r); });
-  return std::max(kMadToSigma * Median(a), 1e-6);
 }
 
 }  // namespace

@@ -151,9 +151,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   if (memory) memory->Use(f, opt.caliper_spacing_px);
   TrackedCylinders tracked;
   bool from_memory = false;
-  const bool fit_in_full = memory && memory->fit_in_full_once;
-  if (memory) memory->fit_in_full_once = false;
-  if (memory && !fit_in_full && !memory->empty() && g.precise && shade[0] == 1 && shade[1] == 1 &&
+  if (memory && !memory->empty() && g.precise && shade[0] == 1 && shade[1] == 1 &&
       g.left_sign == -g.right_sign) {
     tracked = TrackCylinders(img, f, clip, band_s0, opt.caliper_spacing_px, n_cal, memory);
     from_memory = tracked.refused <= kMaxRefusedTemplates * n_cal;

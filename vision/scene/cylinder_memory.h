@@ -50,11 +50,6 @@ class CylinderMemory {
   double cylinder_doubt_px = 0;
   // Frames measured from the templates (calipers.cc counts them; for tests and benches).
   int frames_from_templates = 0;
-  // The next measurement fits every caliper in full, as the first frame, keeping templates
-  // (calipers.cc clears it): a look at the whole stretch, most of whose calipers the templates do
-  // not describe (a gear's marks), whose tracked fits would be refused and then done in full
-  // anyway.
-  bool fit_in_full_once = false;
 
  private:
   AxisFrame frame_;

@@ -121,18 +121,19 @@ bool StrandTracker::Follow(const cv::Mat& frame, StrandMeasurement* out) {
     const int n = short_straight_frames_;
     if (short_part && ((n & (n - 1)) == 0 || n % kRegrowAtMostFrames == 0)) {
       // Perhaps straight again beyond it: the whole stretch's longest straight part, if longer.
-      // A look not taken leaves the templates, lines and doubt of the part that was measured
-      // (the look's come from the whole stretch, gear marks and all).
+      // Every caliper fitted in full, into a memory of its own (most of the whole stretch's
+      // calipers the templates do not describe: a gear's marks): taken, its templates replace
+      // the part's; not taken, the part's templates, lines and doubt stay.
       StrandGeometry whole = g;
       whole.straight_s0_px = whole.straight_s1_px = 0;
-      CylinderMemory kept = cylinders_;
-      cylinders_.fit_in_full_once = true;
-      StrandMeasurement w = MeasureInScene(channel, data_max, FrameStatus::kValid, "", whole, roi,
-                                           options_, cylinders);
-      if (w.valid() && StraightCalipers(w, spacing) > StraightCalipers(m, spacing))
+      CylinderMemory look;
+      StrandMeasurement w =
+          MeasureInScene(channel, data_max, FrameStatus::kValid, "", whole, roi, options_, &look);
+      if (w.valid() && StraightCalipers(w, spacing) > StraightCalipers(m, spacing)) {
         m = std::move(w);
-      else
-        cylinders_ = std::move(kept);
+        look.frames_from_templates = cylinders_.frames_from_templates;
+        cylinders_ = std::move(look);
+      }
     }
   }
   // A frame that does not measure like the last one is looked at afresh.
