@@ -53,16 +53,20 @@ double SharedStructureEdgeDoubtPx(double shared_rms, double rms, double edge_sig
   return per_unit * shared_rms;
 }
 
+double EdgeStructureDoubt::DoubtPx() const {
+  return per_unit_.size() < 2 ? 0.0 : Median(per_unit_) * structure_.SharedRms();
+}
+
 double BandEdgeDoubtPx(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
                        const std::vector<CaliperEdge>& edges, double below_px, double above_px) {
-  ResidualStructure structure(std::max(below_px, above_px));
+  EdgeStructureDoubt doubt(std::max(below_px, above_px));
   // The pooled profile in 0.1 px bins, far finer than any blur: the fits then cost what two
   // calipers' do, not what the whole band's samples would.
   constexpr double kBinPx = 0.1;
   const int bins = static_cast<int>(std::ceil((below_px + above_px) / kBinPx)) + 1;
   std::vector<double> sum(bins, 0.0), sum2(bins, 0.0), count(bins, 0.0);
   std::vector<EdgeSample> samples;
-  std::vector<double> per_unit, blur;
+  std::vector<double> blur;
   bool plain = true;
   for (const CaliperEdge& c : edges) {
     const EdgeFit& e = c.fit;
@@ -71,7 +75,7 @@ double BandEdgeDoubtPx(const GreyImage& img, const AxisFrame& f, const ClipLevel
     if (!GatherEdgeSamples(img, f, c.s0_px, c.s1_px, u0, u1, clip, &samples, &clipped)) continue;
     for (const EdgeSample& smp : samples) {
       const double u = smp.u_px - e.edge_px;
-      structure.Add(u, smp.value - EdgeModelValue(e, smp.u_px));
+      doubt.structure().Add(u, smp.value - EdgeModelValue(e, smp.u_px));
       // The same float distance the pooled samples were binned by.
       const int b = static_cast<int>(std::lround((static_cast<float>(u) + below_px) / kBinPx));
       if (b < 0 || b >= bins) continue;
@@ -79,12 +83,12 @@ double BandEdgeDoubtPx(const GreyImage& img, const AxisFrame& f, const ClipLevel
       sum2[b] += static_cast<double>(smp.value) * smp.value;
       count[b] += 1;
     }
-    per_unit.push_back(SharedStructureEdgeDoubtPx(1.0, e.rms, e.edge_sigma_px, e.samples, u1 - u0));
+    doubt.AddCaliper(e.rms, e.edge_sigma_px, e.samples, u1 - u0);
     blur.push_back(e.sigma_px);
     plain = plain && e.object_side == 0;
   }
-  if (per_unit.size() < 2) return 0.0;
-  const double shared_px = Median(per_unit) * structure.SharedRms();
+  if (doubt.calipers() < 2) return 0.0;
+  const double shared_px = doubt.DoubtPx();
   double slopes_px = 0;
   if (plain) {
     // Both models on the pooled profile, where the noise has averaged down: their difference is

@@ -40,6 +40,25 @@ class ResidualStructure {
 double SharedStructureEdgeDoubtPx(double shared_rms, double rms, double edge_sigma_px, int samples,
                                   double window_px);
 
+// One edge's shared-structure doubt over a band's calipers: each caliper's residuals placed about
+// its own fitted edge (structure()), and what one grey level of shared RMS would move that edge
+// (AddCaliper, SharedStructureEdgeDoubtPx); DoubtPx is their median times the shared RMS, 0 with
+// fewer than two calipers.
+class EdgeStructureDoubt {
+ public:
+  explicit EdgeStructureDoubt(double half_width_px) : structure_(half_width_px) {}
+  ResidualStructure& structure() { return structure_; }
+  void AddCaliper(double rms, double edge_sigma_px, int samples, double window_px) {
+    per_unit_.push_back(SharedStructureEdgeDoubtPx(1.0, rms, edge_sigma_px, samples, window_px));
+  }
+  int calipers() const { return static_cast<int>(per_unit_.size()); }
+  double DoubtPx() const;
+
+ private:
+  ResidualStructure structure_;
+  std::vector<double> per_unit_;
+};
+
 // One caliper's fitted edge: the slab s0..s1 along the axis and its edge model.
 struct CaliperEdge {
   double s0_px = 0, s1_px = 0;

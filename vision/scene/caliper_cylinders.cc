@@ -35,8 +35,8 @@ void RefitAsCylinders(const GreyImage& img, const AxisFrame& f, const ClipLevels
   // The residuals the calipers share near each silhouette (residual_structure.h): a profile the
   // lit cylinder does not describe there (a codec's ringing about the shading's steep start,
   // a stripe or halo beside the edge) moves both of its edges alike in every caliper.
-  ResidualStructure structure[2] = {ResidualStructure(outer), ResidualStructure(outer)};
-  std::vector<double> per_unit[2], residuals;
+  EdgeStructureDoubt doubt[2] = {EdgeStructureDoubt(outer), EdgeStructureDoubt(outer)};
+  std::vector<double> residuals;
   // Each caliper starts from its neighbour's blur: the fit then mostly has only the edges to move.
   double sigma_start = sigma_px;
   for (size_t k = 0; k < fits->size(); ++k) {
@@ -62,18 +62,16 @@ void RefitAsCylinders(const GreyImage& img, const AxisFrame& f, const ClipLevels
       for (size_t i = 0; i < samples.size(); ++i) {
         const double du = samples[i].u_px - edge;
         if (std::abs(du) > outer) continue;
-        structure[side].Add(du, residuals[i]);
+        doubt[side].structure().Add(du, residuals[i]);
         ++near;
       }
-      per_unit[side].push_back(SharedStructureEdgeDoubtPx(
-          1.0, cyl.rms, side == 0 ? cyl.left_sigma_px : cyl.right_sigma_px, near, 2 * outer));
+      doubt[side].AddCaliper(cyl.rms, side == 0 ? cyl.left_sigma_px : cyl.right_sigma_px, near,
+                             2 * outer);
     }
     TakeCylinder(cyl, &cf);
   }
-  for (int side = 0; side < 2 && structure_doubt_px; ++side) {
-    structure_doubt_px[side] =
-        per_unit[side].size() < 2 ? 0.0 : Median(per_unit[side]) * structure[side].SharedRms();
-  }
+  for (int side = 0; side < 2 && structure_doubt_px; ++side)
+    structure_doubt_px[side] = doubt[side].DoubtPx();
 }
 
 }  // namespace clogscope::vision
