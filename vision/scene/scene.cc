@@ -22,7 +22,13 @@ constexpr int kMaxFollowed = 6;          // pairs followed along the full-resolu
 constexpr double kFollowOffsetPx = 3.0;  // edge contrast is read this far either side
 constexpr double kMixedPenalty = 0.5;    // a pair brighter on one side only is less likely
 constexpr double kParallelSine = 0.035;  // two axes within 2° of each other are parallel
-constexpr double kEndFraction = 0.3;     // an edge ends where its contrast falls below this share
+// Objects of the other polarity on both sides of a pair, sharing its edges, make it a stripe or a
+// gap as much as a strand when each scores this share of it: its edges are theirs, so a score
+// short of the ambiguity ratio says little about which is the object.
+constexpr double kFlankScoreRatio = 0.5;
+// An edge walk that ends within this of its start began off the edge.
+constexpr double kOffEdgeStartPx = 3.0;
+constexpr double kEndFraction = 0.3;  // an edge ends where its contrast falls below this share
 
 // The segment's line in an axis frame: u at s.
 struct LineInAxis {
@@ -480,8 +486,13 @@ bool FollowPair(const GreyImage& img, const SceneOptions& o, const PairCandidate
   const double inset = std::min(0.25 * c.length_px, 12.0);
   const double top = inset, bottom = c.length_px - inset;
   const double gap = std::max(20.0, 0.5 * c.width_px);
+  // A segment can run on past its object's end (joined in noise or a codec's blocks to an edge
+  // beyond): a walk that ends where it starts began off the edge, and starts again from the
+  // middle of the stretch, which is on it.
   const auto walk = [&](double u0, int sign, double ref, double from, double dir) {
-    return WalkEdge(img, a, u0, c.edge_slope, sign, ref, from, dir, gap);
+    const EdgeEnd end = WalkEdge(img, a, u0, c.edge_slope, sign, ref, from, dir, gap);
+    if (dir * (end.s - from) >= kOffEdgeStartPx) return end;
+    return WalkEdge(img, a, u0, c.edge_slope, sign, ref, 0.5 * (top + bottom), dir, gap);
   };
   const EdgeEnd up_l = walk(c.left_u0, left_sign, ref_l, top, -1);
   const EdgeEnd up_r = walk(c.right_u0, right_sign, ref_r, top, -1);
@@ -605,7 +616,7 @@ std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const P
 // the silhouette around all three is ruled out for the background showing inside it: the gap's
 // neighbours are of the other polarity, so ContestPairs sees no rivals, and nothing else would
 // stop the gap from being measured as the strand.
-std::string FlankedDetail(const SceneResult& r, int index, const SceneOptions& o) {
+std::string FlankedDetail(const SceneResult& r, int index) {
   const PairCandidate& b = r.candidates[index];
   if (b.polarity == Polarity::kMixed) return "";
   const PairCandidate* flank[2] = {nullptr, nullptr};
@@ -613,7 +624,7 @@ std::string FlankedDetail(const SceneResult& r, int index, const SceneOptions& o
     if (other < 0 || other == index) return;
     const PairCandidate& c = r.candidates[other];
     if (c.polarity == b.polarity || c.polarity == Polarity::kMixed ||
-        c.score < o.ambiguity_ratio * b.score ||
+        c.score < kFlankScoreRatio * b.score ||
         std::abs(c.axis.dx * b.axis.dy - c.axis.dy * b.axis.dx) >= kParallelSine)
       return;
     if (c.right == b.left) flank[0] = &c;
@@ -698,7 +709,7 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
     r.runners_up.emplace_back(i, g);
   }
   if (r.chosen >= 0) {
-    if (std::string flanked = FlankedDetail(r, r.chosen, o); !flanked.empty()) {
+    if (std::string flanked = FlankedDetail(r, r.chosen); !flanked.empty()) {
       r.status = FrameStatus::kAmbiguous;
       r.detail = std::move(flanked);
       return;

@@ -130,9 +130,9 @@ inline bool Ambiguous(PairContest c) {
 // The `ambiguous` detail for a kSideBySide or kSimilarScore contest.
 std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const PairCandidate& c);
 // The `ambiguous` detail when candidate `index` lies between two pairs of the other polarity that
-// held up (r.chosen and r.runners_up), share its edges, are parallel to it and score as well: a
-// stripe in one strand or a gap between two objects. Empty when it does not.
-std::string FlankedDetail(const SceneResult& r, int index, const SceneOptions& options);
+// held up (r.chosen and r.runners_up), share its edges, are parallel to it and each score at least
+// half as well: a stripe in one strand or a gap between two objects. Empty when it does not.
+std::string FlankedDetail(const SceneResult& r, int index);
 
 // Finds the strand in one or more single-channel 8/16-bit views of the same ROI (grey, or a
 // colour frame's luma and channels): the channel whose best pair scores highest is used. Contrast

@@ -170,7 +170,7 @@ StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOption
         m.detail = AmbiguityDetail(contest, next, *rival);
         break;
       }
-      if (std::string flanked = FlankedDetail(scene, index, scene_options); !flanked.empty()) {
+      if (std::string flanked = FlankedDetail(scene, index); !flanked.empty()) {
         next.Judge(PairVerdict::kAsLikely, "a stripe or a gap as much as a strand");
         m.status = FrameStatus::kAmbiguous;
         m.detail = std::move(flanked);
