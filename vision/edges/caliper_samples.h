@@ -39,6 +39,10 @@ struct ClippedCount {
 };
 ClippedCount CountClippedNear(const std::vector<EdgeSample>& samples, const ClipLevels& clip,
                               double edge_u, double half_px);
+// An edge's transition, where clipping is judged: two blurs either side of it, and 1 px for the
+// pixel footprint. (A clipped object or background reaching into it biases the edge; clipping
+// further away moves a plateau's level by a fraction of a grey level.)
+inline double ClipZoneHalfWidthPx(double sigma_px) { return 2.0 * sigma_px + 1.0; }
 
 // How far inside the object, from an edge at edge_u (the object toward `inward`, ±1), the next
 // edge lies: a stripe, a lens's core, a clear strand's inner line. Read from the profile across

@@ -26,9 +26,6 @@ constexpr double kRadToDeg = 180.0 / M_PI;
 // A side is shaded only when its edge also moves out by more than this under the shading model.
 constexpr double kMinShadingShiftPx = 0.1;
 constexpr int kReferenceCalipers = 5;  // outside the band, for the occlusion check
-// An edge's transition, where clipping is judged: this many blurs either side of it, and a margin
-// for the pixel footprint. (A clipped object or background reaching into it biases the edge.)
-constexpr double kClipZoneBlurs = 2.0, kClipZoneMarginPx = 1.0;
 // Tracking from templates: more of the band's calipers than this refusing theirs (the scene
 // changed) and the frame is measured as the first was.
 constexpr double kMaxRefusedTemplates = 0.25;
@@ -219,9 +216,9 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
         // fraction of a grey level, and the edge by far less than its σ. Without an edge, the
         // whole window.
         const ClippedCount near =
-            fit.converged ? CountClippedNear(samples, clip, fit.edge_px,
-                                             kClipZoneBlurs * fit.sigma_px + kClipZoneMarginPx)
-                          : ClippedCount{static_cast<int>(samples.size()), window_clipped};
+            fit.converged
+                ? CountClippedNear(samples, clip, fit.edge_px, ClipZoneHalfWidthPx(fit.sigma_px))
+                : ClippedCount{static_cast<int>(samples.size()), window_clipped};
         cf.samples += near.samples;
         cf.saturated += near.clipped;
       }

@@ -12,11 +12,20 @@ double CylinderReachPx(double sigma_px) { return std::max(10.0, 3.0 * sigma_px +
 
 bool GatherCylinderSamples(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
                            double s0_px, double s1_px, double left_px, double right_px,
-                           double sigma_px, std::vector<EdgeSample>* samples, int* clipped) {
+                           double sigma_px, std::vector<EdgeSample>* samples,
+                           ClippedCount* at_edges) {
   const double outer = CylinderReachPx(sigma_px);
+  int clipped_anywhere = 0;
   if (!GatherEdgeSamples(img, f, s0_px, s1_px, left_px - outer, right_px + outer, clip, samples,
-                         clipped))
+                         &clipped_anywhere))
     return false;
+  // A clipped highlight deep inside a lit object is not where its silhouettes are read (the
+  // interior's clipping is judged on the band as a whole, calipers.cc).
+  const double zone = ClipZoneHalfWidthPx(sigma_px);
+  const ClippedCount l = CountClippedNear(*samples, clip, left_px, zone);
+  const ClippedCount r = CountClippedNear(*samples, clip, right_px, zone);
+  at_edges->samples = l.samples + r.samples;
+  at_edges->clipped = l.clipped + r.clipped;
   // Deep inside, the profile only tells the shading's amplitudes, which vary slowly: every fourth
   // sample there does, and the fit costs a third.
   const double keep = std::max(10.0, 3.0 * sigma_px + 4.0);
@@ -62,7 +71,7 @@ TrackedCylinders TrackCylinders(const GreyImage& img, const AxisFrame& f, const 
   for (int k = 0; k < n; ++k) {
     const double s0 = band_s0_px + k * spacing_px, s1 = s0 + spacing_px;
     CylinderFit& fit = out.fits[k];
-    int clipped = 0;
+    ClippedCount at_edges;
     CylinderMemory::Caliper slab;
     const double sc = 0.5 * (s0 + s1);
     slab.s0_px = s0;
@@ -72,19 +81,18 @@ TrackedCylinders TrackCylinders(const GreyImage& img, const AxisFrame& f, const 
     slab.sigma_px = memory->sigma_px;
     if (const CylinderMemory::Caliper* c = memory->Find(s0)) {
       if (!GatherCylinderSamples(img, f, clip, c->s0_px, c->s1_px, c->left_px, c->right_px,
-                                 c->sigma_px, &samples, &clipped)) {
+                                 c->sigma_px, &samples, &at_edges)) {
         out.border = true;
         continue;
       }
       const auto refusal = TrackLitCylinder(c->cylinder, samples, options, &fit);
       if (refusal == CylinderTrackRefusal::kNone) {
         ++out.from_template;
-        out.samples += static_cast<int>(samples.size());
-        out.saturated += clipped;
+        out.samples += at_edges.samples;
+        out.saturated += at_edges.clipped;
         continue;
       }
       ++out.refused;
-      clipped = 0;
       slab.left_px = c->left_px;
       slab.right_px = c->right_px;
       slab.sigma_px = c->sigma_px;
@@ -92,12 +100,12 @@ TrackedCylinders TrackCylinders(const GreyImage& img, const AxisFrame& f, const 
     // In full, as calipers.cc's RefitAsCylinders (a cylinder whose silhouettes leave their slab
     // does not count).
     if (!GatherCylinderSamples(img, f, clip, s0, s1, slab.left_px, slab.right_px, slab.sigma_px,
-                               &samples, &clipped)) {
+                               &samples, &at_edges)) {
       out.border = true;
       continue;
     }
-    out.samples += static_cast<int>(samples.size());
-    out.saturated += clipped;
+    out.samples += at_edges.samples;
+    out.saturated += at_edges.clipped;
     ++out.fitted_in_full;
     fit = FitLitCylinder(samples, slab.left_px, slab.right_px, slab.sigma_px,
                          CylinderBackground::kOneLine);

@@ -14,11 +14,13 @@ double CylinderReachPx(double sigma_px);
 
 // The pixels one caliper's lit cylinder is fitted to: the slab s0 <= s < s1 across both edges
 // (left_px and right_px at its middle) and far enough beyond them for a blur sigma_px, every
-// fourth pixel deep inside the object. Counts clipped pixels in *clipped; false when the slab
-// leaves the image.
+// fourth pixel deep inside the object. Counts the pixels in both edges' transitions and how many
+// of them are clipped (ClipZoneHalfWidthPx about left_px and right_px) in *at_edges, where
+// clipping is judged as the per-edge fits judge it; false when the slab leaves the image.
 bool GatherCylinderSamples(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
                            double s0_px, double s1_px, double left_px, double right_px,
-                           double sigma_px, std::vector<EdgeSample>* samples, int* clipped);
+                           double sigma_px, std::vector<EdgeSample>* samples,
+                           ClippedCount* at_edges);
 
 // A filament's calipers as lit cylinders, kept from the frames that fitted them in full, for the
 // next frames of the same scene (the same axis frame and caliper grid): each caliper's template
@@ -63,9 +65,9 @@ class CylinderMemory {
 // where the full measurement put them: on real profiles the full fit's width moves with the
 // pixels it is given by a tenth of a px.
 struct TrackedCylinders {
-  std::vector<CylinderFit> fits;  // per caliper; not converged where neither fit held
-  bool border = false;            // a slab left the image
-  int samples = 0, saturated = 0;
+  std::vector<CylinderFit> fits;   // per caliper; not converged where neither fit held
+  bool border = false;             // a slab left the image
+  int samples = 0, saturated = 0;  // in the silhouettes' transitions, and clipped there
   int from_template = 0;
   int refused = 0;  // templates that refused the frame (cylinder_track.h), then fitted in full
   int fitted_in_full = 0;
