@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <opencv2/imgproc.hpp>
 
 #include "common/robust.h"
@@ -147,16 +149,29 @@ void MergeCollinear(std::vector<Piece>* pieces, int row_step) {
   }
 }
 
-// The 3×3 Sobel gradients (scaled by 1/8) about one row of a CV_32F image, the border
+// Sums of 8-bit pixels in 16-bit integers (twice the lanes of floats), of others in floats: both
+// exact for the masks here (|sum| ≤ 16·255), so the results are the same to the bit.
+template <typename T>
+struct SumOf {
+  using type = float;
+};
+template <>
+struct SumOf<uint8_t> {
+  using type = int16_t;
+};
+
+// The 3×3 Sobel gradients (scaled by 1/8) about one row of a CV_8U or CV_32F image, the border
 // replicated: only the sampled rows' gradients are needed, and their |∂/∂y| only where |∂/∂x|
 // peaks. Integer-valued data gives the same sums, exactly, in any order.
+template <typename T>
 class SobelRows {
  public:
-  SobelRows(const cv::Mat& f32, int y)
-      : above_(f32.ptr<float>(std::max(0, y - 1))),
-        row_(f32.ptr<float>(y)),
-        below_(f32.ptr<float>(std::min(f32.rows - 1, y + 1))),
-        last_(f32.cols - 1) {}
+  using Sum = typename SumOf<T>::type;
+  SobelRows(const cv::Mat& img, int y)
+      : above_(img.ptr<T>(std::max(0, y - 1))),
+        row_(img.ptr<T>(y)),
+        below_(img.ptr<T>(std::min(img.rows - 1, y + 1))),
+        last_(img.cols - 1) {}
   void GradientX(float* out) const {
     out[0] = Dx(0, std::min(1, last_));
     for (int x = 1; x < last_; ++x) out[x] = Dx(x - 1, x + 1);  // no clamps: vectorised
@@ -164,17 +179,85 @@ class SobelRows {
   }
   float GradientY(int x) const {
     const int l = std::max(0, x - 1), r = std::min(last_, x + 1);
-    return ((below_[l] + 2 * below_[x] + below_[r]) - (above_[l] + 2 * above_[x] + above_[r])) *
-           0.125f;
+    const Sum sum = static_cast<Sum>((Sum(below_[l]) + 2 * Sum(below_[x]) + Sum(below_[r])) -
+                                     (Sum(above_[l]) + 2 * Sum(above_[x]) + Sum(above_[r])));
+    return static_cast<float>(sum) * 0.125f;
   }
 
  private:
   float Dx(int l, int r) const {
-    return ((above_[r] - above_[l]) + 2 * (row_[r] - row_[l]) + (below_[r] - below_[l])) * 0.125f;
+    const Sum sum =
+        static_cast<Sum>((Sum(above_[r]) - Sum(above_[l])) + 2 * (Sum(row_[r]) - Sum(row_[l])) +
+                         (Sum(below_[r]) - Sum(below_[l])));
+    return static_cast<float>(sum) * 0.125f;
   }
-  const float *above_, *row_, *below_;
+  const T *above_, *row_, *below_;
   int last_;
 };
+
+// |Immerkær's mask| at every inner column of row y (the rows above and below it too).
+template <typename T>
+void NoiseMaskRow(const cv::Mat& img, int y, float* response) {
+  using Sum = typename SumOf<T>::type;
+  const T* a = img.ptr<T>(y - 1);
+  const T* b = img.ptr<T>(y);
+  const T* c = img.ptr<T>(y + 1);
+  for (int x = 1; x + 1 < img.cols; ++x) {  // every column: vectorised; every other one used
+    const Sum sum = static_cast<Sum>(Sum(a[x - 1]) - 2 * Sum(a[x]) + Sum(a[x + 1]) -
+                                     2 * (Sum(b[x - 1]) - 2 * Sum(b[x]) + Sum(b[x + 1])) +
+                                     Sum(c[x - 1]) - 2 * Sum(c[x]) + Sum(c[x + 1]));
+    response[x] = std::abs(static_cast<float>(sum));
+  }
+}
+
+// Every sampled row's local maxima of |∂/∂x| above the threshold, within tan_max of upright.
+template <typename T>
+void FindEdgePoints(const cv::Mat& img, float threshold, float tan_max, Detection* d) {
+  const int cols = img.cols;
+  std::vector<float> gx(cols);
+  // Which columns rise above the threshold: found in one vectorised pass, then looked at 8 at a
+  // time, skipping the words with none (most of a row is below it).
+  const int words = (cols + 7) / 8;
+  std::vector<uint8_t> above(8 * words, 0);
+  for (int y = d->row_step / 2; y < img.rows; y += d->row_step) {
+    const SobelRows<T> rows(img, y);
+    rows.GradientX(gx.data());
+    const float* g = gx.data();
+    for (int x = 0; x < cols; ++x) above[x] = std::abs(g[x]) >= threshold;
+    std::vector<EdgePoint> pts;
+    for (int w = 0; w < words; ++w) {
+      uint64_t any;
+      std::memcpy(&any, &above[8 * w], sizeof any);
+      if (any == 0) continue;
+      for (int x = std::max(1, 8 * w); x < std::min(cols - 1, 8 * w + 8); ++x) {
+        if (!above[x]) continue;
+        const float a = std::abs(g[x]);
+        const float l = std::abs(g[x - 1]), r = std::abs(g[x + 1]);
+        if (a < l || a <= r) continue;
+        if (std::abs(rows.GradientY(x)) > a * tan_max) continue;  // too far from an upright edge
+        // Sub-pixel position: centroid of the peak above half its height. A parabola through
+        // three samples is as good on sharp edges and far less noisy on blurred, broad ones.
+        const float half = 0.5f * a;
+        double sw = 0, sx = 0;
+        for (int k = x; k >= std::max(0, x - 12); --k) {
+          const float wk = std::abs(g[k]) - half;
+          if (wk <= 0 || (k < x && (g[k] > 0) != (g[x] > 0))) break;
+          sw += wk;
+          sx += wk * k;
+        }
+        for (int k = x + 1; k <= std::min(cols - 1, x + 12); ++k) {
+          const float wk = std::abs(g[k]) - half;
+          if (wk <= 0 || (g[k] > 0) != (g[x] > 0)) break;
+          sw += wk;
+          sx += wk * k;
+        }
+        pts.push_back({static_cast<float>(sx / sw), static_cast<float>(y), a, g[x] > 0 ? 1 : -1});
+      }
+    }
+    d->rows.push_back(std::move(pts));
+    d->row_y.push_back(static_cast<float>(y));
+  }
+}
 
 }  // namespace
 
@@ -205,33 +288,31 @@ Detection DetectEdgePoints(const cv::Mat& channel, const SceneOptions& o) {
   } else {
     small = channel;
   }
-  cv::Mat f32;
-  small.convertTo(f32, CV_32F);
-  d.image = f32;
+  // 8-bit data at the detection scale is whole grey levels (INTER_AREA rounds) and is searched
+  // as it is; other depths as floats.
+  const bool whole_levels = small.depth() == CV_8U;
+  cv::Mat img = small;
+  if (!whole_levels) small.convertTo(img, CV_32F);
+  d.image = img;
 
   // Pixel noise by Immerkær's mask [1 −2 1; −2 4 −2; 1 −2 1] (σ of its response is 6σ for white
   // noise), robustly through the median: a second difference hardly sees smooth texture or
   // straight edges, whereas a median gradient would count a textured scene as noise. The Sobel
   // gradient scaled by 1/8 carries 0.433σ of it.
-  // 8-bit data at the detection scale is whole grey levels (INTER_AREA rounds), so the mask's
-  // responses are integers up to 16·255 and their median is read off their counts: a selection
-  // over 57 600 of them was most of a 720p frame's search.
-  const bool whole_levels = small.depth() == CV_8U;
+  // On 8-bit data the mask's responses are integers up to 16·255 and their median is read off
+  // their counts: a selection over 57 600 of them was most of a 720p frame's search.
   constexpr int kLevels = 16 * 255 + 1, kLanes = 4;  // lanes: no wait on the last count's store
   std::vector<double> lap;
   std::vector<int> lane_counts(whole_levels ? kLanes * kLevels : 0, 0);
-  std::vector<float> response(f32.cols, 0.0f);
-  for (int y = std::max(1, d.row_step / 2); y + 1 < f32.rows; y += d.row_step) {
-    const float* a = f32.ptr<float>(y - 1);
-    const float* b = f32.ptr<float>(y);
-    const float* c = f32.ptr<float>(y + 1);
-    for (int x = 1; x + 1 < f32.cols; ++x) {  // every column: vectorised; every other one used
-      response[x] = std::abs(a[x - 1] - 2 * a[x] + a[x + 1] - 2 * (b[x - 1] - 2 * b[x] + b[x + 1]) +
-                             c[x - 1] - 2 * c[x] + c[x + 1]);
-    }
-    for (int x = 1, lane = 0; x + 1 < f32.cols; x += 2, lane = (lane + 1) % kLanes) {
+  std::vector<float> response(img.cols, 0.0f);
+  for (int y = std::max(1, d.row_step / 2); y + 1 < img.rows; y += d.row_step) {
+    if (whole_levels)
+      NoiseMaskRow<uint8_t>(img, y, response.data());
+    else
+      NoiseMaskRow<float>(img, y, response.data());
+    for (int x = 1, lane = 0; x + 1 < img.cols; x += 2, lane = (lane + 1) % kLanes) {
       if (whole_levels)
-        ++lane_counts[lane * kLevels + static_cast<int>(response[x] + 0.5f)];  // a whole number
+        ++lane_counts[lane * kLevels + static_cast<int>(response[x])];  // a whole number
       else
         lap.push_back(response[x]);
     }
@@ -246,40 +327,10 @@ Detection DetectEdgePoints(const cv::Mat& channel, const SceneOptions& o) {
   const float tan_max =
       static_cast<float>(std::tan(std::min(85.0, o.max_tilt_deg + 10) * kDegToRad));
 
-  const int cols = f32.cols;
-  std::vector<float> gx(cols);
-  for (int y = d.row_step / 2; y < f32.rows; y += d.row_step) {
-    const SobelRows rows(f32, y);
-    rows.GradientX(gx.data());
-    const float* g = gx.data();
-    std::vector<EdgePoint> pts;
-    for (int x = 1; x < cols - 1; ++x) {
-      const float a = std::abs(g[x]);
-      if (a < threshold) continue;
-      const float l = std::abs(g[x - 1]), r = std::abs(g[x + 1]);
-      if (a < l || a <= r) continue;
-      if (std::abs(rows.GradientY(x)) > a * tan_max) continue;  // too far from an upright edge
-      // Sub-pixel position: centroid of the peak above half its height. A parabola through three
-      // samples is as good on sharp edges and far less noisy on blurred, broad ones.
-      const float half = 0.5f * a;
-      double sw = 0, sx = 0;
-      for (int k = x; k >= std::max(0, x - 12); --k) {
-        const float w = std::abs(g[k]) - half;
-        if (w <= 0 || (k < x && (g[k] > 0) != (g[x] > 0))) break;
-        sw += w;
-        sx += w * k;
-      }
-      for (int k = x + 1; k <= std::min(cols - 1, x + 12); ++k) {
-        const float w = std::abs(g[k]) - half;
-        if (w <= 0 || (g[k] > 0) != (g[x] > 0)) break;
-        sw += w;
-        sx += w * k;
-      }
-      pts.push_back({static_cast<float>(sx / sw), static_cast<float>(y), a, g[x] > 0 ? 1 : -1});
-    }
-    d.rows.push_back(std::move(pts));
-    d.row_y.push_back(static_cast<float>(y));
-  }
+  if (whole_levels)
+    FindEdgePoints<uint8_t>(img, threshold, tan_max, &d);
+  else
+    FindEdgePoints<float>(img, threshold, tan_max, &d);
   return d;
 }
 

@@ -38,7 +38,7 @@ struct Detection {
   double noise = 0;  // σ of the horizontal gradient from noise, grey per detection-scale px
   std::vector<std::vector<EdgePoint>> rows;  // sorted by x
   std::vector<float> row_y;
-  cv::Mat image;  // the channel at the detection scale, CV_32F
+  cv::Mat image;  // the channel at the detection scale: CV_8U for 8-bit data, else CV_32F
 };
 
 // Edge points: local maxima of |∂/∂x| above 5σ of the pixel noise (Immerkær's estimate) and the

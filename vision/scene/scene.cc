@@ -304,7 +304,7 @@ void SuppressNested(MeasureTarget target, std::vector<PairCandidate>* cands) {
 // strand on a backlight is a lens: its core shows the backlight too, but as one band centred
 // between two dark rims of equal width, and it is one object.
 bool InsideIsOneObject(const Detection& d, const PairCandidate& c) {
-  const cv::Mat& img = d.image;  // CV_32F
+  const cv::Mat& img = d.image;  // CV_8U or CV_32F
   const double f = d.factor, off = 0.5 * (d.factor - 1), gap = 2.0 * d.factor + 2.0;
   std::vector<double> outside, rim;
   std::vector<std::vector<double>> rows(5);
@@ -316,10 +316,11 @@ bool InsideIsOneObject(const Detection& d, const PairCandidate& c) {
       if (x < 0 || y < 0 || x > img.cols - 1.001 || y > img.rows - 1.001) return;
       const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
       const double fx = x - x0, fy = y - y0;
-      const float* r0 = img.ptr<float>(y0);
-      const float* r1 = img.ptr<float>(y0 + 1);
-      out->push_back((r0[x0] * (1 - fx) + r0[x0 + 1] * fx) * (1 - fy) +
-                     (r1[x0] * (1 - fx) + r1[x0 + 1] * fx) * fy);
+      const auto px = [&](int yy, int xx) -> double {
+        return img.depth() == CV_8U ? img.ptr<uint8_t>(yy)[xx] : img.ptr<float>(yy)[xx];
+      };
+      out->push_back((px(y0, x0) * (1 - fx) + px(y0, x0 + 1) * fx) * (1 - fy) +
+                     (px(y0 + 1, x0) * (1 - fx) + px(y0 + 1, x0 + 1) * fx) * fy);
     };
     at(ul - gap, &outside);
     at(ur + gap, &outside);
