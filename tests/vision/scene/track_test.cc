@@ -37,18 +37,29 @@ TEST(StrandTrackerTest, TrackedWidthsMatchFreshSearchesWithFewDetections) {
   EXPECT_GE(tracker.tracked_frames(), 18);
 }
 
+// A lit filament (Lambertian shading, surface texture) feeding down, its width wandering by
+// 2 µm (0.1 px at 20 µm/px: within a template's reach), and its whole stretch measured.
+SceneParams LitFilament() {
+  SceneParams p = synthetic::FeedstockScene(2.0);
+  p.shading_ambient = 0.5;
+  p.width_jitter_um = 2;
+  return p;
+}
+StrandMeasureOptions WholeStretch() {
+  StrandMeasureOptions o;
+  o.target = MeasureTarget::kFilament;
+  o.band_start_px = 0;
+  o.band_height_px = 1e6;
+  return o;
+}
+
 // A lit filament (Lambertian shading, surface texture) feeding down a rendered video whose width
 // wanders by a few µm: tracked, its calipers' lit cylinders are fitted from the templates the
 // first frame left (cylinder_memory.h), and the widths are the rendered ones as closely as the
 // full measurement of each frame gets them.
 TEST(StrandTrackerTest, FilamentFromCylinderTemplatesMatchesTheTruth) {
-  SceneParams p = synthetic::FeedstockScene(2.0);
-  p.shading_ambient = 0.5;
-  p.width_jitter_um = 2;  // 0.1 px at 20 µm/px: within a template's reach
-  StrandMeasureOptions o;
-  o.target = MeasureTarget::kFilament;
-  o.band_start_px = 0;
-  o.band_height_px = 1e6;
+  const SceneParams p = LitFilament();
+  const StrandMeasureOptions o = WholeStretch();
   StrandTracker tracker(o);
   constexpr int kFrames = 24;
   double worst_tracked = 0, worst_fresh = 0;
@@ -80,15 +91,9 @@ TEST(StrandTrackerTest, FilamentFromCylinderTemplatesMatchesTheTruth) {
 // included (10 % of it clipped), refused the tracked frames as saturated, and the tracker searched
 // 6 of 12 frames afresh.
 TEST(StrandTrackerTest, FilamentFromTemplatesJudgesClippingAtItsEdges) {
-  SceneParams p = synthetic::FeedstockScene(2.0);
-  p.shading_ambient = 0.5;
+  SceneParams p = LitFilament();
   p.background_level = 1;
-  p.width_jitter_um = 2;
-  StrandMeasureOptions o;
-  o.target = MeasureTarget::kFilament;
-  o.band_start_px = 0;
-  o.band_height_px = 1e6;
-  StrandTracker tracker(o);
+  StrandTracker tracker(WholeStretch());
   constexpr int kFrames = 12;
   for (int i = 0; i < kFrames; ++i) {
     FrameTruth t;
