@@ -33,7 +33,6 @@ class CameraWatch {
 
   const std::string& printer() const { return printer_; }
   const watch::LiveWatchOptions& live() const { return live_; }
-  const watch::WatchBoard& board() const { return board_; }
   // The camera for the outputs: its name, board, scale and the overlay pictures they share.
   watch::CameraFeed Feed() const { return {printer_, &board_, live_.conversion, frames_}; }
   // Whether a start that failed may succeed later: a stream or device (its printer switched off),

@@ -73,7 +73,6 @@ int RunWatchFarm(const CLI::App& app, const std::string& config, double duration
 WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* stop,
                         const WatchObservers& observers) {
   CameraWatch camera(options, "", observers.on_printer);
-  const std::optional<calib::ScaleCalibration>& conversion = camera.live().conversion;
   if (!options.http_token_file.empty() && options.http.empty())
     throw std::invalid_argument("--http-token-file goes with --http");
   WatchHttpOptions http_options;
@@ -82,10 +81,10 @@ WatchReport WatchNozzle(const WatchCommandOptions& options, std::atomic<bool>* s
 
   std::optional<WatchHttpServer> http;
   const watch::CameraFeed feed = camera.Feed();
-  if (!options.http.empty()) http.emplace(http_options, feed.board, conversion, feed.frames);
+  if (!options.http.empty()) http.emplace(http_options, feed.board, feed.conversion, feed.frames);
   std::optional<watch::MqttPublisher> mqtt;
   if (!options.mqtt.url.empty() || !options.mqtt.credentials_file.empty())
-    mqtt.emplace(options.mqtt, feed.board, conversion, MqttLog(), feed.frames);
+    mqtt.emplace(options.mqtt, feed.board, feed.conversion, MqttLog(), feed.frames);
   const int http_port = http ? http->port() : 0;
   if (http) {
     camera.SetHttpUrl(http->url());

@@ -35,9 +35,7 @@ class Reader : public YamlFields {
   const std::string& path() const { return source(); }
   // A path in the file: relative to the file's folder.
   std::string Path(const YAML::Node& n, const std::string& key) const {
-    const std::string p = Text(n, key);
-    if (p.empty() || fs::path(p).is_absolute()) return p;
-    return (base_ / p).lexically_normal().string();
+    return ResolveFrom(base_.string(), Text(n, key));
   }
   // A source: a URL or device as written, a relative file or folder from the file's folder.
   std::string Source(const YAML::Node& n) const {
@@ -255,6 +253,9 @@ WatchFarmOptions LoadWatchConfig(const std::string& path) {
   if (!cameras.IsSequence() || cameras.size() == 0)
     r.Fail(cameras, "cameras: expected a list of cameras, each with a name and a source");
   std::map<std::string, int> lines;  // each name's first line
+  // The defaults read once (their files opened once): each camera's keys then replace them.
+  WatchCommandOptions base;
+  if (defaults) Apply(r, defaults, &base);
   for (const YAML::Node& c : cameras) {
     if (!c.IsMap()) r.Fail(c, "a camera: expected a mapping (name:, source:, …)");
     r.CheckKeys(
@@ -271,7 +272,7 @@ WatchFarmOptions LoadWatchConfig(const std::string& path) {
     if (const auto [it, fresh] = lines.emplace(camera.name, camera.line); !fresh)
       r.Fail(c["name"], fmt::format("the name '{}' is taken twice (also at line {})", camera.name,
                                     it->second));
-    if (defaults) Apply(r, defaults, &camera.options);
+    camera.options = base;
     Apply(r, c, &camera.options);
     if (c["source"]) camera.options.live.source = r.Source(c["source"]);
     if (camera.options.live.source.empty() && camera.options.printer.moonraker_url.empty())

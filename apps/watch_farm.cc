@@ -131,10 +131,8 @@ WatchFarmReport WatchFarm(const WatchFarmOptions& options, std::atomic<bool>* st
     // A signal handler cannot notify: the farm's flag is looked at every 50 ms. --duration-s
     // ends the farm too, cameras still waiting to start included (a camera's own watch counts it
     // from its own start).
-    const auto started = Clock::now();
-    const auto deadline =
-        started + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
-                      options.duration_s > 0 ? options.duration_s : 0.0));
+    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                             std::chrono::duration<double>(options.duration_s));
     while (running > 0) {
       if (stop->load() || (options.duration_s > 0 && Clock::now() >= deadline))
         for (auto& s : stops) s = true;

@@ -4,6 +4,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <stdexcept>
 
 namespace clogscope {
@@ -75,6 +76,11 @@ bool CheckInputPath(const std::string& option, const std::string& path, PathExpe
 void RequireInputPath(const std::string& option, const std::string& path, PathExpect expect) {
   std::string why;
   if (!CheckInputPath(option, path, expect, &why)) throw std::invalid_argument(why);
+}
+
+std::string ResolveFrom(const std::string& base, const std::string& path) {
+  if (path.empty() || std::filesystem::path(path).is_absolute()) return path;
+  return (std::filesystem::path(base) / path).lexically_normal().string();
 }
 
 }  // namespace clogscope

@@ -15,6 +15,10 @@ enum class PathKind {
   kUnreachable,  // the file system refused: a loop of links, no permission, a name too long, …
 };
 
+// A path written in a file whose folder is `base`: as written when empty or absolute, else from
+// `base`, normalised.
+std::string ResolveFrom(const std::string& base, const std::string& path);
+
 // What `path` is. For kUnreachable, `why` (when given) says why ("too many levels of symbolic
 // links"). Never throws.
 PathKind InspectPath(const std::string& path, std::string* why = nullptr);

@@ -12,6 +12,7 @@
 #include "common/atomic_file.h"
 #include "common/csv.h"
 #include "common/path_check.h"
+#include "common/yaml_fields.h"
 #include "model/step_status.h"
 
 namespace clogscope::model {
@@ -125,12 +126,7 @@ std::vector<Measurement> ReadMeasurements(const std::string& path,
 }
 
 ExtruderParams ParseExtruderYaml(const std::string& text, const std::string& source) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw std::invalid_argument(fmt::format("{}:{}: {}", source, e.mark.line + 1, e.msg));
-  }
+  const YAML::Node root = LoadYamlText(text, source);
   if (!root.IsMap())
     throw std::invalid_argument(source + ": expected a mapping of parameter names to values");
   // Values not in the file come from the preset it names (direct-pla when it names none).

@@ -22,11 +22,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string Resolve(const fs::path& base, const std::string& p) {
-  if (p.empty() || fs::path(p).is_absolute()) return p;
-  return (base / p).lexically_normal().string();
-}
-
 // Steps from one long video and the printer's temperature log.
 std::vector<StepSpec> StepsFromLog(const Manifest& m) {
   const CsvTable t = ParseCsv(ReadFile(m.temperature_log), m.temperature_log);
@@ -69,7 +64,7 @@ Manifest LoadCsvManifest(const std::string& path) {
   Manifest m;
   m.path = path;
   m.name = fs::path(path).stem().string();
-  const fs::path base = fs::path(path).parent_path();
+  const std::string base = fs::path(path).parent_path().string();
   const CsvTable t = ParseCsv(ReadFile(path), path);
   const int c_step = t.Column("step"), c_t = t.Column("temperature_c"), c_src = t.Column("source");
   const int c_a = t.Column("start_s"), c_b = t.Column("end_s");
@@ -90,7 +85,7 @@ Manifest LoadCsvManifest(const std::string& path) {
     if (c_a >= 0 && !r[c_a].empty()) s.start_s = ParseNumberField(r[c_a], where, "start_s");
     if (c_b >= 0 && !r[c_b].empty()) s.end_s = ParseNumberField(r[c_b], where, "end_s");
     if (r[c_src].empty()) throw std::invalid_argument(where + ": source is empty");
-    const std::string src = Resolve(base, r[c_src]);
+    const std::string src = ResolveFrom(base, r[c_src]);
     (InspectPath(src) == PathKind::kDirectory ? s.images : s.video) = src;
     m.steps.push_back(s);
   }
@@ -131,7 +126,7 @@ Manifest LoadManifest(const std::string& path) {
                        "min_step_s",
                        "feedstock"});
     m.path = path;
-    const fs::path base = fs::path(path).parent_path();
+    const std::string base = fs::path(path).parent_path().string();
     m.name = root["name"] ? y.Text(root["name"], "name") : fs::path(path).stem().string();
     if (root["samples"]) {
       m.samples = y.Whole(root["samples"], "samples");
@@ -141,22 +136,22 @@ Manifest LoadManifest(const std::string& path) {
     if (root["scale_um_per_px"])
       m.scale_um_per_px = y.Number(root["scale_um_per_px"], "scale_um_per_px");
     if (root["calibration"])
-      m.calibration_file = Resolve(base, y.Text(root["calibration"], "calibration"));
+      m.calibration_file = ResolveFrom(base, y.Text(root["calibration"], "calibration"));
     if (const auto c = root["calibrate"]) {
       if (!c.IsMap())
         y.Fail(c, "calibrate: expected pins: CSV or micrometer: IMAGE(S) with pitch_um:");
       y.CheckKeys(c, {"pins", "micrometer", "pitch_um"});
-      if (c["pins"]) m.calibrate_pins_csv = Resolve(base, y.Text(c["pins"], "pins"));
+      if (c["pins"]) m.calibrate_pins_csv = ResolveFrom(base, y.Text(c["pins"], "pins"));
       if (c["micrometer"]) {
         for (const auto& p : y.TextList(c["micrometer"], "micrometer"))
-          m.calibrate_micrometer.push_back(Resolve(base, p));
+          m.calibrate_micrometer.push_back(ResolveFrom(base, p));
       }
       if (c["pitch_um"]) m.calibrate_pitch_um = y.Number(c["pitch_um"], "pitch_um");
     }
     if (root["extruder"]) {
       m.extruder = y.Text(root["extruder"], "extruder");
-      if (InspectPath(Resolve(base, m.extruder)) != PathKind::kMissing)
-        m.extruder = Resolve(base, m.extruder);
+      if (InspectPath(ResolveFrom(base, m.extruder)) != PathKind::kMissing)
+        m.extruder = ResolveFrom(base, m.extruder);
     }
     if (root["extruder_set"]) m.extruder_set = y.TextList(root["extruder_set"], "extruder_set");
     if (root["roi"]) m.roi = y.Text(root["roi"], "roi");
@@ -173,9 +168,9 @@ Manifest LoadManifest(const std::string& path) {
     if (root["hold_tolerance_c"])
       m.hold_tolerance_c = y.Number(root["hold_tolerance_c"], "hold_tolerance_c");
     if (root["min_step_s"]) m.min_step_s = y.Number(root["min_step_s"], "min_step_s");
-    if (root["video"]) m.video = Resolve(base, y.Text(root["video"], "video"));
+    if (root["video"]) m.video = ResolveFrom(base, y.Text(root["video"], "video"));
     if (root["temperature_log"])
-      m.temperature_log = Resolve(base, y.Text(root["temperature_log"], "temperature_log"));
+      m.temperature_log = ResolveFrom(base, y.Text(root["temperature_log"], "temperature_log"));
     if (const auto f = root["feedstock"]) {
       if (!f.IsMap())
         y.Fail(f, "feedstock: expected roi:, gear_roi:, gear_radius_mm:, scale_um_per_px:, …");
@@ -194,7 +189,7 @@ Manifest LoadManifest(const std::string& path) {
           y.Fail(f["scale_um_per_px"], "scale_um_per_px: must be positive");
       }
       if (f["calibration"])
-        fs.calibration_file = Resolve(base, y.Text(f["calibration"], "calibration"));
+        fs.calibration_file = ResolveFrom(base, y.Text(f["calibration"], "calibration"));
       if (fs.scale_um_per_px && !fs.calibration_file.empty())
         y.Fail(f, "feedstock: give scale_um_per_px: or calibration:, not both");
       if (!fs.gear_roi.empty() && !(fs.gear_radius_mm > 0))
@@ -215,15 +210,15 @@ Manifest LoadManifest(const std::string& path) {
         if (!n["temperature_c"]) y.Fail(n, "a step needs temperature_c:");
         s.step = y.Whole(n["step"], "step");
         s.temperature_c = y.Number(n["temperature_c"], "temperature_c");
-        if (n["video"]) s.video = Resolve(base, y.Text(n["video"], "video"));
-        if (n["images"]) s.images = Resolve(base, y.Text(n["images"], "images"));
+        if (n["video"]) s.video = ResolveFrom(base, y.Text(n["video"], "video"));
+        if (n["images"]) s.images = ResolveFrom(base, y.Text(n["images"], "images"));
         if (s.video.empty() == s.images.empty())
           y.Fail(n, fmt::format("step {}: give one of video: or images:", s.step));
         if (n["start_s"]) s.start_s = y.Number(n["start_s"], "start_s");
         if (n["end_s"]) s.end_s = y.Number(n["end_s"], "end_s");
         s.settle_s = n["settle_s"] ? y.Number(n["settle_s"], "settle_s") : m.settle_s;
         if (n["feedstock_video"]) {
-          s.feedstock_video = Resolve(base, y.Text(n["feedstock_video"], "feedstock_video"));
+          s.feedstock_video = ResolveFrom(base, y.Text(n["feedstock_video"], "feedstock_video"));
           m.feedstock.enabled = true;
         }
         m.steps.push_back(s);

@@ -107,7 +107,7 @@ bool GatherEdgeSamples(const GreyImage& img, const AxisFrame& f, double s0, doub
       const double u = rx * f.dy - ry * f.dx;
       if (u < u0 || u > u1) continue;
       const float v = img.At(x, y);
-      if (Clipped(v, clip)) ++*saturated;
+      if (saturated && Clipped(v, clip)) ++*saturated;
       out->push_back({static_cast<float>(u), v});
     }
   }

@@ -23,11 +23,11 @@ ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, d
                           double u1, double data_max);
 
 // Gathers the pixels of the slab s0 <= s < s1, u0 <= u <= u1 (axis frame f) in (u, value) form,
-// counting those at or beyond the clip levels in *saturated. Returns false when the slab leaves
-// the image.
+// counting those at or beyond the clip levels in *saturated (when given). Returns false when the
+// slab leaves the image.
 bool GatherEdgeSamples(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
                        double u1, const ClipLevels& clip, std::vector<EdgeSample>* out,
-                       int* saturated);
+                       int* saturated = nullptr);
 
 // Whether a value is at or beyond the clip levels.
 inline bool Clipped(float v, const ClipLevels& clip) { return v <= clip.low || v >= clip.high; }

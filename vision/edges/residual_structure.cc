@@ -71,8 +71,7 @@ double BandEdgeDoubtPx(const GreyImage& img, const AxisFrame& f, const ClipLevel
   for (const CaliperEdge& c : edges) {
     const EdgeFit& e = c.fit;
     const double u0 = e.edge_px - below_px, u1 = e.edge_px + above_px;
-    int clipped = 0;
-    if (!GatherEdgeSamples(img, f, c.s0_px, c.s1_px, u0, u1, clip, &samples, &clipped)) continue;
+    if (!GatherEdgeSamples(img, f, c.s0_px, c.s1_px, u0, u1, clip, &samples)) continue;
     for (const EdgeSample& smp : samples) {
       const double u = smp.u_px - e.edge_px;
       doubt.structure().Add(u, smp.value - EdgeModelValue(e, smp.u_px));

@@ -43,9 +43,9 @@ void RefitAsCylinders(const GreyImage& img, const AxisFrame& f, const ClipLevels
     CaliperFit& cf = (*fits)[k];
     const double s0 = band_s0 + k * spacing, sc = s0 + 0.5 * spacing;
     const double l = lines.left_u0 + lines.slope * sc, r = lines.right_u0 + lines.slope * sc;
-    ClippedCount at_edges;  // judged by the per-edge fits, which saw the same transitions
+    // Clipping was judged by the per-edge fits, which saw the same transitions.
     CylinderFit cyl;
-    if (GatherCylinderSamples(img, f, clip, s0, s0 + spacing, l, r, sigma_px, &samples, &at_edges))
+    if (GatherCylinderSamples(img, f, clip, s0, s0 + spacing, l, r, sigma_px, &samples))
       cyl = FitLitCylinder(samples, l, r, sigma_start, background,
                            structure_doubt_px ? &residuals : nullptr);
     const bool ok = cyl.converged && std::abs(cyl.left_px - l) < outer - 1.0 &&

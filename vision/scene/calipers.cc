@@ -236,8 +236,10 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       // inward at blur 2.9) long before it stops mattering. The width's σ carries the shaded
       // fit's outward shift as the model's doubt. (Counted only above 2σ of evidence, 4.5 % of
       // the matrix's valid widths lay beyond 3σ; counted always, 3.6 %, for 1 % fewer valid.)
-      if (shade[side] == 0) shading_doubt_px[side] = std::max(0.0, shift);
-      if (shade[side] == 0) continue;
+      if (shade[side] == 0) {
+        shading_doubt_px[side] = std::max(0.0, shift);
+        continue;
+      }
       for (auto& cf : fits)
         (side == 0 ? cf.left : cf.right) = side == 0 ? cf.left_shaded : cf.right_shaded;
     }
@@ -297,8 +299,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
         const double e2 = (side == 0 ? b2.left : b2.right).edge_px;
         const double e0 = 2 * e1 - e2;
         const auto [u0, u1] = window(side, e0, outer, inner);
-        int clipped = 0;
-        if (!GatherEdgeSamples(img, f, s0, s1, u0, u1, clip, &samples, &clipped)) break;
+        if (!GatherEdgeSamples(img, f, s0, s1, u0, u1, clip, &samples)) break;
         const EdgeFit again = shade[side] == 1
                                   ? FitShadedStep(samples, e0, sigma_guess, e0, side == 0 ? 1 : -1)
                                   : FitBlurredStep(samples, e0, sigma_guess, e0);
@@ -599,8 +600,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       for (int side = 0; side < 2 && ok; ++side) {
         const double e0 = (side == 0 ? left_guess : right_guess) + slope_guess * sc;
         const auto [u0, u1] = window(side, e0, outer, inner);
-        int clipped = 0;
-        ok = GatherEdgeSamples(img, f, s0, s1, u0, u1, clip, &samples, &clipped);
+        ok = GatherEdgeSamples(img, f, s0, s1, u0, u1, clip, &samples);
         if (!ok) break;
         const EdgeFit fit = shade[side] == 1
                                 ? FitShadedStep(samples, e0, sigma_guess, e0, side == 0 ? 1 : -1)

@@ -15,17 +15,17 @@ bool GatherCylinderSamples(const GreyImage& img, const AxisFrame& f, const ClipL
                            double sigma_px, std::vector<EdgeSample>* samples,
                            ClippedCount* at_edges) {
   const double outer = CylinderReachPx(sigma_px);
-  int clipped_anywhere = 0;
-  if (!GatherEdgeSamples(img, f, s0_px, s1_px, left_px - outer, right_px + outer, clip, samples,
-                         &clipped_anywhere))
+  if (!GatherEdgeSamples(img, f, s0_px, s1_px, left_px - outer, right_px + outer, clip, samples))
     return false;
   // A clipped highlight deep inside a lit object is not where its silhouettes are read (the
   // interior's clipping is judged on the band as a whole, calipers.cc).
-  const double zone = ClipZoneHalfWidthPx(sigma_px);
-  const ClippedCount l = CountClippedNear(*samples, clip, left_px, zone);
-  const ClippedCount r = CountClippedNear(*samples, clip, right_px, zone);
-  at_edges->samples = l.samples + r.samples;
-  at_edges->clipped = l.clipped + r.clipped;
+  if (at_edges) {
+    const double zone = ClipZoneHalfWidthPx(sigma_px);
+    const ClippedCount l = CountClippedNear(*samples, clip, left_px, zone);
+    const ClippedCount r = CountClippedNear(*samples, clip, right_px, zone);
+    at_edges->samples = l.samples + r.samples;
+    at_edges->clipped = l.clipped + r.clipped;
+  }
   // Deep inside, the profile only tells the shading's amplitudes, which vary slowly: every fourth
   // sample there does, and the fit costs a third.
   const double keep = std::max(10.0, 3.0 * sigma_px + 4.0);

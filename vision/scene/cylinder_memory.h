@@ -15,12 +15,12 @@ double CylinderReachPx(double sigma_px);
 // The pixels one caliper's lit cylinder is fitted to: the slab s0 <= s < s1 across both edges
 // (left_px and right_px at its middle) and far enough beyond them for a blur sigma_px, every
 // fourth pixel deep inside the object. Counts the pixels in both edges' transitions and how many
-// of them are clipped (ClipZoneHalfWidthPx about left_px and right_px) in *at_edges, where
-// clipping is judged as the per-edge fits judge it; false when the slab leaves the image.
+// of them are clipped (ClipZoneHalfWidthPx about left_px and right_px) in *at_edges when given,
+// where clipping is judged as the per-edge fits judge it; false when the slab leaves the image.
 bool GatherCylinderSamples(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
                            double s0_px, double s1_px, double left_px, double right_px,
                            double sigma_px, std::vector<EdgeSample>* samples,
-                           ClippedCount* at_edges);
+                           ClippedCount* at_edges = nullptr);
 
 // A filament's calipers as lit cylinders, kept from the frames that fitted them in full, for the
 // next frames of the same scene (the same axis frame and caliper grid): each caliper's template
