@@ -203,6 +203,7 @@ StepResult MeasureStep(const StepSpec& spec, const ExperimentOptions& o, int dec
   vision::InputFrame in;
   // The step's frames show one scene: follow the strand from sample to sample.
   vision::StrandTracker tracker(o.strand);
+  tracker.SetEncoder(frames->encoder());
   while (frames->Next(&in)) {
     const double t = video ? in.time_s : static_cast<double>(in.index);
     const cv::Mat& img = in.image;

@@ -93,6 +93,7 @@ FeedstockResult MeasureFeedstock(const std::string& video, double start_s, doubl
   const double slot = (b - a) / o.pairs;
   const double mm_per_px = conversion ? conversion->scale_um_per_px * 1e-3 : 0.0;
   vision::StrandTracker strand(o.strand);
+  strand.SetEncoder(dec->encoder());
   FrameWidths widths;
   std::vector<double> speeds, gears, slips;
   if (a > vision::kSeekAheadS) dec->SeekToTime(a);

@@ -155,11 +155,8 @@ MeasureSummary MeasureInputs(MeasureInputsOptions o, std::ostream* table_out) {
     std::optional<OverlayWriter> overlays;
     if (!o.overlay_dir.empty())
       overlays.emplace(o.overlay_dir, from_video, o.flag_outliers, conv, &overlay_names);
-    if (from_video) {
-      if (const std::string advice = vision::X264EdgeAdvice(vision::ReadX264Settings(input));
-          !advice.empty())
-        spdlog::warn("{}: {}", input, advice);
-    }
+    if (const std::string advice = vision::X264EdgeAdvice(source->encoder()); !advice.empty())
+      spdlog::warn("{}: {}", input, advice);
     const auto ts = std::chrono::steady_clock::now();
     vision::FeedSpeedTracker speed(o.feed);  // starts afresh with every input
     std::optional<vision::GearSpeedTracker> gear;

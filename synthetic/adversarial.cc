@@ -382,8 +382,10 @@ AdversarialScene RandomAdversarialScene(TroubleClass trouble, uint64_t seed) {
 }
 
 std::vector<cv::Mat> RenderAdversarial(const AdversarialScene& p, int frames,
-                                       const std::string& temp_dir, AdversarialTruth* truth) {
+                                       const std::string& temp_dir, AdversarialTruth* truth,
+                                       vision::X264Settings* encoder) {
   if (frames < 1) throw std::invalid_argument("adversarial render: need at least one frame");
+  if (encoder) *encoder = vision::X264Settings{};
   cv::Mat tau_hi, emit_hi;
   RenderLayers(p, &tau_hi, &emit_hi);
   const cv::Mat tau = Optics(p, tau_hi), emit = Optics(p, emit_hi);
@@ -434,6 +436,7 @@ std::vector<cv::Mat> RenderAdversarial(const AdversarialScene& p, int frames,
     const pid_t pid = Spawn(encode, &why);
     if (pid < 0 || !WaitForExit(pid, &why))
       throw std::runtime_error(path + ": H.264 round trip: ffmpeg " + why);
+    if (encoder) *encoder = vision::ReadX264Settings(path);
     cv::VideoCapture cap(path, cv::CAP_FFMPEG);
     for (cv::Mat& f : out) {
       cv::Mat decoded;

@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "vision/io/encoder_note.h"
+
 namespace clogscope::synthetic {
 
 // An adversarial renderer, written apart from synthetic/synthetic.cc (the world the measurement was
@@ -84,8 +86,11 @@ AdversarialScene RandomAdversarialScene(TroubleClass trouble, uint64_t seed);
 
 // Renders `frames` frames of the scene (the same scene, independent noise), passed through its
 // codec (an H.264 clip goes through a temporary file in `temp_dir`). 8-bit grey, or BGR.
+// encoder (optional): the settings x264 wrote into an H.264 clip, read from it as `measure` reads
+// a video's.
 std::vector<cv::Mat> RenderAdversarial(const AdversarialScene& scene, int frames,
-                                       const std::string& temp_dir, AdversarialTruth* truth);
+                                       const std::string& temp_dir, AdversarialTruth* truth,
+                                       vision::X264Settings* encoder = nullptr);
 
 // A one-line account of the scene, for tables and failures.
 std::string Describe(const AdversarialScene& scene);

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "vision/scene/codec_doubt.h"
 #include "vision/scene/strand_measure.h"
 
 namespace clogscope::synthetic {
@@ -68,10 +69,11 @@ MatrixResult RunAdversarialMatrix(const MatrixOptions& o) {
       AdversarialScene scene = RandomAdversarialScene(trouble, seed);
       scene.noise_sigma *= o.noise_scale;
       AdversarialTruth truth;
+      vision::X264Settings encoder;
       const std::vector<cv::Mat> frames =
-          RenderAdversarial(scene, o.frames_per_scene, temp, &truth);
+          RenderAdversarial(scene, o.frames_per_scene, temp, &truth, &encoder);
       for (int i = 0; i < static_cast<int>(frames.size()); ++i) {
-        const vision::StrandMeasurement m = MeasureAdversarialFrame(frames[i], scene);
+        const vision::StrandMeasurement m = MeasureAdversarialFrame(frames[i], scene, encoder);
         FrameRecord r;
         r.trouble = trouble;
         r.seed = seed;
@@ -101,13 +103,17 @@ MatrixResult RunAdversarialMatrix(const MatrixOptions& o) {
 }
 
 vision::StrandMeasurement MeasureAdversarialFrame(const cv::Mat& frame,
-                                                  const AdversarialScene& scene) {
+                                                  const AdversarialScene& scene,
+                                                  const vision::X264Settings& encoder) {
   vision::StrandMeasureOptions o;
   const vision::BandPx band =
       vision::DefaultBand(vision::MeasureTarget::kStrand, scene.scale_um_per_px);
   o.band_start_px = band.start_px;
   o.band_height_px = band.height_px;
-  return vision::MeasureStrand(frame, o);
+  vision::StrandMeasurement m = vision::MeasureStrand(frame, o);
+  // Each frame stands alone: its own check.
+  if (encoder.found) vision::CodecDoubt(encoder, 1).Apply(frame, o, &m);
+  return m;
 }
 
 std::string MatrixTable(const MatrixResult& r) {

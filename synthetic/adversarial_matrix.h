@@ -60,9 +60,11 @@ struct MatrixResult {
 MatrixResult RunAdversarialMatrix(const MatrixOptions& options);
 
 // How the matrix measures a frame of a scene: the default options with the reference band (50 µm
-// below the tip, 150 µm long) at the scene's scale.
+// below the tip, 150 µm long) at the scene's scale; a width from an x264 clip (`encoder` found)
+// with the codec's doubt, as `measure` gives it (codec_doubt.h).
 vision::StrandMeasurement MeasureAdversarialFrame(const cv::Mat& frame,
-                                                  const AdversarialScene& scene);
+                                                  const AdversarialScene& scene,
+                                                  const vision::X264Settings& encoder = {});
 
 // A Markdown table of the result, one row per class and one for all.
 std::string MatrixTable(const MatrixResult& result);

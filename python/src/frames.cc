@@ -20,7 +20,8 @@ struct Frame {
 
 class FrameReader {
  public:
-  explicit FrameReader(const Path& path) : source_(vision::FrameSource::Open(path.string())) {}
+  explicit FrameReader(const Path& path)
+      : source_(vision::FrameSource::Open(path.string())), encoder_(source_->encoder()) {}
   Frame Next() {
     vision::InputFrame f;
     bool got = false;
@@ -36,9 +37,11 @@ class FrameReader {
   }
   int expected_frames() const { return source_ ? source_->expected_frames() : 0; }
   double fps() const { return source_ ? source_->fps() : 0; }
+  const vision::X264Settings& encoder() const { return encoder_; }
 
  private:
   std::unique_ptr<vision::FrameSource> source_;
+  vision::X264Settings encoder_;  // kept when the source goes at the end
 };
 
 }  // namespace
@@ -55,6 +58,17 @@ void BindFrames(py::module_& m) {
       .def("__repr__", [](const py::object& self) {
         return ReprOf(self, "Frame", {"source", "index", "time_s", "error"});
       });
+  py::class_<vision::X264Settings>(m, "X264Settings",
+                                   "The settings x264 wrote into a video it encoded "
+                                   "(vision/io/encoder_note.h).")
+      .def_readonly("found", &vision::X264Settings::found, "The video holds x264's note.")
+      .def_readonly("aq_mode", &vision::X264Settings::aq_mode,
+                    "Adaptive quantisation mode (-1: not told).")
+      .def_readonly("aq_strength", &vision::X264Settings::aq_strength, "(-1: not told)")
+      .def_readonly("crf", &vision::X264Settings::crf, "Constant rate factor (-1: not told).")
+      .def("__repr__", [](const py::object& self) {
+        return ReprOf(self, "X264Settings", {"found", "aq_mode", "aq_strength", "crf"});
+      });
   py::class_<FrameReader>(m, "FrameReader",
                           "Iterates over the frames of an image, a folder of images (in name "
                           "order) or a video, as `clogscope measure` reads them.")
@@ -62,15 +76,19 @@ void BindFrames(py::module_& m) {
       .def("__next__", &FrameReader::Next)
       .def_property_readonly("expected_frames", &FrameReader::expected_frames,
                              "Frames expected (-1: unknown).")
-      .def_property_readonly("fps", &FrameReader::fps, "Video frame rate (0: unknown).");
+      .def_property_readonly("fps", &FrameReader::fps, "Video frame rate (0: unknown).")
+      .def_property_readonly("encoder", &FrameReader::encoder,
+                             "x264's settings for a video it encoded (found false otherwise): "
+                             "give them to Tracker for the codec's doubt.");
   m.def(
       "open_frames", [](const Path& path) { return std::make_unique<FrameReader>(path); },
       py::arg("path"),
       R"(The frames of an image, a folder of images or a video (vision::FrameSource, as measure
 reads them): iterate for Frame objects (image, index, time_s, source).
 
-    tracker = clogscope.Tracker()
-    for f in clogscope.open_frames("step1.mp4"):
+    frames = clogscope.open_frames("step1.mp4")
+    tracker = clogscope.Tracker(encoder=frames.encoder)
+    for f in frames:
         m = tracker.measure(f.image)
 
 Raises ValueError naming the path when it cannot be opened.)");

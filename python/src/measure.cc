@@ -62,7 +62,10 @@ StrandMeasurement MeasureArray(const py::array& frame, const StrandMeasureOption
 // measures and two threads may share one tracker).
 class Tracker {
  public:
-  explicit Tracker(const StrandMeasureOptions& options) : options_(options), tracker_(options) {}
+  Tracker(const StrandMeasureOptions& options, const vision::X264Settings& encoder)
+      : options_(options), tracker_(options) {
+    tracker_.SetEncoder(encoder);
+  }
   StrandMeasurement Measure(const py::array& frame) {
     const cv::Mat view = MatView(frame);
     py::gil_scoped_release release;
@@ -209,7 +212,11 @@ void BindMeasure(py::module_& m) {
       .def_readonly("width_sigma_px", &StrandMeasurement::width_sigma_px,
                     "Standard error of width_px: the calipers' spread and the model's doubt.")
       .def_readonly("model_sigma_px", &StrandMeasurement::model_sigma_px,
-                    "The part of width_sigma_px from an edge model chosen on weak evidence.")
+                    "The part of width_sigma_px other frames of the scene do not average out: "
+                    "an edge model chosen on weak evidence, and the codec.")
+      .def_readonly("codec_sigma_px", &StrandMeasurement::codec_sigma_px,
+                    "The codec's part: how far a second pass through the video's x264 moved "
+                    "the width (0 for other sources).")
       .def_readonly("angle_deg", &StrandMeasurement::angle_deg,
                     "Strand axis from image vertical, + leaning to +x going down.")
       .def_readonly("contrast", &StrandMeasurement::contrast,
@@ -303,13 +310,18 @@ when that fails, so a steady video costs the caliper fits alone and the band doe
     tracker = clogscope.Tracker(options)
     for frame in frames:
         m = tracker.measure(frame)
+
+encoder: a video's x264 settings (FrameReader.encoder): every width then carries the codec's
+doubt, as measure gives it (vision/scene/codec_doubt.h).
 )")
-      .def(py::init([](std::optional<StrandMeasureOptions> options) {
+      .def(py::init([](std::optional<StrandMeasureOptions> options,
+                       std::optional<vision::X264Settings> encoder) {
              const StrandMeasureOptions o = options ? *options : StrandMeasureOptions{};
              ValidateOptions(o);
-             return std::make_unique<Tracker>(o);
+             return std::make_unique<Tracker>(o, encoder ? *encoder : vision::X264Settings{});
            }),
-           py::arg("options") = py::none(), "Raises ValueError when the options do not validate.")
+           py::arg("options") = py::none(), py::arg("encoder") = py::none(),
+           "Raises ValueError when the options do not validate.")
       .def("measure", &Tracker::Measure, py::arg("frame"),
            "Measures the next frame (arrays as measure_frame takes them; GIL released). Returns a "
            "Measurement.")

@@ -36,13 +36,13 @@ TEST(AdversarialMatrixTest, FewConfidentlyWrongWidthsAndNoneWithoutAStrand) {
   // model's first round. The renders are the same from run to run (H.264 on one thread).
   EXPECT_LE(r.all.wrong, 1);
   EXPECT_LE(r.all.wrong_beyond_sigma, 1);
-  // What that costs: valid widths on 669 of the 1000 measurable strand frames when this was
-  // written (677 before the change above; the saturated and nozzle-alone classes are refused by
-  // design).
+  // What that costs: valid widths on 654 of the 1000 measurable strand frames when this was
+  // written (674 before a width from x264 carried the codec's doubt, 677 before the change above;
+  // the saturated and nozzle-alone classes are refused by design).
   const int measurable = r.all.frames -
                          r.classes[static_cast<int>(TroubleClass::kSaturated)].frames -
                          r.classes[static_cast<int>(TroubleClass::kNoStrand)].frames;
-  EXPECT_GE(r.all.valid, 0.66 * measurable);
+  EXPECT_GE(r.all.valid, 0.64 * measurable);
   // The classes the first round fixed stay fixed: the lens at its silhouette, clipping refused,
   // the tip of a swelling strand at the nozzle (1 % wrong measured; 10 % in the first round, 57 %
   // before).

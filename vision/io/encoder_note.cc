@@ -39,7 +39,8 @@ std::string X264EdgeAdvice(const X264Settings& s) {
     return "";
   return fmt::format(
       "H.264 from x264 with adaptive quantisation (aq-mode {}{}): it can move a lit strand's edges "
-      "by 0.2-0.3 px, beyond what a width's σ tells; record with -aq-mode 0 or -crf {:.0f} or "
+      "by 0.2-0.3 px (each width's σ carries what a second pass through x264 shows, and fewer "
+      "are valid); record with -aq-mode 0 or -crf {:.0f} or "
       "less for measurement",
       s.aq_mode, s.crf >= 0 ? fmt::format(", CRF {:.0f}", s.crf) : std::string(),
       kX264MaxCrfForEdges);

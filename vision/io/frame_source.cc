@@ -48,7 +48,9 @@ class VideoSource : public FrameSource {
       : FrameSource(std::move(path), SourceKind::kVideo),
         options_(options),
         decoder_(path_, options.decoder_threads),
-        shown_(RedactCredentials(path_)) {}
+        shown_(RedactCredentials(path_)) {
+    encoder_ = ReadX264Settings(path_);
+  }
   // For Open(): a video must hold a frame.
   void RequireAFrame() {
     if (!Fill()) throw std::invalid_argument(shown_ + ": video has no frames");

@@ -14,6 +14,8 @@
 #include <opencv2/core.hpp>
 #include <string>
 
+#include "vision/io/encoder_note.h"
+
 namespace clogscope::vision {
 
 // Sampling a video: seek rather than decode forward when the next frame wanted is further ahead
@@ -102,11 +104,14 @@ class FrameSource {
   virtual bool live() const { return false; }
   SourceKind kind() const { return kind_; }
   const std::string& path() const { return path_; }
+  // The settings x264 wrote into a video file it encoded (not found for other sources).
+  const X264Settings& encoder() const { return encoder_; }
 
  protected:
   FrameSource(std::string path, SourceKind kind) : path_(std::move(path)), kind_(kind) {}
   std::string path_;
   SourceKind kind_;
+  X264Settings encoder_;
 };
 
 }  // namespace clogscope::vision

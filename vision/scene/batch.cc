@@ -23,6 +23,7 @@ int MeasureFrames(FrameSource& source, const StrandMeasureOptions& options,
 
   int count = 0;
   StrandTracker tracker(options);
+  tracker.SetEncoder(source.encoder());
   try {
     InputFrame f;
     while (queue.Pop(&f)) {

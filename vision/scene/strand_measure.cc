@@ -283,14 +283,18 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
       m.detail = check.why;
     }
   }
-  const double max_sigma_px = std::max(opt.max_sigma_px, opt.max_sigma_fraction * m.width_px);
-  if (m.valid() && m.width_sigma_px > max_sigma_px) {
-    m.status = FrameStatus::kImprecise;
-    m.detail =
-        fmt::format("width {:.2f} ± {:.2f} px: σ above the {:.2f} px a valid width may carry",
-                    m.width_px, m.width_sigma_px, max_sigma_px);
-  }
+  JudgePrecision(opt, &m);
   return m;
+}
+
+void JudgePrecision(const StrandMeasureOptions& opt, StrandMeasurement* m) {
+  const double max_sigma_px = std::max(opt.max_sigma_px, opt.max_sigma_fraction * m->width_px);
+  if (m->valid() && m->width_sigma_px > max_sigma_px) {
+    m->status = FrameStatus::kImprecise;
+    m->detail =
+        fmt::format("width {:.2f} ± {:.2f} px: σ above the {:.2f} px a valid width may carry",
+                    m->width_px, m->width_sigma_px, max_sigma_px);
+  }
 }
 
 int FlagWidthOutliers(std::vector<StrandMeasurement>& frames, int half_window, double k,

@@ -56,11 +56,16 @@ struct StrandMeasurement {
   FrameStatus status = FrameStatus::kNoStrand;
   std::string detail;  // human-readable reason when not valid
   bool valid() const { return status == FrameStatus::kValid; }
+  // A width was measured: valid, or with a σ too large to be (kImprecise).
+  bool gave_width() const { return valid() || status == FrameStatus::kImprecise; }
 
   double width_px = 0;
   // Standard error of width_px: the calipers' spread, and the model's doubt (model_sigma_px).
   double width_sigma_px = 0;
-  double model_sigma_px = 0;  // the part from an edge model chosen on weak evidence (shading)
+  // The part no other frame of the scene would average out: from an edge model chosen on weak
+  // evidence (shading, tip), and from the codec (codec_sigma_px).
+  double model_sigma_px = 0;
+  double codec_sigma_px = 0;  // how far a second pass through the stream's encoder moved the width
   double angle_deg = 0;       // strand axis from image vertical, + leaning to +x going down
   double contrast = 0;        // median edge step, grey levels of the frame's bit depth
   double blur_px = 0;         // median PSF sigma, pixel footprint removed
@@ -125,6 +130,9 @@ cv::Rect ResolveRoi(const cv::Mat& frame, const StrandMeasureOptions& options);
 
 // Scene-finding options from the measurement options and the data's range.
 SceneOptions SceneOptionsFor(const StrandMeasureOptions& options, double data_max);
+
+// A valid width whose σ is above what the options let a valid width carry becomes kImprecise.
+void JudgePrecision(const StrandMeasureOptions& options, StrandMeasurement* m);
 
 // Marks valid frames whose width is far from the median of the valid frames within ±half_window
 // frames (robust: more than k·1.4826·MAD and more than min_deviation_px away) as kWidthOutlier.

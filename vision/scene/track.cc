@@ -39,13 +39,19 @@ StrandTracker::StrandTracker(const StrandMeasureOptions& options) : options_(opt
   if (!options_.Validate(&why)) throw std::invalid_argument("measure options: " + why);
 }
 
+void StrandTracker::SetEncoder(const X264Settings& encoder) {
+  codec_.reset();
+  if (encoder.found) codec_.emplace(encoder);
+}
+
 StrandMeasurement StrandTracker::Measure(const cv::Mat& frame) {
   StrandMeasurement m;
-  if (tracking_ && Follow(frame, &m)) {
+  if (tracking_ && Follow(frame, &m))
     ++tracked_frames_;
-    return m;
-  }
-  return Detect(frame);
+  else
+    m = Detect(frame);
+  if (codec_) codec_->Apply(frame, options_, &m);
+  return m;
 }
 
 StrandMeasurement StrandTracker::Detect(const cv::Mat& frame) {

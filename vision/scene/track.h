@@ -1,7 +1,9 @@
 #pragma once
 
 #include <opencv2/core.hpp>
+#include <optional>
 
+#include "vision/scene/codec_doubt.h"
 #include "vision/scene/cylinder_memory.h"
 #include "vision/scene/scene.h"
 #include "vision/scene/strand_measure.h"
@@ -17,6 +19,9 @@ class StrandTracker {
   // Throws std::invalid_argument when the options do not validate.
   explicit StrandTracker(const StrandMeasureOptions& options);
 
+  // Frames from a video x264 encoded (encoder.found): every width carries the codec's doubt
+  // (codec_doubt.h); other encoders: none.
+  void SetEncoder(const X264Settings& encoder);
   // Measures one frame (as MeasureStrand does).
   StrandMeasurement Measure(const cv::Mat& frame);
 
@@ -46,6 +51,7 @@ class StrandTracker {
   int full_detections_ = 0;
   int tracked_frames_ = 0;
   int short_straight_frames_ = 0;  // a filament's: frames in a row on a short straight part
+  std::optional<CodecDoubt> codec_;
 };
 
 }  // namespace clogscope::vision

@@ -1,0 +1,104 @@
+#include "vision/scene/codec_doubt.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace clogscope::vision {
+namespace {
+
+constexpr int kMacroblockPx = 16;
+// Beyond the outer edges: the calipers' windows and the outside's self-check, at any blur.
+constexpr double kMarginPx = 16.0;
+constexpr double kMarginBlurs = 4.0;
+constexpr int kMinPairedCalipers = 5;  // fewer: the shift's noise is not known
+
+// The frame's region around the strand from its tip to the band's end, widened to whole
+// macroblocks: the second pass's blocks then lie where the stream's did.
+cv::Rect StrandRegion(const StrandMeasurement& m, const cv::Size& frame) {
+  const double margin = kMarginPx + kMarginBlurs * m.blur_px;
+  const double s0 = std::min(0.0, m.band_start_px) - margin, s1 = m.band_end_px + margin;
+  double x0 = 1e18, y0 = 1e18, x1 = -1e18, y1 = -1e18;
+  for (const double s : {s0, s1}) {
+    for (const double u :
+         {m.left_u0_px + m.edge_slope * s - margin, m.right_u0_px + m.edge_slope * s + margin}) {
+      const double x = m.tip_x_px + s * m.axis_dx + u * m.axis_dy;
+      const double y = m.tip_y_px + s * m.axis_dy - u * m.axis_dx;
+      x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+    }
+  }
+  auto down = [](double v, int limit) {
+    return std::clamp(static_cast<int>(std::floor(v / kMacroblockPx)) * kMacroblockPx, 0, limit);
+  };
+  auto up = [](double v, int limit) {
+    return std::clamp(static_cast<int>(std::ceil(v / kMacroblockPx)) * kMacroblockPx, 0, limit);
+  };
+  const int left = down(x0, frame.width), top = down(y0, frame.height);
+  // 4:2:0 wants even sizes: a frame of odd size loses its last column or row.
+  const int width = (up(x1, frame.width) - left) & ~1, height = (up(y1, frame.height) - top) & ~1;
+  return {left, top, width, height};
+}
+
+}  // namespace
+
+CodecCheck CheckCodec(const cv::Mat& frame, const StrandMeasureOptions& options,
+                      X264RoundTrip* round_trip) {
+  CodecCheck out;
+  if (frame.depth() != CV_8U) return out;
+  const StrandMeasurement first = MeasureStrand(frame, options);
+  if (!first.gave_width() || !first.has_geometry) return out;
+  const cv::Rect region = StrandRegion(first, frame.size());
+  if (region.width < kMacroblockPx || region.height < kMacroblockPx) return out;
+  cv::Mat second = frame.clone();
+  round_trip->Apply(frame(region)).copyTo(second(region));
+  // Found and measured afresh, as the first: a codec that tips the choice of object, channel or
+  // tip moves the width by that choice, and that is doubt too.
+  const StrandMeasurement again = MeasureStrand(second, options);
+  out.second_pass_status = again.status;
+  if (!again.gave_width()) return out;
+  out.done = true;
+  out.shift_px = again.width_px - first.width_px;
+  // Calipers in both, by their place along the band (the same when the tip stayed).
+  if (again.calipers.size() == first.calipers.size()) {
+    double sum = 0, sum2 = 0;
+    int n = 0;
+    for (size_t k = 0; k < first.calipers.size(); ++k) {
+      const Caliper &a = first.calipers[k], &b = again.calipers[k];
+      if (!a.inlier || !b.inlier) continue;
+      const double d = b.width_px - a.width_px;
+      sum += d, sum2 += d * d, ++n;
+    }
+    if (n >= kMinPairedCalipers)
+      out.shift_sigma_px = std::sqrt(std::max(0.0, (sum2 - sum * sum / n) / (n - 1)) / n);
+  }
+  return out;
+}
+
+double CodecCheck::DoubtPx() const {
+  if (!done) return 0;
+  if (shift_sigma_px < 0) return std::abs(shift_px);
+  return std::sqrt(std::max(0.0, shift_px * shift_px - shift_sigma_px * shift_sigma_px));
+}
+
+CodecDoubt::CodecDoubt(const X264Settings& encoder, int check_every_frames)
+    : round_trip_(encoder), every_(check_every_frames) {
+  if (check_every_frames < 1)
+    throw std::invalid_argument("codec doubt: check_every_frames must be at least 1");
+}
+
+void CodecDoubt::Apply(const cv::Mat& frame, const StrandMeasureOptions& options,
+                       StrandMeasurement* m) {
+  if (!m->gave_width()) return;
+  if (since_check_ < 0 || ++since_check_ >= every_) {
+    const CodecCheck check = CheckCodec(frame, options, &round_trip_);
+    since_check_ = 0;
+    if (check.done) sum2_px2_ += check.DoubtPx() * check.DoubtPx(), ++checks_;
+  }
+  if (checks_ == 0) return;
+  m->codec_sigma_px = doubt_px();
+  m->model_sigma_px = std::hypot(m->model_sigma_px, m->codec_sigma_px);
+  m->width_sigma_px = std::hypot(m->width_sigma_px, m->codec_sigma_px);
+  JudgePrecision(options, m);
+}
+
+}  // namespace clogscope::vision
