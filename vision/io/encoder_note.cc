@@ -5,6 +5,8 @@
 #include <cstdlib>
 #include <fstream>
 
+#include "vision/io/x264_round_trip.h"
+
 namespace clogscope::vision {
 
 X264Settings ReadX264Settings(const std::string& path, size_t max_bytes) {
@@ -39,10 +41,11 @@ std::string X264EdgeAdvice(const X264Settings& s) {
     return "";
   return fmt::format(
       "H.264 from x264 with adaptive quantisation (aq-mode {}{}): it can move a lit strand's edges "
-      "by 0.2-0.3 px (each width's σ carries what a second pass through x264 shows, and fewer "
-      "are valid); record with -aq-mode 0 or -crf {:.0f} or "
-      "less for measurement",
+      "by 0.2-0.3 px ({}); record with -aq-mode 0 or -crf {:.0f} or less for measurement",
       s.aq_mode, s.crf >= 0 ? fmt::format(", CRF {:.0f}", s.crf) : std::string(),
+      X264RoundTrip::Available()
+          ? "each width's σ carries what a second pass through x264 shows, and fewer are valid"
+          : "this FFmpeg has no libx264 for a second pass, and the widths' σ does not show it",
       kX264MaxCrfForEdges);
 }
 

@@ -74,6 +74,10 @@ void CopyPlane(const uint8_t* src, int src_step, uint8_t* dst, int dst_step, int
 
 }  // namespace
 
+bool X264RoundTrip::Available() {
+  return avcodec_find_encoder_by_name("libx264") && avcodec_find_decoder(AV_CODEC_ID_H264);
+}
+
 X264RoundTrip::X264RoundTrip(const X264Settings& settings) : settings_(settings) {
   av_log_set_level(AV_LOG_QUIET);  // x264 reports its settings on every open
 }

@@ -13,6 +13,8 @@ namespace clogscope::vision {
 class X264RoundTrip {
  public:
   explicit X264RoundTrip(const X264Settings& settings);
+  // This FFmpeg has libx264's encoder and an H.264 decoder (Debian's does).
+  static bool Available();
 
   // image: 8-bit grey (coded as luma, with neutral chroma) or BGR (BT.601 4:2:0, as an RGB
   // recording is), even width and height. Returns the decoded image in the same form. Throws

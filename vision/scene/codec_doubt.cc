@@ -12,6 +12,7 @@ constexpr int kMacroblockPx = 16;
 constexpr double kMarginPx = 16.0;
 constexpr double kMarginBlurs = 4.0;
 constexpr int kMinPairedCalipers = 5;  // fewer: the shift's noise is not known
+constexpr double kSamePlacePx = 0.5;   // calipers this close along the axis are the same place
 
 // The frame's region around the strand from its tip to the band's end, widened to whole
 // macroblocks: the second pass's blocks then lie where the stream's did.
@@ -44,7 +45,7 @@ cv::Rect StrandRegion(const StrandMeasurement& m, const cv::Size& frame) {
 CodecCheck CheckCodec(const cv::Mat& frame, const StrandMeasureOptions& options,
                       X264RoundTrip* round_trip) {
   CodecCheck out;
-  if (frame.depth() != CV_8U) return out;
+  if (frame.depth() != CV_8U || (frame.channels() != 1 && frame.channels() != 3)) return out;
   const StrandMeasurement first = MeasureStrand(frame, options);
   if (!first.gave_width() || !first.has_geometry) return out;
   const cv::Rect region = StrandRegion(first, frame.size());
@@ -55,27 +56,31 @@ CodecCheck CheckCodec(const cv::Mat& frame, const StrandMeasureOptions& options,
   // tip moves the width by that choice, and that is doubt too.
   const StrandMeasurement again = MeasureStrand(second, options);
   out.second_pass_status = again.status;
-  if (!again.gave_width()) return out;
-  out.done = true;
-  out.shift_px = again.width_px - first.width_px;
-  // Calipers in both, by their place along the band (the same when the tip stayed).
-  if (again.calipers.size() == first.calipers.size()) {
-    double sum = 0, sum2 = 0;
-    int n = 0;
-    for (size_t k = 0; k < first.calipers.size(); ++k) {
-      const Caliper &a = first.calipers[k], &b = again.calipers[k];
-      if (!a.inlier || !b.inlier) continue;
-      const double d = b.width_px - a.width_px;
-      sum += d, sum2 += d * d, ++n;
-    }
-    if (n >= kMinPairedCalipers)
-      out.shift_sigma_px = std::sqrt(std::max(0.0, (sum2 - sum * sum / n) / (n - 1)) / n);
+  if (!again.gave_width()) {
+    out.outcome = CodecCheck::Outcome::kLostInSecondPass;
+    return out;
   }
+  out.outcome = CodecCheck::Outcome::kDone;
+  out.shift_px = again.width_px - first.width_px;
+  // Calipers in both, paired by their place along the axis (a tip that moved moves the band).
+  double sum = 0, sum2 = 0;
+  int n = 0;
+  size_t j = 0;
+  for (const Caliper& a : first.calipers) {
+    while (j < again.calipers.size() && again.calipers[j].s_px < a.s_px - kSamePlacePx) ++j;
+    if (j == again.calipers.size()) break;
+    const Caliper& b = again.calipers[j];
+    if (std::abs(b.s_px - a.s_px) > kSamePlacePx || !a.inlier || !b.inlier) continue;
+    const double d = b.width_px - a.width_px;
+    sum += d, sum2 += d * d, ++n;
+  }
+  if (n >= kMinPairedCalipers)
+    out.shift_sigma_px = std::sqrt(std::max(0.0, (sum2 - sum * sum / n) / (n - 1)) / n);
   return out;
 }
 
 double CodecCheck::DoubtPx() const {
-  if (!done) return 0;
+  if (!done()) return 0;
   if (shift_sigma_px < 0) return std::abs(shift_px);
   return std::sqrt(std::max(0.0, shift_px * shift_px - shift_sigma_px * shift_sigma_px));
 }
@@ -86,13 +91,29 @@ CodecDoubt::CodecDoubt(const X264Settings& encoder, int check_every_frames)
     throw std::invalid_argument("codec doubt: check_every_frames must be at least 1");
 }
 
+void CodecDoubt::Reset() {
+  until_check_ = failed_ = attempts_ = checks_ = 0;
+  sum2_px2_ = 0;
+}
+
 void CodecDoubt::Apply(const cv::Mat& frame, const StrandMeasureOptions& options,
                        StrandMeasurement* m) {
   if (!m->gave_width()) return;
-  if (since_check_ < 0 || ++since_check_ >= every_) {
+  if (until_check_ > 0) {
+    --until_check_;
+  } else {
+    ++attempts_;
     const CodecCheck check = CheckCodec(frame, options, &round_trip_);
-    since_check_ = 0;
-    if (check.done) sum2_px2_ += check.DoubtPx() * check.DoubtPx(), ++checks_;
+    if (check.done()) {
+      sum2_px2_ += check.DoubtPx() * check.DoubtPx();
+      ++checks_;
+      failed_ = 0;
+      until_check_ = every_ - 1;
+    } else {
+      // Tried again soon, but not every frame: a check costs two searches and an encode.
+      ++failed_;
+      until_check_ = std::min(1 << std::min(failed_ - 1, 20), every_) - 1;
+    }
   }
   if (checks_ == 0) return;
   m->codec_sigma_px = doubt_px();

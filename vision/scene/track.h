@@ -20,16 +20,18 @@ class StrandTracker {
   explicit StrandTracker(const StrandMeasureOptions& options);
 
   // Frames from a video x264 encoded (encoder.found): every width carries the codec's doubt
-  // (codec_doubt.h); other encoders: none.
+  // (codec_doubt.h); other encoders, or an FFmpeg without libx264 (X264RoundTrip::Available):
+  // none.
   void SetEncoder(const X264Settings& encoder);
   // Measures one frame (as MeasureStrand does).
   StrandMeasurement Measure(const cv::Mat& frame);
 
-  // Forgets the strand: the next frame is searched from scratch.
+  // Forgets the strand and the codec's checks: the next frame is searched from scratch.
   void Reset() {
     tracking_ = false;
     short_straight_frames_ = 0;
     cylinders_.Clear();
+    if (codec_) codec_->Reset();
   }
 
   int full_detections() const { return full_detections_; }

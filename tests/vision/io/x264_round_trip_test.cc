@@ -4,17 +4,10 @@
 
 #include <opencv2/core.hpp>
 
+#include "tests/vision/x264_test_settings.h"
+
 namespace clogscope::vision {
 namespace {
-
-X264Settings Crf(double crf) {
-  X264Settings s;
-  s.found = true;
-  s.crf = crf;
-  s.aq_mode = 1;
-  s.aq_strength = 1.0;
-  return s;
-}
 
 // A dark bar on a bright field, with noise: what a strand's frame holds.
 cv::Mat NoisyBar() {
@@ -37,7 +30,7 @@ double MeanAbsDiff(const cv::Mat& a, const cv::Mat& b) {
 TEST(X264RoundTripTest, LosslessX264GivesTheImageBackToTheBit) {
   // x264 at CRF 0 is lossless: whatever comes back different was the round trip's own doing.
   const cv::Mat img = NoisyBar();
-  const cv::Mat back = X264RoundTrip(Crf(0)).Apply(img);
+  const cv::Mat back = X264RoundTrip(X264AtCrf(0)).Apply(img);
   ASSERT_EQ(back.type(), CV_8U);
   ASSERT_EQ(back.size(), img.size());
   EXPECT_EQ(cv::norm(img, back, cv::NORM_INF), 0);
@@ -47,8 +40,8 @@ TEST(X264RoundTripTest, TheStreamsRateFactorIsTheOneUsed) {
   // Coarser quantisation loses more: the noise of a CRF 40 pass is not that of CRF 10. (A setting
   // the encoder ignored would give the same image at both.)
   const cv::Mat img = NoisyBar();
-  const double fine = MeanAbsDiff(img, X264RoundTrip(Crf(10)).Apply(img));
-  const double coarse = MeanAbsDiff(img, X264RoundTrip(Crf(40)).Apply(img));
+  const double fine = MeanAbsDiff(img, X264RoundTrip(X264AtCrf(10)).Apply(img));
+  const double coarse = MeanAbsDiff(img, X264RoundTrip(X264AtCrf(40)).Apply(img));
   EXPECT_LT(fine, 1.5);    // grey levels: CRF 10 keeps 4-level noise nearly as it was
   EXPECT_GT(coarse, 2.0);  // CRF 40 smooths most of it away
 }
@@ -60,7 +53,7 @@ TEST(X264RoundTripTest, ColourComesBackInItsOwnColours) {
                                {240, 240, 240}, {10, 10, 10},  {128, 30, 180}};
   for (int i = 0; i < 6; ++i)
     img(cv::Rect(32 * (i % 3), 32 * (i / 3), 32, 32)).setTo(cv::Scalar(colours[i]));
-  const cv::Mat back = X264RoundTrip(Crf(10)).Apply(img);
+  const cv::Mat back = X264RoundTrip(X264AtCrf(10)).Apply(img);
   ASSERT_EQ(back.type(), CV_8UC3);
   for (int i = 0; i < 6; ++i) {
     const cv::Scalar mean = cv::mean(back(cv::Rect(32 * (i % 3) + 8, 32 * (i / 3) + 8, 16, 16)));
@@ -69,7 +62,7 @@ TEST(X264RoundTripTest, ColourComesBackInItsOwnColours) {
 }
 
 TEST(X264RoundTripTest, RefusesWhat420CannotHold) {
-  X264RoundTrip rt(Crf(23));
+  X264RoundTrip rt(X264AtCrf(23));
   EXPECT_THROW(rt.Apply(cv::Mat(31, 32, CV_8U, cv::Scalar(0))), std::invalid_argument);
   EXPECT_THROW(rt.Apply(cv::Mat(32, 32, CV_16U, cv::Scalar(0))), std::invalid_argument);
 }
