@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "common/atomic_file.h"
+#include "vision/io/av_error.h"
 #include "vision/io/image_header.h"
 #include "vision/io/source_name.h"
 #include "vision/io/video_io.h"
@@ -82,12 +83,6 @@ struct VideoDecoder::Impl {
 
 namespace {
 constexpr int kMaxFrameIndex = 1 << 30;  // frame numbers from timestamps stop here
-
-std::string AvError(int code) {
-  char buf[AV_ERROR_MAX_STRING_SIZE] = {0};
-  av_strerror(code, buf, sizeof(buf));
-  return buf;
-}
 
 // True when plane 0 of the format is luma (YUV, grey): it is the grey image as is.
 bool HasLumaPlane(AVPixelFormat fmt) {

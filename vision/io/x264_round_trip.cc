@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "vision/io/av_error.h"
+
 extern "C" {
 #include <libavcodec/avcodec.h>
 }
@@ -32,9 +34,7 @@ using Frame = std::unique_ptr<AVFrame, FrameFree>;
 using Packet = std::unique_ptr<AVPacket, PacketFree>;
 
 [[noreturn]] void Fail(const char* what, int err) {
-  char text[AV_ERROR_MAX_STRING_SIZE] = {};
-  av_strerror(err, text, sizeof text);
-  throw std::runtime_error(fmt::format("x264 round trip: {}: {}", what, text));
+  throw std::runtime_error(fmt::format("x264 round trip: {}: {}", what, AvError(err)));
 }
 
 Context OpenEncoder(const X264Settings& s, int width, int height) {
