@@ -36,8 +36,9 @@ TEST(AdversarialMatrixTest, FewConfidentlyWrongWidthsAndNoneWithoutAStrand) {
   // model's first round. The renders are the same from run to run (H.264 on one thread).
   EXPECT_LE(r.all.wrong, 1);
   EXPECT_LE(r.all.wrong_beyond_sigma, 1);
-  // What that costs: valid widths on 654 of the 1000 measurable strand frames when this was
-  // written (674 before a width from x264 carried the codec's doubt, 677 before the change above;
+  // What that costs: valid widths on 660 of the 1000 measurable strand frames when this was
+  // written (674 before a width from x264 carried the codec's doubt, 654 while its second pass
+  // coded a lone key frame, 677 before the change above;
   // the saturated and nozzle-alone classes are refused by design).
   const int measurable = r.all.frames -
                          r.classes[static_cast<int>(TroubleClass::kSaturated)].frames -

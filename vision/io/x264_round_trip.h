@@ -8,8 +8,9 @@ namespace clogscope::vision {
 
 // Passes an image once more through x264 (libavcodec's libx264 encoder, then its H.264 decoder):
 // what a second generation of a stream's own encoder does to it. With the stream's CRF (23 when
-// not told) and adaptive quantisation, the rest at x264's defaults; the image is coded as one key
-// frame, as a steady scene's strand is (the frames between key frames code little but noise).
+// not told) and adaptive quantisation, the rest at x264's defaults; the image is coded as the key
+// frame of a short steady run, as a steady scene's strand is (the frames between key frames code
+// little but noise, and x264 gives a key frame they copy a finer quantiser than a lone one).
 class X264RoundTrip {
  public:
   explicit X264RoundTrip(const X264Settings& settings);
