@@ -1,11 +1,13 @@
 // clogscope_bench adversarial [SCENES_PER_CLASS] [--first-seed N] [--noise-scale F] [--list]
 //                             [--frames-tsv PATH]:
 // the adversarial matrix (issue 22): every trouble class rendered by synthetic/adversarial.cc,
-// 4 frames a scene, measured with the default options; valid %, confident-wrong %, bias and σ by
-// class. Seeds from N (default 1: the slow test's scenes; another N gives scenes no one tuned
-// for); every scene's noise times F (default 1; below 1 shows biases the noise hid). --list
-// prints every frame that was confidently wrong, with its scene; --frames-tsv writes every frame
-// (class, seed, frame, status, width, σ, truth, scene) for analysis.
+// 4 frames a scene, measured with the default options; valid %, the share of frames whose
+// Cramér–Rao bound lets a valid width be measured at all and how many of those are valid,
+// confident-wrong %, bias and σ by class. Seeds from N (default 1: the slow test's scenes; another
+// N gives scenes no one tuned for); every scene's noise times F (default 1; below 1 shows biases
+// the noise hid). --list prints every frame that was confidently wrong, with its scene;
+// --frames-tsv writes every frame (class, seed, frame, status, width, σ and its model and codec
+// parts, truth, bound σ, scene) for analysis.
 #include <fmt/format.h>
 
 #include <chrono>
@@ -43,18 +45,23 @@ void BenchAdversarial(int argc, char** argv) {
       o.scenes_per_class, o.frames_per_scene, o.first_seed, o.noise_scale, secs);
   fmt::print(
       "Confident-wrong: valid but off by more than max({} px, {} %) (or any width where "
-      "there is no strand). Bias and σ over the other valid frames.\n\n",
+      "there is no strand). Bias and σ over the other valid frames. Bound allows: the "
+      "Cramér–Rao bound on the width's σ (camera blur and noise, the strand's cross-section) is "
+      "within what a valid width may carry.\n\n",
       syn::kWrongPx, 100 * syn::kWrongFraction);
   fmt::print("{}", syn::MatrixTable(r));
   if (!tsv_path.empty()) {
-    std::string tsv = "class\tseed\tframe\tstatus\twidth_px\tsigma_px\ttruth_px\twrong\tscene\n";
+    std::string tsv =
+        "class\tseed\tframe\tstatus\twidth_px\tsigma_px\tmodel_sigma_px\tcodec_sigma_px\ttruth_px\t"
+        "wrong\tbound_sigma_px\tscene\n";
     for (const auto& f : r.frames) {
-      tsv += fmt::format("{}\t{}\t{}\t{}\t{:.4f}\t{:.4f}\t{:.4f}\t{}\t{}\n",
+      tsv += fmt::format("{}\t{}\t{}\t{}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{}\t{:.4f}\t{}\n",
                          syn::TroubleClassName(f.trouble), f.seed, f.frame,
                          f.status == clogscope::vision::FrameStatus::kValid
                              ? "valid"
                              : clogscope::vision::FrameStatusName(f.status),
-                         f.width_px, f.sigma_px, f.truth_px, f.wrong ? 1 : 0, f.scene);
+                         f.width_px, f.sigma_px, f.model_sigma_px, f.codec_sigma_px, f.truth_px,
+                         f.wrong ? 1 : 0, f.bound_sigma_px, f.scene);
     }
     clogscope::WriteFileAtomically(tsv_path, tsv);
   }

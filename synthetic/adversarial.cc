@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "common/spawn.h"
+#include "synthetic/adversarial_optics.h"
 
 namespace clogscope::synthetic {
 namespace {
@@ -30,17 +31,6 @@ struct StrandShape {
     return s > bend_s_px ? bend_k * (s - bend_s_px) * (s - bend_s_px) : 0.0;
   }
 };
-
-// A transparent cylinder on a backlight seen through a lens of finite aperture: a ray crossing
-// the cylinder at x = u/R (|x| < 1) leaves deviated by δ = 2(asin x − asin(x/n)). It reaches the
-// sensor from the backlight only while δ is within the optics' acceptance; outside, the rim shows
-// only scattered light (the rim floor). Fresnel losses take ~8 %.
-double LensTransmission(double x, double n, double acceptance_rad, double floor) {
-  const double ax = std::min(std::abs(x), 1.0);
-  const double delta = 2 * (std::asin(ax) - std::asin(ax / n));
-  const double pass = 0.5 * std::erfc((delta - acceptance_rad) / (0.12 * acceptance_rad + 1e-9));
-  return 0.92 * (floor + (1 - floor) * pass);
-}
 
 // A normalised box kernel of `length_px` (hi-res px) along (dx, dy), sampled finely and spread
 // bilinearly: symmetric about its centre, so it blurs without shifting.
@@ -102,8 +92,7 @@ void RenderLayers(const AdversarialScene& p, cv::Mat* tau, cv::Mat* emit) {
             if (p.lens) {
               obj_tau = LensTransmission(xr, p.lens_index, p.lens_acceptance_rad, p.lens_rim_floor);
             } else {
-              const double bulge = std::sqrt(std::max(0.0, 1 - xr * xr));
-              obj_emit = p.strand_level * (p.shading_ambient + (1 - p.shading_ambient) * bulge);
+              obj_emit = StrandEmission(p, xr);
             }
             if (p.stripe_gain != 0) {
               const double sc = p.stripe_offset * 2 * h, sh = p.stripe_width * h;
@@ -190,12 +179,12 @@ cv::Mat Background(const AdversarialScene& p) {
 }
 
 cv::Mat Quantise(const cv::Mat& radiance, double noise_sigma, cv::RNG& rng) {
-  // Read noise plus shot noise growing with the signal.
+  // Read noise plus shot noise growing with the signal (NoiseVariance, per pixel).
   cv::Mat noise(radiance.size(), CV_32FC(radiance.channels()));
   rng.fill(noise, cv::RNG::NORMAL, 0.0, 1.0);
   cv::Mat sigma;
-  cv::sqrt(0.5 + radiance / 255.0, sigma);
-  cv::Mat noisy = radiance + noise.mul(sigma) * (noise_sigma / std::sqrt(1.5));
+  cv::sqrt(kReadShare + radiance / 255.0, sigma);
+  cv::Mat noisy = radiance + noise.mul(sigma) * (noise_sigma / std::sqrt(kReadShare + 1.0));
   cv::Mat out;
   noisy.convertTo(out, CV_8U);  // rounds and clips at 0 and 255
   return out;
@@ -392,12 +381,10 @@ std::vector<cv::Mat> RenderAdversarial(const AdversarialScene& p, int frames,
   tau_hi.release();
   emit_hi.release();
   const cv::Mat bg = Background(p);
-  // Colour: an orange strand (and nozzle) on a blue background.
-  const double strand_tint[3] = {0.3, 0.65, 1.0}, bg_tint[3] = {1.0, 0.6, 0.25};
   std::vector<cv::Mat> planes;
   const int nc = p.colour ? 3 : 1;
   for (int c = 0; c < nc; ++c) {
-    const double tb = p.colour ? bg_tint[c] : 1.0, ts = p.colour ? strand_tint[c] : 1.0;
+    const double tb = p.colour ? kBackgroundTint[c] : 1.0, ts = p.colour ? kStrandTint[c] : 1.0;
     planes.push_back(bg.mul(tau) * tb + emit * ts);
   }
   cv::Mat radiance;

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "synthetic/adversarial_bound.h"
 #include "vision/scene/codec_doubt.h"
 #include "vision/scene/strand_measure.h"
 
@@ -22,6 +23,10 @@ void Add(ClassSummary* s, const FrameRecord& r) {
     ++s->valid;
   else
     ++s->refusals[static_cast<int>(r.status)];
+  if (r.bound_allows) {
+    ++s->allowed;
+    if (r.status == vision::FrameStatus::kValid) ++s->allowed_valid;
+  }
   if (r.wrong) ++s->wrong;
   if (r.wrong_beyond_sigma) ++s->wrong_beyond_sigma;
 }
@@ -72,6 +77,10 @@ MatrixResult RunAdversarialMatrix(const MatrixOptions& o) {
       vision::X264Settings encoder;
       const std::vector<cv::Mat> frames =
           RenderAdversarial(scene, o.frames_per_scene, temp, &truth, &encoder);
+      const double bound_px = WidthBoundSigmaPx(scene, truth.width_px);
+      const bool allows =
+          truth.strand &&
+          bound_px <= vision::MaxValidSigmaPx(vision::StrandMeasureOptions{}, truth.width_px);
       for (int i = 0; i < static_cast<int>(frames.size()); ++i) {
         const vision::StrandMeasurement m = MeasureAdversarialFrame(frames[i], scene, encoder);
         FrameRecord r;
@@ -83,7 +92,11 @@ MatrixResult RunAdversarialMatrix(const MatrixOptions& o) {
         r.truth_px = truth.width_px;
         r.width_px = m.width_px;
         r.sigma_px = m.width_sigma_px;
+        r.model_sigma_px = m.model_sigma_px;
+        r.codec_sigma_px = m.codec_sigma_px;
         r.strand = truth.strand;
+        r.bound_sigma_px = bound_px;
+        r.bound_allows = allows;
         if (m.valid()) {
           const double err = std::abs(m.width_px - truth.width_px);
           r.wrong = !truth.strand || err > WrongTolerancePx(truth.width_px);
@@ -118,9 +131,9 @@ vision::StrandMeasurement MeasureAdversarialFrame(const cv::Mat& frame,
 
 std::string MatrixTable(const MatrixResult& r) {
   std::string t =
-      "| class | frames | valid % | confident-wrong % | of them beyond 4σ | bias px | σ px | "
-      "refused as |\n"
-      "|---|---|---|---|---|---|---|---|\n";
+      "| class | frames | valid % | bound allows % | valid of those % | confident-wrong % | "
+      "of them beyond 4σ | bias px | σ px | refused as |\n"
+      "|---|---|---|---|---|---|---|---|---|---|\n";
   const auto row = [&](const std::string& name, const ClassSummary& s) {
     std::string why;
     for (int k = 0; k < static_cast<int>(s.refusals.size()); ++k) {
@@ -129,10 +142,12 @@ std::string MatrixTable(const MatrixResult& r) {
           fmt::format("{}{} {}", why.empty() ? "" : ", ",
                       vision::FrameStatusName(static_cast<vision::FrameStatus>(k)), s.refusals[k]);
     }
-    t += fmt::format("| {} | {} | {:.1f} | {:.2f} | {} | {:+.3f} | {:.3f} | {} |\n", name, s.frames,
-                     s.frames ? 100.0 * s.valid / s.frames : 0.0,
-                     s.frames ? 100.0 * s.wrong / s.frames : 0.0, s.wrong_beyond_sigma, s.bias_px,
-                     s.sd_px, why);
+    t += fmt::format(
+        "| {} | {} | {:.1f} | {:.1f} | {:.1f} | {:.2f} | {} | {:+.3f} | {:.3f} | {} |\n", name,
+        s.frames, s.frames ? 100.0 * s.valid / s.frames : 0.0,
+        s.frames ? 100.0 * s.allowed / s.frames : 0.0,
+        s.allowed ? 100.0 * s.allowed_valid / s.allowed : 0.0,
+        s.frames ? 100.0 * s.wrong / s.frames : 0.0, s.wrong_beyond_sigma, s.bias_px, s.sd_px, why);
   };
   for (int c = 0; c < kTroubleClassCount; ++c)
     row(TroubleClassName(static_cast<TroubleClass>(c)), r.classes[c]);

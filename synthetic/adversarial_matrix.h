@@ -38,6 +38,11 @@ struct FrameRecord {
   vision::FrameStatus status = vision::FrameStatus::kNoStrand;
   std::string detail;
   double truth_px = 0, width_px = 0, sigma_px = 0;
+  double model_sigma_px = 0, codec_sigma_px = 0;  // the parts of sigma_px (strand_measure.h)
+  // The Cramér–Rao bound on the width's σ (adversarial_bound.h), and whether it lets a valid width
+  // be measured at all (at most the σ a valid width may carry, MaxValidSigmaPx).
+  double bound_sigma_px = 0;
+  bool bound_allows = false;
   bool strand = false;
   bool wrong = false;  // valid and confidently wrong (or a width where there is no strand)
   bool wrong_beyond_sigma = false;  // and off by more than 4 of its own σ too
@@ -46,6 +51,7 @@ struct FrameRecord {
 
 struct ClassSummary {
   int frames = 0, valid = 0, wrong = 0;
+  int allowed = 0, allowed_valid = 0;  // frames the bound allows, and of them the valid ones
   int wrong_beyond_sigma = 0;  // of the wrong ones, those whose σ does not cover the error either
   double bias_px = 0, sd_px = 0;  // of the valid frames that are not wrong
   std::vector<int> refusals;      // count per FrameStatus

@@ -287,8 +287,12 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
   return m;
 }
 
+double MaxValidSigmaPx(const StrandMeasureOptions& opt, double width_px) {
+  return std::max(opt.max_sigma_px, opt.max_sigma_fraction * width_px);
+}
+
 void JudgePrecision(const StrandMeasureOptions& opt, StrandMeasurement* m) {
-  const double max_sigma_px = std::max(opt.max_sigma_px, opt.max_sigma_fraction * m->width_px);
+  const double max_sigma_px = MaxValidSigmaPx(opt, m->width_px);
   if (m->valid() && m->width_sigma_px > max_sigma_px) {
     m->status = FrameStatus::kImprecise;
     m->detail =

@@ -131,7 +131,9 @@ cv::Rect ResolveRoi(const cv::Mat& frame, const StrandMeasureOptions& options);
 // Scene-finding options from the measurement options and the data's range.
 SceneOptions SceneOptionsFor(const StrandMeasureOptions& options, double data_max);
 
-// A valid width whose σ is above what the options let a valid width carry becomes kImprecise.
+// The largest σ the options let a valid width of width_px carry; a valid width whose σ is above
+// it becomes kImprecise (JudgePrecision).
+double MaxValidSigmaPx(const StrandMeasureOptions& options, double width_px);
 void JudgePrecision(const StrandMeasureOptions& options, StrandMeasurement* m);
 
 // Marks valid frames whose width is far from the median of the valid frames within ±half_window

@@ -1,0 +1,33 @@
+#pragma once
+
+#include "synthetic/adversarial.h"
+
+namespace clogscope::synthetic {
+
+// The adversarial strand's cross-section, shared by the renderer (adversarial.cc) and the
+// Cramér–Rao bound (adversarial_bound.h). x is the place across the strand in half widths from its
+// axis (|x| < 1 inside).
+
+// A transparent cylinder on a backlight seen through a lens of finite aperture: a ray crossing
+// the cylinder at x = u/R (|x| < 1) leaves deviated by δ = 2(asin x − asin(x/n)). It reaches the
+// sensor from the backlight only while δ is within the optics' acceptance; outside, the rim shows
+// only scattered light (the rim floor). Fresnel losses take ~8 %.
+double LensTransmission(double x, double n, double acceptance_rad, double floor);
+
+// An opaque strand's own light at x (8-bit grey levels): a lit cylinder, from the ambient share at
+// its rim to its full level on its axis (flat when shading_ambient is 1).
+double StrandEmission(const AdversarialScene& p, double x);
+
+// A colour scene: an orange strand (and nozzle) on a blue background, the light of each
+// multiplied by these per channel (B, G, R).
+inline constexpr double kStrandTint[3] = {0.3, 0.65, 1.0}, kBackgroundTint[3] = {1.0, 0.6, 0.25};
+
+// The camera's noise: read noise plus shot noise growing with the signal, a pixel of radiance r
+// (8-bit grey levels) drawing noise of variance noise_sigma² (kReadShare + r/255)/(kReadShare + 1)
+// (noise_sigma is the noise at 255, and 0.58 of it at black).
+inline constexpr double kReadShare = 0.5;
+inline double NoiseVariance(double noise_sigma, double radiance) {
+  return noise_sigma * noise_sigma * (kReadShare + radiance / 255.0) / (kReadShare + 1.0);
+}
+
+}  // namespace clogscope::synthetic
