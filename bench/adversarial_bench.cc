@@ -47,7 +47,8 @@ void BenchAdversarial(int argc, char** argv) {
       "Confident-wrong: valid but off by more than max({} px, {} %) (or any width where "
       "there is no strand). Bias and σ over the other valid frames. Bound allows: the "
       "Cramér–Rao bound on the width's σ (camera blur and noise, the strand's cross-section) is "
-      "within what a valid width may carry.\n\n",
+      "within what a valid width may carry. Error/σ RMS: over every width given (valid or "
+      "imprecise), 1 for an honest σ.\n\n",
       syn::kWrongPx, 100 * syn::kWrongFraction);
   fmt::print("{}", syn::MatrixTable(r));
   if (!tsv_path.empty()) {

@@ -43,6 +43,17 @@ void Moments(const std::vector<FrameRecord>& frames, int trouble, ClassSummary* 
     sum2 += e * e;
     ++n;
   }
+  double z2 = 0;
+  int nz = 0;
+  for (const auto& r : frames) {
+    if (trouble >= 0 && static_cast<int>(r.trouble) != trouble) continue;
+    const bool width =
+        r.status == vision::FrameStatus::kValid || r.status == vision::FrameStatus::kImprecise;
+    if (!width || !r.strand || !(r.sigma_px > 0)) continue;
+    z2 += std::pow((r.width_px - r.truth_px) / r.sigma_px, 2);
+    ++nz;
+  }
+  if (nz > 0) s->error_sigmas_rms = std::sqrt(z2 / nz);
   if (n == 0) return;
   s->bias_px = sum / n;
   s->sd_px = n > 1 ? std::sqrt(std::max(0.0, (sum2 - sum * sum / n) / (n - 1))) : 0.0;
@@ -132,8 +143,8 @@ vision::StrandMeasurement MeasureAdversarialFrame(const cv::Mat& frame,
 std::string MatrixTable(const MatrixResult& r) {
   std::string t =
       "| class | frames | valid % | bound allows % | valid of those % | confident-wrong % | "
-      "of them beyond 4σ | bias px | σ px | refused as |\n"
-      "|---|---|---|---|---|---|---|---|---|---|\n";
+      "of them beyond 4σ | bias px | σ px | error/σ RMS | refused as |\n"
+      "|---|---|---|---|---|---|---|---|---|---|---|\n";
   const auto row = [&](const std::string& name, const ClassSummary& s) {
     std::string why;
     for (int k = 0; k < static_cast<int>(s.refusals.size()); ++k) {
@@ -143,11 +154,12 @@ std::string MatrixTable(const MatrixResult& r) {
                       vision::FrameStatusName(static_cast<vision::FrameStatus>(k)), s.refusals[k]);
     }
     t += fmt::format(
-        "| {} | {} | {:.1f} | {:.1f} | {:.1f} | {:.2f} | {} | {:+.3f} | {:.3f} | {} |\n", name,
-        s.frames, s.frames ? 100.0 * s.valid / s.frames : 0.0,
+        "| {} | {} | {:.1f} | {:.1f} | {:.1f} | {:.2f} | {} | {:+.3f} | {:.3f} | {:.2f} | {} |\n",
+        name, s.frames, s.frames ? 100.0 * s.valid / s.frames : 0.0,
         s.frames ? 100.0 * s.allowed / s.frames : 0.0,
         s.allowed ? 100.0 * s.allowed_valid / s.allowed : 0.0,
-        s.frames ? 100.0 * s.wrong / s.frames : 0.0, s.wrong_beyond_sigma, s.bias_px, s.sd_px, why);
+        s.frames ? 100.0 * s.wrong / s.frames : 0.0, s.wrong_beyond_sigma, s.bias_px, s.sd_px,
+        s.error_sigmas_rms, why);
   };
   for (int c = 0; c < kTroubleClassCount; ++c)
     row(TroubleClassName(static_cast<TroubleClass>(c)), r.classes[c]);

@@ -54,6 +54,9 @@ struct ClassSummary {
   int allowed = 0, allowed_valid = 0;  // frames the bound allows, and of them the valid ones
   int wrong_beyond_sigma = 0;  // of the wrong ones, those whose σ does not cover the error either
   double bias_px = 0, sd_px = 0;  // of the valid frames that are not wrong
+  // Whether the σ covers the error: the RMS of (width − truth)/σ over every strand frame that gave
+  // a width (valid or imprecise); 1 for an honest σ of Gaussian errors, below for one too cautious.
+  double error_sigmas_rms = 0;
   std::vector<int> refusals;      // count per FrameStatus
 };
 

@@ -7,6 +7,71 @@
 #include "common/robust.h"
 
 namespace clogscope::vision {
+namespace {
+
+// The band's pooled profile about its calipers' own edges (from below_px before each to above_px
+// after it, in 0.1 px bins, far finer than any blur: the fits then cost what two calipers' do, not
+// what the whole band's samples would), the plain and the two-slope step fitted to it: how far the
+// edge moves between them, and the two-slope fit's gain over the plain one in units of the bins'
+// noise (χ² with one degree of freedom when the sides slope alike).
+// The two-slope step's premise, a flat object: its side's slope at most this share of the
+// background's. And one background slope: the move with the window reaching further into the
+// background within 2σ of it or this share of it (a pixel's box is not quite a Gaussian's blur).
+constexpr double kMaxObjectSlopeShare = 0.25, kSameMoveShare = 0.1;
+
+struct TwoSlopeMove {
+  bool found = false;
+  double move_px = 0, gain = 0;
+  double slope_minus = 0, slope_plus = 0;  // grey levels per px toward −u and +u of the edge
+};
+TwoSlopeMove PooledTwoSlopeMove(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
+                                const std::vector<CaliperEdge>& edges, double below_px,
+                                double above_px, double blur_px) {
+  constexpr double kBinPx = 0.1;
+  const int bins = static_cast<int>(std::ceil((below_px + above_px) / kBinPx)) + 1;
+  std::vector<double> sum(bins, 0.0), sum2(bins, 0.0), count(bins, 0.0);
+  std::vector<EdgeSample> samples;
+  for (const CaliperEdge& c : edges) {
+    const double e = c.fit.edge_px;
+    if (!GatherEdgeSamples(img, f, c.s0_px, c.s1_px, e - below_px, e + above_px, clip, &samples))
+      continue;
+    for (const EdgeSample& smp : samples) {
+      // The same float distance the pooled samples were binned by.
+      const float u = static_cast<float>(smp.u_px - e);
+      const int b = static_cast<int>(std::lround((u + below_px) / kBinPx));
+      if (b < 0 || b >= bins) continue;
+      sum[b] += smp.value;
+      sum2[b] += static_cast<double>(smp.value) * smp.value;
+      count[b] += 1;
+    }
+  }
+  std::vector<EdgeSample> profile;
+  double within = 0, n = 0;
+  for (int b = 0; b < bins; ++b) {
+    if (count[b] == 0) continue;
+    profile.push_back(
+        {static_cast<float>(b * kBinPx - below_px), static_cast<float>(sum[b] / count[b])});
+    within += sum2[b] - sum[b] * sum[b] / count[b];
+    n += count[b];
+  }
+  const double occupied = static_cast<double>(profile.size());
+  // A bin mean's noise: the samples' variance within the bins over the samples a bin holds.
+  const double mean_var = n > occupied ? within / (n - occupied) / (n / occupied) : 0.0;
+  TwoSlopeMove out;
+  if (!(mean_var > 0)) return out;
+  const EdgeFit one = FitBlurredStep(profile, 0.0, blur_px, 0.0);
+  const EdgeFit two = FitTwoSlopeStep(profile, 0.0, blur_px, 0.0);
+  if (!one.converged || !two.converged || std::abs(two.edge_px) >= std::min(below_px, above_px))
+    return out;
+  out.found = true;
+  out.move_px = two.edge_px - one.edge_px;
+  out.gain = (one.rms * one.rms - two.rms * two.rms) * occupied / mean_var;
+  out.slope_minus = two.slope_per_px;
+  out.slope_plus = two.slope_per_px + two.slope_change_per_px;
+  return out;
+}
+
+}  // namespace
 
 ResidualStructure::ResidualStructure(double half_width_px)
     : half_width_px_(half_width_px),
@@ -57,14 +122,10 @@ double EdgeStructureDoubt::DoubtPx() const {
   return per_unit_.size() < 2 ? 0.0 : Median(per_unit_) * structure_.SharedRms();
 }
 
-double BandEdgeDoubtPx(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
-                       const std::vector<CaliperEdge>& edges, double below_px, double above_px) {
+BandEdgeDoubt JudgeBandEdge(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
+                            const std::vector<CaliperEdge>& edges, double below_px, double above_px,
+                            int background_side) {
   EdgeStructureDoubt doubt(std::max(below_px, above_px));
-  // The pooled profile in 0.1 px bins, far finer than any blur: the fits then cost what two
-  // calipers' do, not what the whole band's samples would.
-  constexpr double kBinPx = 0.1;
-  const int bins = static_cast<int>(std::ceil((below_px + above_px) / kBinPx)) + 1;
-  std::vector<double> sum(bins, 0.0), sum2(bins, 0.0), count(bins, 0.0);
   std::vector<EdgeSample> samples;
   std::vector<double> blur;
   bool plain = true;
@@ -72,55 +133,56 @@ double BandEdgeDoubtPx(const GreyImage& img, const AxisFrame& f, const ClipLevel
     const EdgeFit& e = c.fit;
     const double u0 = e.edge_px - below_px, u1 = e.edge_px + above_px;
     if (!GatherEdgeSamples(img, f, c.s0_px, c.s1_px, u0, u1, clip, &samples)) continue;
-    for (const EdgeSample& smp : samples) {
-      const double u = smp.u_px - e.edge_px;
-      doubt.structure().Add(u, smp.value - EdgeModelValue(e, smp.u_px));
-      // The same float distance the pooled samples were binned by.
-      const int b = static_cast<int>(std::lround((static_cast<float>(u) + below_px) / kBinPx));
-      if (b < 0 || b >= bins) continue;
-      sum[b] += smp.value;
-      sum2[b] += static_cast<double>(smp.value) * smp.value;
-      count[b] += 1;
-    }
+    for (const EdgeSample& smp : samples)
+      doubt.structure().Add(smp.u_px - e.edge_px, smp.value - EdgeModelValue(e, smp.u_px));
     doubt.AddCaliper(e.rms, e.edge_sigma_px, e.samples, u1 - u0);
     blur.push_back(e.sigma_px);
     plain = plain && e.object_side == 0;
   }
-  if (doubt.calipers() < 2) return 0.0;
+  BandEdgeDoubt out;
+  if (doubt.calipers() < 2) return out;
   const double shared_px = doubt.DoubtPx();
   double slopes_px = 0;
   if (plain) {
     // Both models on the pooled profile, where the noise has averaged down: their difference is
     // the model's, not the noise's.
-    std::vector<EdgeSample> profile;
-    for (int b = 0; b < bins; ++b) {
-      if (count[b] > 0)
-        profile.push_back(
-            {static_cast<float>(b * kBinPx - below_px), static_cast<float>(sum[b] / count[b])});
-    }
     const double sigma = Median(blur);
-    const EdgeFit one = FitBlurredStep(profile, 0.0, sigma, 0.0);
-    const EdgeFit two = FitTwoSlopeStep(profile, 0.0, sigma, 0.0);
-    // The bins' means carry the samples' noise over the samples per bin: the two-slope fit's
-    // gain over the plain one in units of it is χ² with one degree of freedom when the sides
-    // slope alike, and the edges' difference is then noise too. Only the part of the difference
-    // the gain cannot put down to noise counts (its square less the noise's share, as above).
-    double within = 0, n = 0;
-    int occupied = 0;
-    for (int b = 0; b < bins; ++b) {
-      if (count[b] == 0) continue;
-      within += sum2[b] - sum[b] * sum[b] / count[b];
-      n += count[b];
-      ++occupied;
-    }
-    const double mean_var = n > occupied ? within / (n - occupied) / (n / occupied) : 0.0;
-    if (one.converged && two.converged && std::abs(two.edge_px) < std::min(below_px, above_px) &&
-        mean_var > 0) {
-      const double gain = (one.rms * one.rms - two.rms * two.rms) * profile.size() / mean_var;
-      if (gain > 1) slopes_px = std::abs(two.edge_px - one.edge_px) * std::sqrt(1 - 1 / gain);
+    const TwoSlopeMove here = PooledTwoSlopeMove(img, f, clip, edges, below_px, above_px, sigma);
+    // The slopes on the background's side and on the object's.
+    const auto background_slope = [&](const TwoSlopeMove& t) {
+      return background_side < 0 ? t.slope_minus : t.slope_plus;
+    };
+    const auto object_slope = [&](const TwoSlopeMove& t) {
+      return background_side < 0 ? t.slope_plus : t.slope_minus;
+    };
+    // The move is the slope change's, which the gain measures in its own σ: the move's σ is the
+    // move over √gain. It is taken only where the two-slope step's premise holds: the slope is
+    // the background's and the object is flat (a stripe's tail inside the object slopes the
+    // other side), and the background is one slope, the move the same with the window reaching
+    // further into it (a lamp's spot curves the background, and the move then changes with the
+    // reach; a gradient or a long wave of texture does not).
+    if (here.found && here.gain >= kTwoSlopeEvidence &&
+        std::abs(object_slope(here)) <= kMaxObjectSlopeShare * std::abs(background_slope(here))) {
+      const double move_sigma = std::abs(here.move_px) / std::sqrt(here.gain);
+      const double further = std::max(4.0, 0.5 * (background_side < 0 ? below_px : above_px));
+      const TwoSlopeMove wider =
+          PooledTwoSlopeMove(img, f, clip, edges, below_px + (background_side < 0 ? further : 0.0),
+                             above_px + (background_side > 0 ? further : 0.0), sigma);
+      const double same = std::max(2.0 * move_sigma, kSameMoveShare * std::abs(here.move_px));
+      if (wider.found && std::abs(wider.move_px - here.move_px) <= same) {
+        out.shift_px = here.move_px;
+        slopes_px = move_sigma;
+      } else {
+        slopes_px = std::abs(here.move_px);
+      }
+    } else if (here.found && here.gain > 1) {
+      // Below the evidence, only the part of the move the gain cannot put down to noise counts
+      // (its square less the noise's share).
+      slopes_px = std::abs(here.move_px) * std::sqrt(1 - 1 / here.gain);
     }
   }
-  return std::hypot(shared_px, slopes_px);
+  out.doubt_px = std::hypot(shared_px, slopes_px);
+  return out;
 }
 
 }  // namespace clogscope::vision

@@ -65,14 +65,28 @@ struct CaliperEdge {
   EdgeFit fit;  // FitBlurredStep or FitShadedStep
 };
 
-// How far one edge of a band may lie from where its calipers put it, by what the band's pooled
-// profile (each caliper's samples placed about its own fitted edge, below_px before it and
-// above_px after it along u) shows that one caliper's cannot: the structure the calipers share in
-// their residuals, and, when every caliper took the plain step, how far the edge moves when its
-// two sides may slope differently (FitTwoSlopeStep: a background gradient stopping at a flat
-// object); the plain step's two-slope check only counts the part of that move the pooled
-// profile's noise cannot explain. 0 with fewer than two calipers.
-double BandEdgeDoubtPx(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
-                       const std::vector<CaliperEdge>& edges, double below_px, double above_px);
+// One edge of a band judged on its pooled profile (each caliper's samples placed about its own
+// fitted edge, below_px before it and above_px after it along u), which shows what one caliper's
+// cannot:
+// - the structure the calipers share in their residuals;
+// - when every caliper took the plain step, whether the edge's two sides slope differently
+//   (FitTwoSlopeStep: a textured or graded background stopping at a flat object), which pulls a
+//   plain step's edge. Where the pooled profile's gain from that slope is beyond its noise
+//   (kTwoSlopeEvidence) and the background is one slope (the move stays the same with the window
+//   reaching further into the background, on background_side: −1 toward −u, +1 toward +u), the
+//   edge is moved by what the two-slope step says (shift_px, along u) and only that move's own σ
+//   is left as doubt; where it is not one slope, the whole move is doubt; below the evidence, the
+//   part of the move the noise cannot explain.
+struct BandEdgeDoubt {
+  double doubt_px = 0;  // one σ
+  double shift_px = 0;  // where the edge lies from the calipers' mean, along u
+};
+// Gain (χ² with one degree of freedom without a slope change) from which the two-slope step is
+// taken: 5σ.
+inline constexpr double kTwoSlopeEvidence = 25.0;
+// Zero with fewer than two calipers.
+BandEdgeDoubt JudgeBandEdge(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
+                            const std::vector<CaliperEdge>& edges, double below_px, double above_px,
+                            int background_side);
 
 }  // namespace clogscope::vision

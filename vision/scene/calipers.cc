@@ -559,7 +559,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     // cylinders'. (A filament's cylinders carry only their disagreement with the per-edge fits:
     // their residual structure on Greeff's real filament, knurled and lit, doubled its σ to
     // 0.16 px against a frame-to-frame scatter of 0.08 px.)
-    double structure_doubt_px[2];
+    double structure_doubt_px[2], edge_shift_px[2];
     for (int side = 0; side < 2; ++side) {
       std::vector<CaliperEdge> edges;
       for (int k = 0; k < n_cal; ++k) {
@@ -570,8 +570,16 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       }
       // About each caliper's fitted edge: the window's reach either side of it.
       const Window w = window(side, 0.0, outer, inner);
-      structure_doubt_px[side] = BandEdgeDoubtPx(img, f, clip, edges, -w.u0, w.u1);
-      structure_doubt_px[side] = std::hypot(structure_doubt_px[side], cylinder_structure_px[side]);
+      const BandEdgeDoubt judged =
+          JudgeBandEdge(img, f, clip, edges, -w.u0, w.u1, side == 0 ? -1 : 1);
+      edge_shift_px[side] = judged.shift_px;
+      structure_doubt_px[side] = std::hypot(judged.doubt_px, cylinder_structure_px[side]);
+    }
+    // An edge whose background slopes toward a flat object lies where the two-slope step puts it.
+    if (edge_shift_px[0] != 0 || edge_shift_px[1] != 0) {
+      m->width_px += (edge_shift_px[1] - edge_shift_px[0]) * cos_d;
+      m->left_u0_px += edge_shift_px[0];
+      m->right_u0_px += edge_shift_px[1];
     }
     // And where the band starts, when the width changes along it (die swell relaxing): a tip set
     // by the nozzle's face or the object's own end is good to a fraction of a px (tip.h); one

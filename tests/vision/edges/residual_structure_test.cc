@@ -3,7 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <opencv2/core.hpp>
 #include <random>
+#include <vector>
+
+#include "vision/edges/caliper_samples.h"
+#include "vision/edges/edge_fit.h"
 
 namespace clogscope::vision {
 namespace {
@@ -42,6 +47,80 @@ TEST(ResidualStructureTest, EdgeDoubtScalesWithTheSharedStructure) {
   // per px gives √(80/20) = 2 times that per unit of noise, 0.04 px per grey level.
   EXPECT_NEAR(SharedStructureEdgeDoubtPx(2.0, 5.0, 0.1, 80, 20.0), 0.08, 1e-12);
   EXPECT_EQ(SharedStructureEdgeDoubtPx(2.0, 0.0, 0.1, 80, 20.0), 0.0);
+}
+
+// A vertical edge at x = 120.3 of a flat object (left, level 60) against a background (right)
+// that rises away from it by `gradient` grey levels per px, blurred (σ 2.5 px) and averaged over
+// each pixel, with noise of 1 grey level; 16 bit at 100 counts a grey level. Calipers of 4 rows
+// each fit the plain step, as a band's calipers do.
+struct GradedEdge {
+  static constexpr double kEdgeX = 120.3, kBlur = 2.5, kScale = 100.0;
+  cv::Mat image;
+  AxisFrame axis;  // origin (100, 10), down the column: u = x − 100
+  std::vector<CaliperEdge> calipers;
+  double mean_edge_u = 0;
+  explicit GradedEdge(double gradient) {
+    image.create(60, 200, CV_16U);
+    std::mt19937 rng(11);
+    std::normal_distribution<double> noise(0, 1.0);
+    std::vector<double> column(image.cols);
+    for (int x = 0; x < image.cols; ++x) {
+      double sum = 0, weight = 0;
+      for (double t = x - 0.5 - 6 * kBlur; t <= x + 0.5 + 6 * kBlur; t += 0.005) {
+        // The pixel's box [x − ½, x + ½] convolved with the Gaussian: Φ differences.
+        const double w = 0.5 * (std::erf((x + 0.5 - t) / (std::sqrt(2.0) * kBlur)) -
+                                std::erf((x - 0.5 - t) / (std::sqrt(2.0) * kBlur)));
+        sum += w * (t < kEdgeX ? 60.0 : 200.0 + gradient * (t - kEdgeX));
+        weight += w;
+      }
+      column[x] = sum / weight;
+    }
+    for (int y = 0; y < image.rows; ++y)
+      for (int x = 0; x < image.cols; ++x)
+        image.at<uint16_t>(y, x) = cv::saturate_cast<uint16_t>(kScale * (column[x] + noise(rng)));
+    axis.ox = 100;
+    axis.oy = 10;
+    const GreyImage img{image, true};
+    const ClipLevels clip{0, 65535};
+    std::vector<EdgeSample> samples;
+    const double e0 = kEdgeX - axis.ox;
+    for (int k = 0; k < 10; ++k) {
+      const double s0 = 4.0 * k, s1 = s0 + 4.0;
+      if (!GatherEdgeSamples(img, axis, s0, s1, e0 - 12, e0 + 12, clip, &samples)) continue;
+      const EdgeFit fit = FitBlurredStep(samples, e0, 2.0, e0);
+      if (!fit.converged) continue;
+      calipers.push_back({s0, s1, fit});
+      mean_edge_u += fit.edge_px;
+    }
+    mean_edge_u /= std::max<size_t>(1, calipers.size());
+  }
+  BandEdgeDoubt Judge() const {
+    const GreyImage img{image, true};
+    return JudgeBandEdge(img, axis, ClipLevels{0, 65535}, calipers, 12.0, 12.0, +1);
+  }
+};
+
+TEST(JudgeBandEdgeTest, ABackgroundSlopingToAFlatObjectMovesTheEdgeWhereItLies) {
+  // 3 grey levels per px toward the edge: the plain steps put it 0.53 px off; the pooled
+  // two-slope step puts it back within 0.02 px (0.011) and leaves a doubt well below the bias
+  // (0.07 px).
+  const GradedEdge scene(3.0);
+  ASSERT_EQ(scene.calipers.size(), 10u);
+  const double truth_u = GradedEdge::kEdgeX - scene.axis.ox;
+  const double bias = scene.mean_edge_u - truth_u;
+  ASSERT_GT(std::abs(bias), 0.1) << "the plain steps should be pulled by the slope";
+  const BandEdgeDoubt judged = scene.Judge();
+  EXPECT_NEAR(scene.mean_edge_u + judged.shift_px, truth_u, 0.02) << "plain bias " << bias;
+  EXPECT_LT(judged.doubt_px, 0.3 * std::abs(bias));
+}
+
+TEST(JudgeBandEdgeTest, AFlatBackgroundLeavesTheEdgeInPlace) {
+  const GradedEdge scene(0.0);
+  ASSERT_EQ(scene.calipers.size(), 10u);
+  EXPECT_NEAR(scene.mean_edge_u, GradedEdge::kEdgeX - scene.axis.ox, 0.02);
+  const BandEdgeDoubt judged = scene.Judge();
+  EXPECT_EQ(judged.shift_px, 0.0);
+  EXPECT_LT(judged.doubt_px, 0.05);
 }
 
 }  // namespace
