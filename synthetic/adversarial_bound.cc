@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "synthetic/adversarial_optics.h"
+#include "vision/scene/strand_measure.h"
 
 namespace clogscope::synthetic {
 namespace {
@@ -21,7 +22,7 @@ using Mat = Eigen::Matrix<double, kParams, kParams>;
 constexpr int kPhases = 4;        // pixel grids offset by a quarter px: rows see every phase
 constexpr double kCellPx = 0.1;   // the cross-section's cells, far finer than any blur
 constexpr double kStepPx = 0.02;  // finite differences in place and blur
-constexpr double kQuantisation = 1.0 / 12.0;  // grey levels²: rounding to 8 bit
+constexpr double kRoundingVar = 1.0 / 12.0;  // grey levels²: rounding to 8 bit
 
 // Φ on a table: the profiles cost millions of its values.
 class NormalCdf {
@@ -91,9 +92,9 @@ double WidthBoundSigmaPx(const AdversarialScene& p, double width_px) {
   static const NormalCdf phi;
   const double inf = std::numeric_limits<double>::infinity();
   if (!(width_px > 0) || !p.strand) return inf;
-  const double blur = std::max(0.05, p.blur_sigma_px);
-  const double margin = 9.0 * blur + 3.0;
-  const int pixels = static_cast<int>(std::ceil(width_px + 2 * margin)) + 1;
+  const double blur_px = std::max(0.05, p.blur_sigma_px);
+  const double margin_px = 9.0 * blur_px + 3.0;
+  const int pixels = static_cast<int>(std::ceil(width_px + 2 * margin_px)) + 1;
   const int cells = std::max(200, static_cast<int>(std::ceil(width_px / kCellPx)));
   // The strand's own light is a gain on B (1 on a lit strand's axis); a lens's is its stripe's.
   const double gain = p.lens ? 1.0 : p.strand_level;
@@ -113,13 +114,13 @@ double WidthBoundSigmaPx(const AdversarialScene& p, double width_px) {
   // An edge moves the light within its transition (the blur's reach and a px) with it: the
   // strand's light further in is its own unknown, whose shape (a lit cylinder's ramp, a lens's
   // core, a stripe) says nothing of where the silhouette is.
-  const double reach = 3.0 * blur + 2.5;
+  const double reach_px = 3.0 * blur_px + 2.5;
   Mat info = Mat::Zero();
   std::vector<double> a, b, a_lo, b_lo, a_hi, b_hi;
   std::array<std::vector<double>, 2> da, db;  // ∂/∂centre, ∂/∂blur
   for (int ph = 0; ph < kPhases; ++ph) {
-    const double u0 = -0.5 * width_px - margin + static_cast<double>(ph) / kPhases;
-    const Shape base{width_px, 0.0, blur};
+    const double u0 = -0.5 * width_px - margin_px + static_cast<double>(ph) / kPhases;
+    const Shape base{width_px, 0.0, blur_px};
     Layers(p, base, cells, u0, pixels, phi, &a, &b);
     for (int q = 0; q < 2; ++q) {
       Shape lo = base, hi = base;
@@ -138,25 +139,26 @@ double WidthBoundSigmaPx(const AdversarialScene& p, double width_px) {
       for (int i = 0; i < pixels; ++i) {
         // radiance = bg·tint_bg·(1 + A) + gain·tint_strand·B
         const double value = bg * ch.tint_bg * (1 + a[i]) + gain * ch.tint_strand * b[i];
-        if (value >= p.full_scale_level) continue;  // clipped: tells nothing
+        if (value >= kFullScale || value <= 0) continue;  // clipped: tells nothing
         const auto d = [&](int q) {
           return bg * ch.tint_bg * da[q][i] + gain * ch.tint_strand * db[q][i];
         };
         const double u = u0 + i;
-        const bool left = u < 0 && std::abs(u + 0.5 * width_px) <= reach;
-        const bool right = u >= 0 && std::abs(u - 0.5 * width_px) <= reach;
+        const bool left = u < 0 && std::abs(u + 0.5 * width_px) <= reach_px;
+        const bool right = u >= 0 && std::abs(u - 0.5 * width_px) <= reach_px;
         Vec g;
         g << (left ? d(0) : 0.0), (right ? d(0) : 0.0), ch.tint_bg * (1 + a[i]),
             ch.tint_strand * b[i], d(1);
-        const double var = NoiseVariance(p.noise_sigma, value) + kQuantisation;
+        const double var = NoiseVariance(p.noise_sigma, value) + kRoundingVar;
         info += (ch.share / kPhases) * g * g.transpose() / var;
       }
     }
   }
   // Every px along the band's length holds one such row of pixels across it.
-  info *= kBandLengthUm / p.scale_um_per_px;
-  // A lens has no light of its own to be unknown: only its stripe's, if any, taken as known.
-  if (p.lens) {
+  info *= vision::DefaultBand(vision::MeasureTarget::kStrand, p.scale_um_per_px).height_px;
+  // A lens has no light of its own to be unknown (only its stripe's, if any, taken as known), nor
+  // has a black strand.
+  if (p.lens || !(p.strand_level > 0)) {
     info.row(3).setZero();
     info.col(3).setZero();
     info(3, 3) = 1.0;

@@ -154,10 +154,10 @@ std::string MatrixTable(const MatrixResult& r) {
                       vision::FrameStatusName(static_cast<vision::FrameStatus>(k)), s.refusals[k]);
     }
     t += fmt::format(
-        "| {} | {} | {:.1f} | {:.1f} | {:.1f} | {:.2f} | {} | {:+.3f} | {:.3f} | {:.2f} | {} |\n",
-        name, s.frames, s.frames ? 100.0 * s.valid / s.frames : 0.0,
+        "| {} | {} | {:.1f} | {:.1f} | {} | {:.2f} | {} | {:+.3f} | {:.3f} | {:.2f} | {} |\n", name,
+        s.frames, s.frames ? 100.0 * s.valid / s.frames : 0.0,
         s.frames ? 100.0 * s.allowed / s.frames : 0.0,
-        s.allowed ? 100.0 * s.allowed_valid / s.allowed : 0.0,
+        s.allowed ? fmt::format("{:.1f}", 100.0 * s.allowed_valid / s.allowed) : "–",
         s.frames ? 100.0 * s.wrong / s.frames : 0.0, s.wrong_beyond_sigma, s.bias_px, s.sd_px,
         s.error_sigmas_rms, why);
   };

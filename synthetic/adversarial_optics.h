@@ -22,6 +22,9 @@ double StrandEmission(const AdversarialScene& p, double x);
 // multiplied by these per channel (B, G, R).
 inline constexpr double kStrandTint[3] = {0.3, 0.65, 1.0}, kBackgroundTint[3] = {1.0, 0.6, 0.25};
 
+// The frames are 8 bit: a pixel's value is rounded and clipped to 0..kFullScale.
+inline constexpr double kFullScale = 255.0;
+
 // The camera's noise: read noise plus shot noise growing with the signal, a pixel of radiance r
 // (8-bit grey levels) drawing noise of variance noise_sigma² (kReadShare + r/255)/(kReadShare + 1)
 // (noise_sigma is the noise at 255, and 0.58 of it at black).

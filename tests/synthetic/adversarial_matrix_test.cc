@@ -39,9 +39,8 @@ TEST(AdversarialMatrixTest, FewConfidentlyWrongWidthsAndNoneWithoutAStrand) {
   // What that costs: valid widths on 665 of the 1000 measurable strand frames when this was
   // written (660 before an edge whose background slopes toward a flat object was put where the
   // band's two-slope step says; 674 before a width from x264 carried the codec's doubt, 654 while
-  // its second pass
-  // coded a lone key frame, 677 before the change above;
-  // the saturated and nozzle-alone classes are refused by design).
+  // its second pass coded a lone key frame, 677 before the change above; the saturated and
+  // nozzle-alone classes are refused by design).
   const int measurable = r.all.frames -
                          r.classes[static_cast<int>(TroubleClass::kSaturated)].frames -
                          r.classes[static_cast<int>(TroubleClass::kNoStrand)].frames;

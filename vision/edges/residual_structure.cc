@@ -9,20 +9,21 @@
 namespace clogscope::vision {
 namespace {
 
-// The band's pooled profile about its calipers' own edges (from below_px before each to above_px
-// after it, in 0.1 px bins, far finer than any blur: the fits then cost what two calipers' do, not
-// what the whole band's samples would), the plain and the two-slope step fitted to it: how far the
-// edge moves between them, and the two-slope fit's gain over the plain one in units of the bins'
-// noise (χ² with one degree of freedom when the sides slope alike).
 // The two-slope step's premise, a flat object: its side's slope at most this share of the
 // background's. And one background slope: the move with the window reaching further into the
 // background within 2σ of it or this share of it (a pixel's box is not quite a Gaussian's blur).
 constexpr double kMaxObjectSlopeShare = 0.25, kSameMoveShare = 0.1;
 
+// The band's pooled profile about its calipers' own edges (from below_px before each to above_px
+// after it, in 0.1 px bins, far finer than any blur: the fits then cost what two calipers' do, not
+// what the whole band's samples would), the plain and the two-slope step fitted to it: how far the
+// edge moves between them, and the two-slope fit's gain over the plain one in units of the bins'
+// noise (χ² with one degree of freedom when the sides slope alike).
 struct TwoSlopeMove {
   bool found = false;
   double move_px = 0, gain = 0;
-  double slope_minus = 0, slope_plus = 0;  // grey levels per px toward −u and +u of the edge
+  // The profile's slope toward −u and toward +u of the edge, grey levels per px.
+  double slope_minus_per_px = 0, slope_plus_per_px = 0;
 };
 TwoSlopeMove PooledTwoSlopeMove(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
                                 const std::vector<CaliperEdge>& edges, double below_px,
@@ -66,8 +67,8 @@ TwoSlopeMove PooledTwoSlopeMove(const GreyImage& img, const AxisFrame& f, const 
   out.found = true;
   out.move_px = two.edge_px - one.edge_px;
   out.gain = (one.rms * one.rms - two.rms * two.rms) * occupied / mean_var;
-  out.slope_minus = two.slope_per_px;
-  out.slope_plus = two.slope_per_px + two.slope_change_per_px;
+  out.slope_minus_per_px = two.slope_per_px;
+  out.slope_plus_per_px = two.slope_per_px + two.slope_change_per_px;
   return out;
 }
 
@@ -150,10 +151,10 @@ BandEdgeDoubt JudgeBandEdge(const GreyImage& img, const AxisFrame& f, const Clip
     const TwoSlopeMove here = PooledTwoSlopeMove(img, f, clip, edges, below_px, above_px, sigma);
     // The slopes on the background's side and on the object's.
     const auto background_slope = [&](const TwoSlopeMove& t) {
-      return background_side < 0 ? t.slope_minus : t.slope_plus;
+      return background_side < 0 ? t.slope_minus_per_px : t.slope_plus_per_px;
     };
     const auto object_slope = [&](const TwoSlopeMove& t) {
-      return background_side < 0 ? t.slope_plus : t.slope_minus;
+      return background_side < 0 ? t.slope_plus_per_px : t.slope_minus_per_px;
     };
     // The move is the slope change's, which the gain measures in its own σ: the move's σ is the
     // move over √gain. It is taken only where the two-slope step's premise holds: the slope is
@@ -163,15 +164,16 @@ BandEdgeDoubt JudgeBandEdge(const GreyImage& img, const AxisFrame& f, const Clip
     // reach; a gradient or a long wave of texture does not).
     if (here.found && here.gain >= kTwoSlopeEvidence &&
         std::abs(object_slope(here)) <= kMaxObjectSlopeShare * std::abs(background_slope(here))) {
-      const double move_sigma = std::abs(here.move_px) / std::sqrt(here.gain);
-      const double further = std::max(4.0, 0.5 * (background_side < 0 ? below_px : above_px));
-      const TwoSlopeMove wider =
-          PooledTwoSlopeMove(img, f, clip, edges, below_px + (background_side < 0 ? further : 0.0),
-                             above_px + (background_side > 0 ? further : 0.0), sigma);
-      const double same = std::max(2.0 * move_sigma, kSameMoveShare * std::abs(here.move_px));
-      if (wider.found && std::abs(wider.move_px - here.move_px) <= same) {
+      const double move_sigma_px = std::abs(here.move_px) / std::sqrt(here.gain);
+      const double further_px = std::max(4.0, 0.5 * (background_side < 0 ? below_px : above_px));
+      const TwoSlopeMove wider = PooledTwoSlopeMove(
+          img, f, clip, edges, below_px + (background_side < 0 ? further_px : 0.0),
+          above_px + (background_side > 0 ? further_px : 0.0), sigma);
+      const double same_px = std::max(2.0 * move_sigma_px, kSameMoveShare * std::abs(here.move_px));
+      if (wider.found && std::abs(wider.move_px - here.move_px) <= same_px) {
+        // Its σ, and the two reaches' disagreement: how far the background is from one slope.
         out.shift_px = here.move_px;
-        slopes_px = move_sigma;
+        slopes_px = std::hypot(move_sigma_px, wider.move_px - here.move_px);
       } else {
         slopes_px = std::abs(here.move_px);
       }

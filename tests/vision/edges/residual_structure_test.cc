@@ -49,17 +49,20 @@ TEST(ResidualStructureTest, EdgeDoubtScalesWithTheSharedStructure) {
   EXPECT_EQ(SharedStructureEdgeDoubtPx(2.0, 0.0, 0.1, 80, 20.0), 0.0);
 }
 
-// A vertical edge at x = 120.3 of a flat object (left, level 60) against a background (right)
-// that rises away from it by `gradient` grey levels per px, blurred (σ 2.5 px) and averaged over
-// each pixel, with noise of 1 grey level; 16 bit at 100 counts a grey level. Calipers of 4 rows
-// each fit the plain step, as a band's calipers do.
+// A vertical edge at x = 120.3 of a flat object (level 60) against a background that rises away
+// from it by `gradient` grey levels per px and `curvature` per px² (a lamp's spot), on the right
+// (or, mirrored, the left), blurred (σ 2.5 px) and averaged over each pixel, with noise of 1 grey
+// level; 16 bit at 100 counts a grey level. Calipers of 4 rows each fit the plain step, as a
+// band's calipers do.
 struct GradedEdge {
   static constexpr double kEdgeX = 120.3, kBlur = 2.5, kScale = 100.0;
   cv::Mat image;
   AxisFrame axis;  // origin (100, 10), down the column: u = x − 100
+  int background_side = +1;
   std::vector<CaliperEdge> calipers;
   double mean_edge_u = 0;
-  explicit GradedEdge(double gradient) {
+  GradedEdge(double gradient, double curvature, bool mirrored)
+      : background_side(mirrored ? -1 : +1) {
     image.create(60, 200, CV_16U);
     std::mt19937 rng(11);
     std::normal_distribution<double> noise(0, 1.0);
@@ -70,7 +73,8 @@ struct GradedEdge {
         // The pixel's box [x − ½, x + ½] convolved with the Gaussian: Φ differences.
         const double w = 0.5 * (std::erf((x + 0.5 - t) / (std::sqrt(2.0) * kBlur)) -
                                 std::erf((x - 0.5 - t) / (std::sqrt(2.0) * kBlur)));
-        sum += w * (t < kEdgeX ? 60.0 : 200.0 + gradient * (t - kEdgeX));
+        const double d = background_side * (t - kEdgeX);  // into the background
+        sum += w * (d < 0 ? 60.0 : 200.0 + gradient * d + curvature * d * d);
         weight += w;
       }
       column[x] = sum / weight;
@@ -94,31 +98,52 @@ struct GradedEdge {
     }
     mean_edge_u /= std::max<size_t>(1, calipers.size());
   }
-  BandEdgeDoubt Judge() const {
+  double TruthU() const { return kEdgeX - axis.ox; }
+  BandEdgeDoubt Judge(int side) const {
     const GreyImage img{image, true};
-    return JudgeBandEdge(img, axis, ClipLevels{0, 65535}, calipers, 12.0, 12.0, +1);
+    return JudgeBandEdge(img, axis, ClipLevels{0, 65535}, calipers, 12.0, 12.0, side);
   }
 };
 
 TEST(JudgeBandEdgeTest, ABackgroundSlopingToAFlatObjectMovesTheEdgeWhereItLies) {
-  // 3 grey levels per px toward the edge: the plain steps put it 0.53 px off; the pooled
+  // 3 grey levels per px away from the edge: the plain steps put it 0.53 px off; the pooled
   // two-slope step puts it back within 0.02 px (0.011) and leaves a doubt well below the bias
-  // (0.07 px).
-  const GradedEdge scene(3.0);
+  // (0.07 px). Mirrored alike.
+  for (const bool mirrored : {false, true}) {
+    const GradedEdge scene(3.0, 0.0, mirrored);
+    ASSERT_EQ(scene.calipers.size(), 10u);
+    const double bias = scene.mean_edge_u - scene.TruthU();
+    ASSERT_GT(std::abs(bias), 0.1) << "the plain steps should be pulled by the slope";
+    const BandEdgeDoubt judged = scene.Judge(scene.background_side);
+    EXPECT_NEAR(scene.mean_edge_u + judged.shift_px, scene.TruthU(), 0.02)
+        << "mirrored " << mirrored << ", plain bias " << bias;
+    EXPECT_LT(judged.doubt_px, 0.3 * std::abs(bias)) << "mirrored " << mirrored;
+    // Told the background is on the object's side, the premise (a flat object) fails: no move,
+    // and the move it would have made counts whole as doubt.
+    const BandEdgeDoubt wrong_side = scene.Judge(-scene.background_side);
+    EXPECT_EQ(wrong_side.shift_px, 0.0) << "mirrored " << mirrored;
+    EXPECT_GT(wrong_side.doubt_px, 0.8 * std::abs(bias)) << "mirrored " << mirrored;
+  }
+}
+
+TEST(JudgeBandEdgeTest, ACurvedBackgroundIsNotMovedButDoubted) {
+  // A lamp's spot: the background bends away from the edge (0.3 grey levels per px²). The
+  // two-slope step's move changes with the window's reach: no move, and the plain steps' bias is
+  // within the doubt.
+  const GradedEdge scene(0.0, 0.3, false);
   ASSERT_EQ(scene.calipers.size(), 10u);
-  const double truth_u = GradedEdge::kEdgeX - scene.axis.ox;
-  const double bias = scene.mean_edge_u - truth_u;
-  ASSERT_GT(std::abs(bias), 0.1) << "the plain steps should be pulled by the slope";
-  const BandEdgeDoubt judged = scene.Judge();
-  EXPECT_NEAR(scene.mean_edge_u + judged.shift_px, truth_u, 0.02) << "plain bias " << bias;
-  EXPECT_LT(judged.doubt_px, 0.3 * std::abs(bias));
+  const double bias = scene.mean_edge_u - scene.TruthU();
+  ASSERT_GT(std::abs(bias), 0.05);
+  const BandEdgeDoubt judged = scene.Judge(scene.background_side);
+  EXPECT_EQ(judged.shift_px, 0.0) << "bias " << bias;
+  EXPECT_GT(judged.doubt_px, 0.5 * std::abs(bias)) << "bias " << bias;
 }
 
 TEST(JudgeBandEdgeTest, AFlatBackgroundLeavesTheEdgeInPlace) {
-  const GradedEdge scene(0.0);
+  const GradedEdge scene(0.0, 0.0, false);
   ASSERT_EQ(scene.calipers.size(), 10u);
-  EXPECT_NEAR(scene.mean_edge_u, GradedEdge::kEdgeX - scene.axis.ox, 0.02);
-  const BandEdgeDoubt judged = scene.Judge();
+  EXPECT_NEAR(scene.mean_edge_u, scene.TruthU(), 0.02);
+  const BandEdgeDoubt judged = scene.Judge(scene.background_side);
   EXPECT_EQ(judged.shift_px, 0.0);
   EXPECT_LT(judged.doubt_px, 0.05);
 }
