@@ -12,8 +12,8 @@
 #include <random>
 #include <stdexcept>
 
-#include "common/spawn.h"
 #include "synthetic/adversarial_optics.h"
+#include "synthetic/x264_clip.h"
 
 namespace clogscope::synthetic {
 namespace {
@@ -406,23 +406,7 @@ std::vector<cv::Mat> RenderAdversarial(const AdversarialScene& p, int frames,
     namespace fs = std::filesystem;
     const fs::path dir =
         fs::path(temp_dir) / fmt::format("adversarial_{}_{}", p.seed, static_cast<int>(p.trouble));
-    const std::string path = (dir / "round_trip.mp4").string();
-    fs::create_directories(dir);
-    for (size_t i = 0; i < out.size(); ++i)
-      cv::imwrite((dir / fmt::format("{:03d}.png", i)).string(), out[i]);
-    // The ffmpeg program with one encoder thread: OpenCV's writer runs x264 on every core, and its
-    // output then changes from run to run, and with it the matrix's figures.
-    SpawnOptions encode;
-    encode.argv = {"ffmpeg", "-nostdin", "-v",
-                   "error",  "-y",       "-framerate",
-                   "25",     "-i",       (dir / "%03d.png").string(),
-                   "-c:v",   "libx264",  "-threads",
-                   "1",      "-pix_fmt", "yuv420p",
-                   path};
-    std::string why;
-    const pid_t pid = Spawn(encode, &why);
-    if (pid < 0 || !WaitForExit(pid, &why))
-      throw std::runtime_error(path + ": H.264 round trip: ffmpeg " + why);
+    const std::string path = EncodeX264Clip(out, dir, "round_trip.mp4", 25);
     if (encoder) *encoder = vision::ReadX264Settings(path);
     cv::VideoCapture cap(path, cv::CAP_FFMPEG);
     for (cv::Mat& f : out) {

@@ -31,27 +31,20 @@ void Add(ClassSummary* s, const FrameRecord& r) {
   if (r.wrong_beyond_sigma) ++s->wrong_beyond_sigma;
 }
 
-// Bias and spread over the valid, not-wrong frames of one class (all classes when trouble < 0).
+// Bias and spread over the valid, not-wrong frames of one class (all classes when trouble < 0),
+// and error/σ over every width given.
 void Moments(const std::vector<FrameRecord>& frames, int trouble, ClassSummary* s) {
-  double sum = 0, sum2 = 0;
-  int n = 0;
+  double sum = 0, sum2 = 0, z2 = 0;
+  int n = 0, nz = 0;
   for (const auto& r : frames) {
     if (trouble >= 0 && static_cast<int>(r.trouble) != trouble) continue;
-    if (r.status != vision::FrameStatus::kValid || r.wrong || !r.strand) continue;
+    if (!r.strand || !vision::GivesWidth(r.status)) continue;
     const double e = r.width_px - r.truth_px;
+    if (r.sigma_px > 0) z2 += std::pow(e / r.sigma_px, 2), ++nz;
+    if (r.status != vision::FrameStatus::kValid || r.wrong) continue;
     sum += e;
     sum2 += e * e;
     ++n;
-  }
-  double z2 = 0;
-  int nz = 0;
-  for (const auto& r : frames) {
-    if (trouble >= 0 && static_cast<int>(r.trouble) != trouble) continue;
-    const bool width =
-        r.status == vision::FrameStatus::kValid || r.status == vision::FrameStatus::kImprecise;
-    if (!width || !r.strand || !(r.sigma_px > 0)) continue;
-    z2 += std::pow((r.width_px - r.truth_px) / r.sigma_px, 2);
-    ++nz;
   }
   if (nz > 0) s->error_sigmas_rms = std::sqrt(z2 / nz);
   if (n == 0) return;

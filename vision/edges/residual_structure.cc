@@ -14,46 +14,64 @@ namespace {
 // background within 2σ of it or this share of it (a pixel's box is not quite a Gaussian's blur).
 constexpr double kMaxObjectSlopeShare = 0.25, kSameMoveShare = 0.1;
 
-// The band's pooled profile about its calipers' own edges (from below_px before each to above_px
-// after it, in 0.1 px bins, far finer than any blur: the fits then cost what two calipers' do, not
-// what the whole band's samples would), the plain and the two-slope step fitted to it: how far the
-// edge moves between them, and the two-slope fit's gain over the plain one in units of the bins'
-// noise (χ² with one degree of freedom when the sides slope alike).
-struct TwoSlopeMove {
-  bool found = false;
-  double move_px = 0, gain = 0;
-  // The profile's slope toward −u and toward +u of the edge, grey levels per px.
-  double slope_minus_per_px = 0, slope_plus_per_px = 0;
-};
-TwoSlopeMove PooledTwoSlopeMove(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
-                                const std::vector<CaliperEdge>& edges, double below_px,
-                                double above_px, double blur_px) {
-  constexpr double kBinPx = 0.1;
-  const int bins = static_cast<int>(std::ceil((below_px + above_px) / kBinPx)) + 1;
-  std::vector<double> sum(bins, 0.0), sum2(bins, 0.0), count(bins, 0.0);
-  std::vector<EdgeSample> samples;
-  for (const CaliperEdge& c : edges) {
-    const double e = c.fit.edge_px;
-    if (!GatherEdgeSamples(img, f, c.s0_px, c.s1_px, e - below_px, e + above_px, clip, &samples))
-      continue;
-    for (const EdgeSample& smp : samples) {
-      // The same float distance the pooled samples were binned by.
-      const float u = static_cast<float>(smp.u_px - e);
-      const int b = static_cast<int>(std::lround((u + below_px) / kBinPx));
-      if (b < 0 || b >= bins) continue;
-      sum[b] += smp.value;
-      sum2[b] += static_cast<double>(smp.value) * smp.value;
-      count[b] += 1;
+// The band's pooled profile about its calipers' own edges, from below_px before each to above_px
+// after it, in 0.1 px bins (far finer than any blur: the fits then cost what two calipers' do, not
+// what the whole band's samples would).
+class PooledProfile {
+ public:
+  PooledProfile(double below_px, double above_px)
+      : below_px_(below_px),
+        above_px_(above_px),
+        sum_(static_cast<size_t>(std::ceil((below_px + above_px) / kBinPx)) + 1, 0.0),
+        sum2_(sum_.size(), 0.0),
+        count_(sum_.size(), 0.0) {}
+  void Add(double u_from_edge_px, float value) {
+    // The same float distance for every sample at one place.
+    const float u = static_cast<float>(u_from_edge_px);
+    const long b = std::lround((u + below_px_) / kBinPx);
+    if (b < 0 || b >= static_cast<long>(sum_.size())) return;
+    sum_[b] += value;
+    sum2_[b] += static_cast<double>(value) * value;
+    count_[b] += 1;
+  }
+  // Each caliper's samples gathered again over this profile's reach.
+  void Gather(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
+              const std::vector<CaliperEdge>& edges) {
+    std::vector<EdgeSample> samples;
+    for (const CaliperEdge& c : edges) {
+      const double e = c.fit.edge_px;
+      if (!GatherEdgeSamples(img, f, c.s0_px, c.s1_px, e - below_px_, e + above_px_, clip,
+                             &samples))
+        continue;
+      for (const EdgeSample& smp : samples) Add(smp.u_px - e, smp.value);
     }
   }
+  // The plain and the two-slope step fitted to the profile: how far the edge moves between them,
+  // and the two-slope fit's gain over the plain one in units of the bins' noise (χ² with one
+  // degree of freedom when the sides slope alike).
+  struct TwoSlopeMove {
+    bool found = false;
+    double move_px = 0, gain = 0;
+    // The profile's slope toward −u and toward +u of the edge, grey levels per px.
+    double slope_minus_per_px = 0, slope_plus_per_px = 0;
+  };
+  TwoSlopeMove FitTwoSlope(double blur_px) const;
+
+ private:
+  static constexpr double kBinPx = 0.1;
+  double below_px_, above_px_;
+  std::vector<double> sum_, sum2_, count_;
+};
+
+PooledProfile::TwoSlopeMove PooledProfile::FitTwoSlope(double blur_px) const {
   std::vector<EdgeSample> profile;
   double within = 0, n = 0;
-  for (int b = 0; b < bins; ++b) {
-    if (count[b] == 0) continue;
+  for (size_t b = 0; b < sum_.size(); ++b) {
+    if (count_[b] == 0) continue;
     profile.push_back(
-        {static_cast<float>(b * kBinPx - below_px), static_cast<float>(sum[b] / count[b])});
-    within += sum2[b] - sum[b] * sum[b] / count[b];
-    n += count[b];
+        {static_cast<float>(b * kBinPx - below_px_), static_cast<float>(sum_[b] / count_[b])});
+    within += sum2_[b] - sum_[b] * sum_[b] / count_[b];
+    n += count_[b];
   }
   const double occupied = static_cast<double>(profile.size());
   // A bin mean's noise: the samples' variance within the bins over the samples a bin holds.
@@ -62,7 +80,7 @@ TwoSlopeMove PooledTwoSlopeMove(const GreyImage& img, const AxisFrame& f, const 
   if (!(mean_var > 0)) return out;
   const EdgeFit one = FitBlurredStep(profile, 0.0, blur_px, 0.0);
   const EdgeFit two = FitTwoSlopeStep(profile, 0.0, blur_px, 0.0);
-  if (!one.converged || !two.converged || std::abs(two.edge_px) >= std::min(below_px, above_px))
+  if (!one.converged || !two.converged || std::abs(two.edge_px) >= std::min(below_px_, above_px_))
     return out;
   out.found = true;
   out.move_px = two.edge_px - one.edge_px;
@@ -127,6 +145,7 @@ BandEdgeDoubt JudgeBandEdge(const GreyImage& img, const AxisFrame& f, const Clip
                             const std::vector<CaliperEdge>& edges, double below_px, double above_px,
                             int background_side) {
   EdgeStructureDoubt doubt(std::max(below_px, above_px));
+  PooledProfile pooled(below_px, above_px);
   std::vector<EdgeSample> samples;
   std::vector<double> blur;
   bool plain = true;
@@ -134,8 +153,10 @@ BandEdgeDoubt JudgeBandEdge(const GreyImage& img, const AxisFrame& f, const Clip
     const EdgeFit& e = c.fit;
     const double u0 = e.edge_px - below_px, u1 = e.edge_px + above_px;
     if (!GatherEdgeSamples(img, f, c.s0_px, c.s1_px, u0, u1, clip, &samples)) continue;
-    for (const EdgeSample& smp : samples)
+    for (const EdgeSample& smp : samples) {
       doubt.structure().Add(smp.u_px - e.edge_px, smp.value - EdgeModelValue(e, smp.u_px));
+      pooled.Add(smp.u_px - e.edge_px, smp.value);
+    }
     doubt.AddCaliper(e.rms, e.edge_sigma_px, e.samples, u1 - u0);
     blur.push_back(e.sigma_px);
     plain = plain && e.object_side == 0;
@@ -148,12 +169,12 @@ BandEdgeDoubt JudgeBandEdge(const GreyImage& img, const AxisFrame& f, const Clip
     // Both models on the pooled profile, where the noise has averaged down: their difference is
     // the model's, not the noise's.
     const double sigma = Median(blur);
-    const TwoSlopeMove here = PooledTwoSlopeMove(img, f, clip, edges, below_px, above_px, sigma);
+    const PooledProfile::TwoSlopeMove here = pooled.FitTwoSlope(sigma);
     // The slopes on the background's side and on the object's.
-    const auto background_slope = [&](const TwoSlopeMove& t) {
+    const auto background_slope = [&](const PooledProfile::TwoSlopeMove& t) {
       return background_side < 0 ? t.slope_minus_per_px : t.slope_plus_per_px;
     };
-    const auto object_slope = [&](const TwoSlopeMove& t) {
+    const auto object_slope = [&](const PooledProfile::TwoSlopeMove& t) {
       return background_side < 0 ? t.slope_plus_per_px : t.slope_minus_per_px;
     };
     // The move is the slope change's, which the gain measures in its own σ: the move's σ is the
@@ -166,9 +187,10 @@ BandEdgeDoubt JudgeBandEdge(const GreyImage& img, const AxisFrame& f, const Clip
         std::abs(object_slope(here)) <= kMaxObjectSlopeShare * std::abs(background_slope(here))) {
       const double move_sigma_px = std::abs(here.move_px) / std::sqrt(here.gain);
       const double further_px = std::max(4.0, 0.5 * (background_side < 0 ? below_px : above_px));
-      const TwoSlopeMove wider = PooledTwoSlopeMove(
-          img, f, clip, edges, below_px + (background_side < 0 ? further_px : 0.0),
-          above_px + (background_side > 0 ? further_px : 0.0), sigma);
+      PooledProfile further(below_px + (background_side < 0 ? further_px : 0.0),
+                            above_px + (background_side > 0 ? further_px : 0.0));
+      further.Gather(img, f, clip, edges);
+      const PooledProfile::TwoSlopeMove wider = further.FitTwoSlope(sigma);
       const double same_px = std::max(2.0 * move_sigma_px, kSameMoveShare * std::abs(here.move_px));
       if (wider.found && std::abs(wider.move_px - here.move_px) <= same_px) {
         // Its σ, and the two reaches' disagreement: how far the background is from one slope.

@@ -22,6 +22,11 @@ enum class FrameStatus {
   kImprecise,      // the width's σ is above what a valid width may carry
 };
 inline constexpr int kFrameStatusCount = static_cast<int>(FrameStatus::kImprecise) + 1;
+
+// A width was measured: valid, or with a σ too large to be (kImprecise).
+inline bool GivesWidth(FrameStatus s) {
+  return s == FrameStatus::kValid || s == FrameStatus::kImprecise;
+}
 const char* FrameStatusName(FrameStatus status);
 
 // What is measured: a strand below a nozzle tip (the band is placed from the tip), or a filament,

@@ -56,8 +56,7 @@ struct StrandMeasurement {
   FrameStatus status = FrameStatus::kNoStrand;
   std::string detail;  // human-readable reason when not valid
   bool valid() const { return status == FrameStatus::kValid; }
-  // A width was measured: valid, or with a σ too large to be (kImprecise).
-  bool gave_width() const { return valid() || status == FrameStatus::kImprecise; }
+  bool gave_width() const { return GivesWidth(status); }
 
   double width_px = 0;
   // Standard error of width_px: the calipers' spread, and the model's doubt (model_sigma_px).

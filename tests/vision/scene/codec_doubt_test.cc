@@ -1,15 +1,13 @@
 #include "vision/scene/codec_doubt.h"
 
-#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <cstdio>
 #include <filesystem>
-#include <opencv2/imgcodecs.hpp>
 
-#include "common/spawn.h"
 #include "synthetic/synthetic.h"
+#include "synthetic/x264_clip.h"
 #include "tests/vision/x264_test_settings.h"
 #include "vision/io/frame_source.h"
 #include "vision/scene/batch.h"
@@ -97,24 +95,12 @@ TEST(CodecDoubtTest, AStreamX264LeftInPlaceStaysValid) {
   // +0.06 px.
   namespace fs = std::filesystem;
   const fs::path dir = fs::temp_directory_path() / ("codec_doubt_" + std::to_string(getpid()));
-  fs::create_directories(dir);
   const synthetic::SceneParams p;
   synthetic::FrameTruth truth;
   constexpr int kFrames = 12;
-  for (int i = 0; i < kFrames; ++i)
-    cv::imwrite((dir / fmt::format("f{:03d}.png", i)).string(),
-                synthetic::RenderFrame(p, i, &truth));
-  const std::string video = (dir / "x264_defaults.mp4").string();
-  SpawnOptions o;
-  o.argv = {"ffmpeg", "-nostdin", "-v",
-            "error",  "-y",       "-framerate",
-            "30",     "-i",       (dir / "f%03d.png").string(),
-            "-c:v",   "libx264",  "-threads",
-            "1",      "-pix_fmt", "yuv420p",
-            video};
-  std::string why;
-  const pid_t pid = Spawn(o, &why);
-  ASSERT_TRUE(pid > 0 && WaitForExit(pid, &why)) << "ffmpeg: " << why;
+  std::vector<cv::Mat> rendered;
+  for (int i = 0; i < kFrames; ++i) rendered.push_back(synthetic::RenderFrame(p, i, &truth));
+  const std::string video = synthetic::EncodeX264Clip(rendered, dir, "x264_defaults.mp4", 30);
   auto source = FrameSource::Open(video);
   ASSERT_TRUE(source->encoder().found);
   int frames = 0, with_doubt = 0;
