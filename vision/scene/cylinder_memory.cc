@@ -52,13 +52,22 @@ const CylinderMemory::Caliper* CylinderMemory::Find(double s0_px) const {
   return it == calipers_.end() ? nullptr : &it->second;
 }
 
+bool CylinderMemory::Rests(double s0_px) {
+  const auto it = calipers_.find(Key(s0_px));
+  if (it == calipers_.end() || it->second.rest_frames <= 0) return false;
+  --it->second.rest_frames;
+  return true;
+}
+
 void CylinderMemory::Keep(const Caliper& slab, const std::vector<EdgeSample>& samples,
                           const CylinderFit& fit) {
   Caliper c = slab;
-  if (MakeCylinderTemplate(samples, fit, &c.cylinder))
-    calipers_[Key(slab.s0_px)] = std::move(c);
-  else
-    calipers_.erase(Key(slab.s0_px));
+  c.rest_frames = 0;
+  if (!MakeCylinderTemplate(samples, fit, &c.cylinder)) {
+    c.cylinder = CylinderTemplate{};
+    c.rest_frames = kRestFrames;
+  }
+  calipers_[Key(slab.s0_px)] = std::move(c);
 }
 
 TrackedCylinders TrackCylinders(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
@@ -79,7 +88,12 @@ TrackedCylinders TrackCylinders(const GreyImage& img, const AxisFrame& f, const 
     slab.left_px = memory->left_u0_px + memory->slope * sc;
     slab.right_px = memory->right_u0_px + memory->slope * sc;
     slab.sigma_px = memory->sigma_px;
-    if (const CylinderMemory::Caliper* c = memory->Find(s0)) {
+    if (memory->Rests(s0)) {
+      ++out.resting;
+      continue;
+    }
+    const CylinderMemory::Caliper* c = memory->Find(s0);
+    if (c && !c->cylinder.samples.empty()) {
       if (!GatherCylinderSamples(img, f, clip, c->s0_px, c->s1_px, c->left_px, c->right_px,
                                  c->sigma_px, &samples, &at_edges)) {
         out.border = true;
@@ -93,6 +107,8 @@ TrackedCylinders TrackCylinders(const GreyImage& img, const AxisFrame& f, const 
         continue;
       }
       ++out.refused;
+    }
+    if (c) {  // its template's slab, or the one of the fit that failed before its rest
       slab.left_px = c->left_px;
       slab.right_px = c->right_px;
       slab.sigma_px = c->sigma_px;
@@ -112,7 +128,7 @@ TrackedCylinders TrackCylinders(const GreyImage& img, const AxisFrame& f, const 
     const double outer = CylinderReachPx(slab.sigma_px);
     fit.converged = fit.converged && std::abs(fit.left_px - slab.left_px) < outer - 1.0 &&
                     std::abs(fit.right_px - slab.right_px) < outer - 1.0;
-    memory->Keep(slab, samples, fit);  // a failed fit drops the caliper's template
+    memory->Keep(slab, samples, fit);  // a failed fit drops the caliper's template, rests it
   }
   return out;
 }

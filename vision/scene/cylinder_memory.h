@@ -29,8 +29,13 @@ class CylinderMemory {
  public:
   struct Caliper {
     double s0_px = 0, s1_px = 0, left_px = 0, right_px = 0, sigma_px = 0;  // its slab
-    CylinderTemplate cylinder;
+    CylinderTemplate cylinder;  // no samples while the caliper rests
+    int rest_frames = 0;        // frames it is left out before its full fit is tried again
   };
+  // After a full fit that failed (a gear tooth over an edge, mostly), a caliper is left out for
+  // this many frames: on a drive's video the same few calipers failed again in most frames, at
+  // the full fit's most iterations, and were half of its cost.
+  static constexpr int kRestFrames = 4;
 
   // Forgets the templates unless they were made in axis frame f on calipers `spacing_px` long.
   void Use(const AxisFrame& f, double spacing_px);
@@ -39,8 +44,10 @@ class CylinderMemory {
 
   // The caliper starting at s0_px, or null.
   const Caliper* Find(double s0_px) const;
+  // True (and one frame of its rest counted) when the caliper at s0_px rests after a failed fit.
+  bool Rests(double s0_px);
   // Keeps a caliper's full fit on `samples` (gathered as GatherCylinderSamples with its slab) as
-  // its template; a fit that did not converge drops the template it had.
+  // its template; a fit that did not converge drops the template it had and rests the caliper.
   void Keep(const Caliper& slab, const std::vector<EdgeSample>& samples, const CylinderFit& fit);
 
   // What the full measurement that made the templates found beyond the fits: the edge lines
@@ -60,10 +67,10 @@ class CylinderMemory {
 };
 
 // Every caliper of [band_s0_px, band_s0_px + n·spacing_px) fitted as a lit cylinder: from its
-// template where it has one that holds in this frame; else in full (FitLitCylinder on the
-// template's slab, or on one about the memory's lines), its template then kept. The slabs stay
-// where the full measurement put them: on real profiles the full fit's width moves with the
-// pixels it is given by a tenth of a px.
+// template where it has one that holds in this frame; none while it rests; else in full
+// (FitLitCylinder on the template's slab, or on one about the memory's lines), its template then
+// kept. The slabs stay where the full measurement put them: on real profiles the full fit's width
+// moves with the pixels it is given by a tenth of a px.
 struct TrackedCylinders {
   std::vector<CylinderFit> fits;   // per caliper; not converged where neither fit held
   bool border = false;             // a slab left the image
@@ -71,6 +78,7 @@ struct TrackedCylinders {
   int from_template = 0;
   int refused = 0;  // templates that refused the frame (cylinder_track.h), then fitted in full
   int fitted_in_full = 0;
+  int resting = 0;  // left out after a failed full fit (CylinderMemory::kRestFrames)
 };
 TrackedCylinders TrackCylinders(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
                                 double band_s0_px, double spacing_px, int n,

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <opencv2/imgproc.hpp>
 
 #include "synthetic/synthetic.h"
 
@@ -104,6 +105,33 @@ TEST(StrandTrackerTest, FilamentFromTemplatesJudgesClippingAtItsEdges) {
   }
   EXPECT_LE(tracker.full_detections(), 2);
   EXPECT_GE(tracker.cylinders().frames_from_templates, kFrames - 3);
+}
+
+// A gear tooth over the left silhouette for three frames (a dark block across it at the middle of
+// the stretch): the calipers it spoils fail their full fits and rest (CylinderMemory::kRestFrames)
+// instead of being fitted in full again in every frame; once it has gone they are fitted again
+// and count again. The widths stay the rendered ones throughout.
+TEST(StrandTrackerTest, FilamentCalipersSpoiledForAWhileRestThenReturn) {
+  const SceneParams p = LitFilament();
+  StrandTracker tracker(WholeStretch());
+  constexpr int kFrames = 16, kToothFrom = 3, kToothUntil = 6;
+  int calipers_clean = 0;
+  for (int i = 0; i < kFrames; ++i) {
+    FrameTruth t;
+    cv::Mat img = RenderFrame(p, i, &t);
+    if (i >= kToothFrom && i < kToothUntil) {
+      const int left = static_cast<int>(std::lround(t.tip_x_px - 0.5 * t.width_px));
+      cv::rectangle(img, cv::Rect(left - 12, img.rows / 2, 24, 16), cv::Scalar::all(0), cv::FILLED);
+    }
+    const StrandMeasurement m = tracker.Measure(img);
+    ASSERT_TRUE(m.valid()) << i << ": " << m.detail;
+    EXPECT_NEAR(m.width_px, t.width_px, 0.05) << "frame " << i;
+    if (i == kToothFrom - 1) calipers_clean = m.calipers_used;
+    if (i >= kToothFrom && i < kToothUntil) EXPECT_LT(m.calipers_used, calipers_clean) << i;
+    if (i >= kToothUntil + CylinderMemory::kRestFrames)
+      EXPECT_EQ(m.calipers_used, calipers_clean) << i;
+  }
+  EXPECT_LE(tracker.full_detections(), 2);
 }
 
 TEST(StrandTrackerTest, LosesTheStrandAndFindsItAgain) {
