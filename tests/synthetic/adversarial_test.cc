@@ -109,6 +109,25 @@ TEST(AdversarialTest, ASwellUnderANozzleAtTheBackgroundsLevelHangsFromItsOwnEnd)
   EXPECT_GE(valid, 5);
 }
 
+TEST(AdversarialTest, ASwellsOutlineBesideTheStrandIsNotTheNozzlesFace) {
+  // A swell 1.48 times as wide, relaxing over 7 px, under a nozzle 4 levels above the background:
+  // the columns beside the strand where the face is looked for cross the swell's outline and
+  // back, 7 px below the object's end. The end fixes the tip; the outline, no step between flat
+  // levels, neither confirms it nor doubts it by half that distance (a tip σ of 3.3 px, and the
+  // width's 0.64 px, before).
+  AdversarialScene p = RandomAdversarialScene(TroubleClass::kDieSwell, 17);
+  p.codec = Codec::kPng;
+  AdversarialTruth t;
+  const vision::StrandMeasurement m = RenderAndMeasure(p, &t);
+  ASSERT_TRUE(m.gave_width()) << m.detail << " " << Describe(p);
+  const double tip_error_px = std::hypot(m.tip_x_px - t.tip_x_px, m.tip_y_px - t.tip_y_px);
+  EXPECT_LT(tip_error_px, 0.5) << Describe(p);
+  ASSERT_GE(m.tip_sigma_px, 0) << Describe(p);
+  EXPECT_LE(m.tip_sigma_px, 1.0) << Describe(p);
+  EXPECT_LT(tip_error_px, 3 * m.tip_sigma_px) << Describe(p);
+  EXPECT_NEAR(m.width_px, t.width_px, std::max(3 * m.width_sigma_px, 0.05)) << Describe(p);
+}
+
 TEST(AdversarialTest, ClippedStrandThroughH264IsSaturatedNotMeasured) {
   // H.264 in TV range decodes a clipped plateau at ~252 of 255: still saturation.
   for (uint64_t seed : {3, 7, 11, 14}) {

@@ -234,6 +234,7 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
   m.polarity = g.polarity;
   m.tip_x_px = g.axis.ox + roi.x;
   m.tip_y_px = g.axis.oy + roi.y;
+  if (opt.target == MeasureTarget::kStrand) m.tip_sigma_px = g.tip_sigma_px;
   m.angle_deg = std::atan2(g.axis.dx, g.axis.dy) * 180.0 / M_PI;
 
   // The band: from the tip (strand) or the top of the stretch (filament), stopping short of where

@@ -70,6 +70,10 @@ struct StrandMeasurement {
   double blur_px = 0;         // median PSF sigma, pixel footprint removed
   double tip_x_px = 0;  // nozzle tip on the axis (strand); top of the measured stretch (filament)
   double tip_y_px = 0;
+  // Strand: the tip's doubt along the axis where the nozzle's face or the object's own end fixed
+  // it (tip.h); −1 where only the followed edges did (the band's start is then doubted by a share
+  // of the width).
+  double tip_sigma_px = -1;
   Polarity polarity = Polarity::kAuto;
   int calipers_used = 0;
   int calipers_total = 0;

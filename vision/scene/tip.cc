@@ -96,6 +96,9 @@ constexpr double kTipSigmaConfirmedPx = 0.25, kTipSigmaAlonePx = 0.5;
 // The object's end is read in the columns between these fractions of its width either side of
 // the axis: clear of the edges' blur, and inside where a swell's curved sides begin.
 constexpr double kEndColumns[2] = {0.05, 0.3};
+// A face's levels are flat: over the reach, the profile's slope changes the level by at most
+// this share of the step (a nozzle's face: a few %; a dip read as a step: 50 % and more).
+constexpr double kMaxSlopeShareOfStep = 0.25;
 
 // A blurred step along the axis in the columns u0..u1 (step 1 px) near s_guess. The step depends
 // on s alone, so it is fitted to the columns' mean profile: the same least-squares edge as all
@@ -128,6 +131,11 @@ bool AxialStep(const GreyImage& img, const AxisFrame& a, double s_guess, double 
 // the columns about u_px.
 struct LineReading {
   double u_px = 0, s_px = 0, sigma_px = 0;
+  // A step between two flat levels, as a nozzle's face is: not a profile the fit could only
+  // follow with its slope doing a step's work (beside a die swell the columns cross the swollen
+  // strand's outline and back, a dip, which a step of +131 on a slope of −6.7 per px described
+  // 7 px below the face).
+  bool flat = true;
 };
 
 // The nozzle's face beside the strand: just outside the outline on one side, the profile along
@@ -150,7 +158,9 @@ std::vector<LineReading> FaceOnSide(const GreyImage& img, const AxisFrame& a, do
       break;
     }
     if (std::abs(fit.edge_px - s_guess) > kNearGuessPx) break;
-    found.push_back({0.5 * (u_in + u_out), fit.edge_px, fit.edge_sigma_px});
+    const bool flat =
+        std::abs(fit.slope_per_px) * kReachPx <= kMaxSlopeShareOfStep * std::abs(fit.step);
+    found.push_back({0.5 * (u_in + u_out), fit.edge_px, fit.edge_sigma_px, flat});
     if (found.size() == 2) break;
   }
   return found;
@@ -252,9 +262,25 @@ TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0,
           if (!one || std::abs(r.s_px - s_guess) < std::abs(one->s_px - s_guess)) one = &r;
     t.face_sides = face.found ? 2 : one ? 1 : 0;
     if (end.found) {
-      // Confirmed by the face beside it, or alone (the nozzle at the background's level).
-      const bool confirmed = face.found || one;
-      const double other_s = face.found ? face.s_px : one ? one->s_px : end.s_px;
+      // Confirmed by the face beside it, or alone (the nozzle at the background's level). Only a
+      // step between flat levels is the face here: a swell's outline beside the strand neither
+      // confirms the end nor, lying below it, leaves it in doubt. (Which object hangs from the
+      // nozzle is still told by every reading: face_sides.)
+      std::vector<LineReading> flat[2];
+      for (int k = 0; k < 2; ++k)
+        std::copy_if(faces[k].begin(), faces[k].end(), std::back_inserter(flat[k]),
+                     [](const LineReading& r) { return r.flat; });
+      const TipEstimate flat_face = LineAcross(flat[0], flat[1]);
+      const LineReading* flat_one = nullptr;
+      if (!flat_face.found)
+        for (const auto& side : flat)
+          for (const LineReading& r : side)
+            if (!flat_one || std::abs(r.s_px - s_guess) < std::abs(flat_one->s_px - s_guess))
+              flat_one = &r;
+      const bool confirmed = flat_face.found || flat_one;
+      const double other_s = flat_face.found ? flat_face.s_px
+                             : flat_one      ? flat_one->s_px
+                                             : end.s_px;
       t.s_tip_px = end.s_px;
       t.tip_sigma_px = std::max({confirmed ? kTipSigmaConfirmedPx : kTipSigmaAlonePx, end.doubt_px,
                                  0.5 * std::abs(end.s_px - other_s)});
