@@ -113,21 +113,26 @@ struct SceneResult {
 // kFirstAtFace / kSecondAtFace: the tip decides — only that one hangs from the nozzle's face;
 // kSideBySide: parallel and closer than either is wide (one strand with a stripe at the
 // background's level, or two strands): ambiguous whatever the scores;
+// kNeitherAtFace: a strand's target, and neither hangs from the nozzle's face (on both sides):
+// the tip does not decide, and a score (contrast, length) does not tell a strand from a hair or
+// another strand: ambiguous;
 // kSimilarScore: c scores at least ambiguity_ratio of b: ambiguous; kOutscored: b wins.
 enum class PairContest {
   kNotRivals,
   kFirstAtFace,
   kSecondAtFace,
   kSideBySide,
+  kNeitherAtFace,
   kSimilarScore,
   kOutscored
 };
 PairContest ContestPairs(const PairCandidate& b, const StrandGeometry& bg, const PairCandidate& c,
                          const StrandGeometry& cg, const SceneOptions& options);
 inline bool Ambiguous(PairContest c) {
-  return c == PairContest::kSideBySide || c == PairContest::kSimilarScore;
+  return c == PairContest::kSideBySide || c == PairContest::kNeitherAtFace ||
+         c == PairContest::kSimilarScore;
 }
-// The `ambiguous` detail for a kSideBySide or kSimilarScore contest.
+// The `ambiguous` detail for a kSideBySide, kNeitherAtFace or kSimilarScore contest.
 std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const PairCandidate& c);
 // The `ambiguous` detail when candidate `index` lies between two pairs of the other polarity that
 // held up (r.chosen and r.runners_up), share its edges, are parallel to it and each score at least

@@ -80,7 +80,32 @@ TEST(SceneTest, TwoStrandsOfSimilarScoreAreAmbiguous) {
   cv::max(a, b, both);  // two lit strands below two nozzles
   const SceneResult r = Find(both);
   EXPECT_EQ(r.status, FrameStatus::kAmbiguous) << r.detail;
-  EXPECT_NE(r.detail.find("similar score"), std::string::npos);
+  EXPECT_NE(r.detail.find("similar score"), std::string::npos) << r.detail;
+}
+
+// A strand and a fainter thread of 40 µm below two nozzles at the background's level: no face
+// shows beside either, so the tip does not say which is the strand, and the one that scores
+// better is not taken by default (a 10 px hair had once been taken that way over an 83 px strand).
+TEST(SceneTest, TwoStrandsNeitherAtAVisibleFaceAreAmbiguousWhateverTheirScores) {
+  SceneParams p;
+  p.nozzle_level = p.background_level;
+  p.tip_x_px = 380;
+  cv::Mat a = RenderFrame(p, 0, nullptr);
+  p.tip_x_px = 900;
+  p.strand_width_um = 40;
+  p.strand_level = 60;
+  p.seed = 2;
+  const cv::Mat b = RenderFrame(p, 0, nullptr);
+  cv::Mat both;
+  cv::max(a, b, both);
+  const SceneResult r = Find(both);
+  EXPECT_EQ(r.status, FrameStatus::kAmbiguous) << r.detail;
+  EXPECT_NE(r.detail.find("neither hanging from the nozzle's face"), std::string::npos) << r.detail;
+  // The thread alone is found: the rule is about rivals, not about faint nozzles.
+  FrameTruth t;
+  const SceneResult alone = Find(RenderFrame(p, 0, &t));
+  ASSERT_EQ(alone.status, FrameStatus::kValid) << alone.detail;
+  EXPECT_NEAR(alone.geometry.width_px, t.width_px, 1.0);
 }
 
 TEST(SceneTest, TargetsDecideWhatATipMeans) {

@@ -127,9 +127,12 @@ TEST(StrandTrackerTest, FilamentCalipersSpoiledForAWhileRestThenReturn) {
     ASSERT_TRUE(m.valid()) << i << ": " << m.detail;
     EXPECT_NEAR(m.width_px, t.width_px, 0.05) << "frame " << i;
     if (i == kToothFrom - 1) calipers_clean = m.calipers_used;
-    if (i >= kToothFrom && i < kToothUntil) EXPECT_LT(m.calipers_used, calipers_clean) << i;
-    if (i >= kToothUntil + CylinderMemory::kRestFrames)
+    if (i >= kToothFrom && i < kToothUntil) {
+      EXPECT_LT(m.calipers_used, calipers_clean) << i;
+    }
+    if (i >= kToothUntil + CylinderMemory::kRestFrames) {
       EXPECT_EQ(m.calipers_used, calipers_clean) << i;
+    }
   }
   EXPECT_LE(tracker.full_detections(), 2);
 }
