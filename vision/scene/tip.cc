@@ -197,6 +197,30 @@ TipEstimate LineAcross(const std::vector<LineReading>& left,
   return e;
 }
 
+// The nozzle's face from the readings on both sides (flat_only: only steps between flat levels),
+// and where they are not one line across the axis (a face on one side only, a flank, a hair's
+// end), the reading nearest the guess (pointing into `readings`).
+struct FaceReadings {
+  TipEstimate face;
+  const LineReading* one = nullptr;
+};
+FaceReadings ReadFace(const std::vector<LineReading> (&readings)[2], double s_guess,
+                      bool flat_only) {
+  std::vector<LineReading> kept[2];
+  for (int k = 0; k < 2; ++k)
+    for (const LineReading& r : readings[k])
+      if (r.flat || !flat_only) kept[k].push_back(r);
+  FaceReadings out;
+  out.face = LineAcross(kept[0], kept[1]);
+  if (out.face.found) return out;
+  for (const auto& side : readings)
+    for (const LineReading& r : side)
+      if ((r.flat || !flat_only) &&
+          (!out.one || std::abs(r.s_px - s_guess) < std::abs(out.one->s_px - s_guess)))
+        out.one = &r;
+  return out;
+}
+
 // The object's own end along the axis in columns u0..u1: where the strand gives way to the
 // nozzle above it.
 std::vector<LineReading> ObjectEnd(const GreyImage& img, const AxisFrame& a, double s_guess,
@@ -242,7 +266,9 @@ TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0,
     const std::vector<LineReading> faces[2] = {
         FaceOnSide(img, centred, s_guess, half, min_face_step, -1),
         FaceOnSide(img, centred, s_guess, half, min_face_step, +1)};
-    const TipEstimate face = LineAcross(faces[0], faces[1]);
+    const FaceReadings all = ReadFace(faces, s_guess, false);
+    const TipEstimate& face = all.face;
+    const LineReading* one = all.one;
     const auto end_near = [&](double s) {
       return LineAcross(ObjectEnd(img, centred, s, -kEndColumns[1] * width, -kEndColumns[0] * width,
                                   min_face_step),
@@ -253,33 +279,16 @@ TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0,
     // end may lie beyond the reach below, and is looked for again half a reach further up.
     TipEstimate end = end_near(s_guess);
     if (!end.found) end = end_near(s_guess - 0.5 * kReachPx);
-    // A face on one side only, or two that are not one line (a flank, a hair's end): the reading
-    // nearest the guess.
-    const LineReading* one = nullptr;
-    if (!face.found)
-      for (const auto& side : faces)
-        for (const LineReading& r : side)
-          if (!one || std::abs(r.s_px - s_guess) < std::abs(one->s_px - s_guess)) one = &r;
     t.face_sides = face.found ? 2 : one ? 1 : 0;
     if (end.found) {
       // Confirmed by the face beside it, or alone (the nozzle at the background's level). Only a
       // step between flat levels is the face here: a swell's outline beside the strand neither
       // confirms the end nor, lying below it, leaves it in doubt. (Which object hangs from the
       // nozzle is still told by every reading: face_sides.)
-      std::vector<LineReading> flat[2];
-      for (int k = 0; k < 2; ++k)
-        std::copy_if(faces[k].begin(), faces[k].end(), std::back_inserter(flat[k]),
-                     [](const LineReading& r) { return r.flat; });
-      const TipEstimate flat_face = LineAcross(flat[0], flat[1]);
-      const LineReading* flat_one = nullptr;
-      if (!flat_face.found)
-        for (const auto& side : flat)
-          for (const LineReading& r : side)
-            if (!flat_one || std::abs(r.s_px - s_guess) < std::abs(flat_one->s_px - s_guess))
-              flat_one = &r;
-      const bool confirmed = flat_face.found || flat_one;
-      const double other_s = flat_face.found ? flat_face.s_px
-                             : flat_one      ? flat_one->s_px
+      const FaceReadings flat = ReadFace(faces, s_guess, true);
+      const bool confirmed = flat.face.found || flat.one;
+      const double other_s = flat.face.found ? flat.face.s_px
+                             : flat.one      ? flat.one->s_px
                                              : end.s_px;
       t.s_tip_px = end.s_px;
       t.tip_sigma_px = std::max({confirmed ? kTipSigmaConfirmedPx : kTipSigmaAlonePx, end.doubt_px,
