@@ -155,10 +155,13 @@ InspectReport InspectInput(const InspectCommandOptions& o) {
         m.contrast, m.shading_left ? "shaded" : "plain", m.shading_right ? "shaded" : "plain");
     if (rep.target == vision::MeasureTarget::kStrand) {
       const int face = rep.scene.geometry.tip_face_sides;
-      t += fmt::format("  tip: {}; swell ratio {:.2f} (widest below the tip over the width)\n",
+      t += fmt::format("  tip: {}{}; swell ratio {:.2f} (widest below the tip over the width)\n",
                        face == 2   ? "on the nozzle's face, which shows on both sides"
                        : face == 1 ? "on the nozzle's face, which shows on one side"
                                    : "where the edges end (the nozzle's face does not show)",
+                       m.tip_sigma_px >= 0
+                           ? fmt::format(", ± {:.2f} px along the axis", m.tip_sigma_px)
+                           : std::string(),
                        m.swell_ratio);
     }
     if (m.model_sigma_px > 0) {

@@ -254,6 +254,9 @@ void BindMeasure(py::module_& m) {
       .def_readonly("straight_end_px", &StrandMeasurement::straight_end_px)
       .def_readonly("rough_calipers", &StrandMeasurement::rough_calipers,
                     "Filament: calipers whose edges are not straight (knurl marks).")
+      .def_readonly("tip_sigma_px", &StrandMeasurement::tip_sigma_px,
+                    "Strand: the tip's doubt along the axis where the nozzle's face or the "
+                    "object's own end fixed it; -1 where only the followed edges did.")
       .def_readonly("swell_ratio", &StrandMeasurement::swell_ratio,
                     "Widest width between the tip and the band over width_px (die swell).")
       .def_readonly("calipers", &StrandMeasurement::calipers, "The Caliper list across the band.")

@@ -21,6 +21,10 @@ def test_width_matches_the_rendered_truth(reference):
     assert abs(m.width_px - truth["width_px"]) < 0.1  # the README's accuracy: ≤ 0.1 px
     assert 0 < m.width_sigma_px < 0.1
     assert abs(m.tip_x_px - truth["tip_x_px"]) < 1 and abs(m.tip_y_px - truth["tip_y_px"]) < 1
+    # The nozzle's face shows on both sides here: the tip is fixed to a fraction of a px, and
+    # within 3 of its σ of the rendered one.
+    assert 0 < m.tip_sigma_px < 1
+    assert abs(m.tip_y_px - truth["tip_y_px"]) < 3 * m.tip_sigma_px
     assert m.polarity == clogscope.Polarity.bright
     assert len(m.calipers) == m.calipers_total >= m.calipers_used > 0
     assert "width_px=" in repr(m)

@@ -284,7 +284,9 @@ TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0,
       // Confirmed by the face beside it, or alone (the nozzle at the background's level). Only a
       // step between flat levels is the face here: a swell's outline beside the strand neither
       // confirms the end nor, lying below it, leaves it in doubt. (Which object hangs from the
-      // nozzle is still told by every reading: face_sides.)
+      // nozzle is still told by every reading, face_sides: counting only these there, a hair
+      // was measured over the strand where neither's readings were the nozzle's, at the
+      // background's level. The face's lower level is not yet checked against the background.)
       const FaceReadings flat = ReadFace(faces, s_guess, true);
       const bool confirmed = flat.face.found || flat.one;
       const double other_s = flat.face.found ? flat.face.s_px
