@@ -96,22 +96,22 @@ constexpr double kTipSigmaConfirmedPx = 0.25, kTipSigmaAlonePx = 0.5;
 // The object's end is read in the columns between these fractions of its width either side of
 // the axis: clear of the edges' blur, and inside where a swell's curved sides begin.
 constexpr double kEndColumns[2] = {0.05, 0.3};
-// A face's levels are flat: over the reach, the profile's slope changes the level by at most
-// this share of the step (a nozzle's face: a few %; a dip read as a step: 50 % and more).
+// A face's levels are flat and its lower one the background's: over the reach the profile's
+// slope changes the level by at most this share of the step (a nozzle's face: a few %; a dip
+// read as a step: 50 % and more), and the level below it is the background's further down within
+// this share of the step.
 constexpr double kMaxSlopeShareOfStep = 0.25;
 
-// A blurred step along the axis in the columns u0..u1 (step 1 px) near s_guess. The step depends
-// on s alone, so it is fitted to the columns' mean profile: the same least-squares edge as all
-// their pixels give, at the cost of one column (a strand's end spans dozens, every frame).
-bool AxialStep(const GreyImage& img, const AxisFrame& a, double s_guess, double u0, double u1,
-               double min_contrast, EdgeFit* fit) {
+// The mean of the columns u0..u1 (step 1 px) every half px along the axis from s0 to s1, in the
+// rows that lie in the image; *pixels counts the pixels read.
+std::vector<EdgeSample> ColumnProfile(const GreyImage& img, const AxisFrame& a, double s0,
+                                      double s1, double u0, double u1, int* pixels) {
   constexpr double kStepPx = 0.5;
-  constexpr int kMinPixels = 60;
   std::vector<EdgeSample> profile;
-  int pixels = 0;
+  *pixels = 0;
   const int columns = static_cast<int>(std::floor(u1 - u0 + 1e-9)) + 1;
-  if (columns <= 0) return false;  // no column between u0 and u1
-  for (double s = s_guess - kReachPx; s <= s_guess + kReachPx; s += kStepPx) {
+  if (columns <= 0) return profile;  // no column between u0 and u1
+  for (double s = s0; s <= s1; s += kStepPx) {
     // A row across the axis lies in the image when both its ends do; then every column does.
     const double x0 = a.ImageX(s, u0), y0 = a.ImageY(s, u0);
     const double x1 = a.ImageX(s, u0 + columns - 1), y1 = a.ImageY(s, u0 + columns - 1);
@@ -119,8 +119,20 @@ bool AxialStep(const GreyImage& img, const AxisFrame& a, double s_guess, double 
     double sum = 0;
     for (int k = 0; k < columns; ++k) sum += img.Bilinear(x0 + k * a.dy, y0 - k * a.dx);
     profile.push_back({static_cast<float>(s), static_cast<float>(sum / columns)});
-    pixels += columns;
+    *pixels += columns;
   }
+  return profile;
+}
+
+// A blurred step along the axis in the columns u0..u1 (step 1 px) near s_guess. The step depends
+// on s alone, so it is fitted to the columns' mean profile: the same least-squares edge as all
+// their pixels give, at the cost of one column (a strand's end spans dozens, every frame).
+bool AxialStep(const GreyImage& img, const AxisFrame& a, double s_guess, double u0, double u1,
+               double min_contrast, EdgeFit* fit) {
+  constexpr int kMinPixels = 60;
+  int pixels = 0;
+  const std::vector<EdgeSample> profile =
+      ColumnProfile(img, a, s_guess - kReachPx, s_guess + kReachPx, u0, u1, &pixels);
   if (pixels < kMinPixels) return false;
   *fit = FitBlurredStep(profile, s_guess, 1.5, s_guess);
   return fit->converged && std::abs(fit->step) >= min_contrast &&
@@ -131,11 +143,7 @@ bool AxialStep(const GreyImage& img, const AxisFrame& a, double s_guess, double 
 // the columns about u_px.
 struct LineReading {
   double u_px = 0, s_px = 0, sigma_px = 0;
-  // A step between two flat levels, as a nozzle's face is: not a profile the fit could only
-  // follow with its slope doing a step's work (beside a die swell the columns cross the swollen
-  // strand's outline and back, a dip, which a step of +131 on a slope of −6.7 per px described
-  // 7 px below the face).
-  bool flat = true;
+  double step = 0;  // signed, along +s
 };
 
 // The nozzle's face beside the strand: just outside the outline on one side, the profile along
@@ -158,9 +166,27 @@ std::vector<LineReading> FaceOnSide(const GreyImage& img, const AxisFrame& a, do
       break;
     }
     if (std::abs(fit.edge_px - s_guess) > kNearGuessPx) break;
-    const bool flat =
-        std::abs(fit.slope_per_px) * kReachPx <= kMaxSlopeShareOfStep * std::abs(fit.step);
-    found.push_back({0.5 * (u_in + u_out), fit.edge_px, fit.edge_sigma_px, flat});
+    // A face is a step between two flat levels, onto the background: the same columns further
+    // down are at the level below it. A profile the fit could only follow with its slope doing a
+    // step's work is a dip (beside a die swell the columns cross the swollen strand's outline and
+    // back: a step of +131 on a slope of −6.7 per px, 7 px below the face); a step onto another
+    // level is some other object's outline (a tilted strand's own, under a nozzle at the
+    // background's level, once told which of a strand and a hair hung from the nozzle).
+    int further_pixels = 0;
+    const std::vector<EdgeSample> further =
+        ColumnProfile(img, a, s_guess + kReachPx, s_guess + 3 * kReachPx, std::min(u_in, u_out),
+                      std::max(u_in, u_out), &further_pixels);
+    double background = 0;
+    for (const EdgeSample& e : further) background += e.value / further.size();
+    const double share = kMaxSlopeShareOfStep * std::abs(fit.step);
+    const bool face =
+        std::abs(fit.slope_per_px) * kReachPx <= share && !further.empty() &&
+        std::abs(EdgeModelValue(fit, fit.edge_px + 3.0 * fit.sigma_px) - background) <= share;
+    if (!face) {
+      if (found.empty()) continue;
+      break;
+    }
+    found.push_back({0.5 * (u_in + u_out), fit.edge_px, fit.edge_sigma_px, fit.step});
     if (found.size() == 2) break;
   }
   return found;
@@ -174,6 +200,12 @@ TipEstimate LineAcross(const std::vector<LineReading>& left,
                        const std::vector<LineReading>& right) {
   TipEstimate e;
   if (left.empty() || right.empty()) return e;
+  // One line steps the same way on both sides: from the nozzle's level to the background's (a
+  // face), or to the strand's (the object's end).
+  int up = 0, down = 0;
+  for (const auto* side : {&left, &right})
+    for (const LineReading& r : *side) (r.step > 0 ? up : down) += 1;
+  if (up > 0 && down > 0) return e;
   double n = 0, su = 0, ss = 0, suu = 0, sus = 0, sigma = 0;
   for (const auto* side : {&left, &right})
     for (const LineReading& r : *side) {
@@ -197,27 +229,20 @@ TipEstimate LineAcross(const std::vector<LineReading>& left,
   return e;
 }
 
-// The nozzle's face from the readings on both sides (flat_only: only steps between flat levels),
-// and where they are not one line across the axis (a face on one side only, a flank, a hair's
-// end), the reading nearest the guess (pointing into `readings`).
+// The nozzle's face from the readings on both sides, and where they are not one line across the
+// axis (a face on one side only, a flank, a hair's end), the reading nearest the guess (pointing
+// into `readings`).
 struct FaceReadings {
   TipEstimate face;
   const LineReading* one = nullptr;
 };
-FaceReadings ReadFace(const std::vector<LineReading> (&readings)[2], double s_guess,
-                      bool flat_only) {
-  std::vector<LineReading> kept[2];
-  for (int k = 0; k < 2; ++k)
-    for (const LineReading& r : readings[k])
-      if (r.flat || !flat_only) kept[k].push_back(r);
+FaceReadings ReadFace(const std::vector<LineReading> (&readings)[2], double s_guess) {
   FaceReadings out;
-  out.face = LineAcross(kept[0], kept[1]);
+  out.face = LineAcross(readings[0], readings[1]);
   if (out.face.found) return out;
   for (const auto& side : readings)
     for (const LineReading& r : side)
-      if ((r.flat || !flat_only) &&
-          (!out.one || std::abs(r.s_px - s_guess) < std::abs(out.one->s_px - s_guess)))
-        out.one = &r;
+      if (!out.one || std::abs(r.s_px - s_guess) < std::abs(out.one->s_px - s_guess)) out.one = &r;
   return out;
 }
 
@@ -229,7 +254,7 @@ std::vector<LineReading> ObjectEnd(const GreyImage& img, const AxisFrame& a, dou
   if (!AxialStep(img, a, s_guess, u0, u1, min_contrast, &fit) ||
       std::abs(fit.edge_px - s_guess) > kNearGuessPx)
     return {};
-  return {{0.5 * (u0 + u1), fit.edge_px, fit.edge_sigma_px}};
+  return {{0.5 * (u0 + u1), fit.edge_px, fit.edge_sigma_px, fit.step}};
 }
 
 }  // namespace
@@ -266,7 +291,7 @@ TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0,
     const std::vector<LineReading> faces[2] = {
         FaceOnSide(img, centred, s_guess, half, min_face_step, -1),
         FaceOnSide(img, centred, s_guess, half, min_face_step, +1)};
-    const FaceReadings all = ReadFace(faces, s_guess, false);
+    const FaceReadings all = ReadFace(faces, s_guess);
     const TipEstimate& face = all.face;
     const LineReading* one = all.one;
     const auto end_near = [&](double s) {
@@ -281,17 +306,9 @@ TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0,
     if (!end.found) end = end_near(s_guess - 0.5 * kReachPx);
     t.face_sides = face.found ? 2 : one ? 1 : 0;
     if (end.found) {
-      // Confirmed by the face beside it, or alone (the nozzle at the background's level). Only a
-      // step between flat levels is the face here: a swell's outline beside the strand neither
-      // confirms the end nor, lying below it, leaves it in doubt. (Which object hangs from the
-      // nozzle is still told by every reading, face_sides: counting only these there, a hair
-      // was measured over the strand where neither's readings were the nozzle's, at the
-      // background's level. The face's lower level is not yet checked against the background.)
-      const FaceReadings flat = ReadFace(faces, s_guess, true);
-      const bool confirmed = flat.face.found || flat.one;
-      const double other_s = flat.face.found ? flat.face.s_px
-                             : flat.one      ? flat.one->s_px
-                                             : end.s_px;
+      // Confirmed by the face beside it, or alone (the nozzle at the background's level).
+      const bool confirmed = face.found || one;
+      const double other_s = face.found ? face.s_px : one ? one->s_px : end.s_px;
       t.s_tip_px = end.s_px;
       t.tip_sigma_px = std::max({confirmed ? kTipSigmaConfirmedPx : kTipSigmaAlonePx, end.doubt_px,
                                  0.5 * std::abs(end.s_px - other_s)});
