@@ -52,21 +52,15 @@ const CylinderMemory::Caliper* CylinderMemory::Find(double s0_px) const {
   return it == calipers_.end() ? nullptr : &it->second;
 }
 
-bool CylinderMemory::Rests(double s0_px) {
+CylinderMemory::Caliper* CylinderMemory::Find(double s0_px) {
   const auto it = calipers_.find(Key(s0_px));
-  if (it == calipers_.end() || it->second.rest_frames <= 0) return false;
-  --it->second.rest_frames;
-  return true;
+  return it == calipers_.end() ? nullptr : &it->second;
 }
 
 void CylinderMemory::Keep(const Caliper& slab, const std::vector<EdgeSample>& samples,
                           const CylinderFit& fit) {
   Caliper c = slab;
-  c.rest_frames = 0;
-  if (!MakeCylinderTemplate(samples, fit, &c.cylinder)) {
-    c.cylinder = CylinderTemplate{};
-    c.rest_frames = kRestFrames;
-  }
+  c.rest_frames = MakeCylinderTemplate(samples, fit, &c.cylinder) ? 0 : kRestFrames;
   calipers_[Key(slab.s0_px)] = std::move(c);
 }
 
@@ -88,11 +82,11 @@ TrackedCylinders TrackCylinders(const GreyImage& img, const AxisFrame& f, const 
     slab.left_px = memory->left_u0_px + memory->slope * sc;
     slab.right_px = memory->right_u0_px + memory->slope * sc;
     slab.sigma_px = memory->sigma_px;
-    if (memory->Rests(s0)) {
-      ++out.resting;
+    CylinderMemory::Caliper* c = memory->Find(s0);
+    if (c && c->rest_frames > 0) {  // resting after a failed full fit
+      --c->rest_frames;
       continue;
     }
-    const CylinderMemory::Caliper* c = memory->Find(s0);
     if (c && !c->cylinder.samples.empty()) {
       if (!GatherCylinderSamples(img, f, clip, c->s0_px, c->s1_px, c->left_px, c->right_px,
                                  c->sigma_px, &samples, &at_edges)) {

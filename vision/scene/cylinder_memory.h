@@ -34,7 +34,7 @@ class CylinderMemory {
   };
   // After a full fit that failed (a gear tooth over an edge, mostly), a caliper is left out for
   // this many frames: on a drive's video the same few calipers failed again in most frames, at
-  // the full fit's most iterations, and were half of its cost.
+  // the full fit's most iterations, and cost an eighth of the path's instructions.
   static constexpr int kRestFrames = 4;
 
   // Forgets the templates unless they were made in axis frame f on calipers `spacing_px` long.
@@ -44,8 +44,7 @@ class CylinderMemory {
 
   // The caliper starting at s0_px, or null.
   const Caliper* Find(double s0_px) const;
-  // True (and one frame of its rest counted) when the caliper at s0_px rests after a failed fit.
-  bool Rests(double s0_px);
+  Caliper* Find(double s0_px);
   // Keeps a caliper's full fit on `samples` (gathered as GatherCylinderSamples with its slab) as
   // its template; a fit that did not converge drops the template it had and rests the caliper.
   void Keep(const Caliper& slab, const std::vector<EdgeSample>& samples, const CylinderFit& fit);
@@ -78,7 +77,6 @@ struct TrackedCylinders {
   int from_template = 0;
   int refused = 0;  // templates that refused the frame (cylinder_track.h), then fitted in full
   int fitted_in_full = 0;
-  int resting = 0;  // left out after a failed full fit (CylinderMemory::kRestFrames)
 };
 TrackedCylinders TrackCylinders(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
                                 double band_s0_px, double spacing_px, int n,

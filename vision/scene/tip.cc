@@ -172,17 +172,18 @@ std::vector<LineReading> FaceOnSide(const GreyImage& img, const AxisFrame& a, do
     // back: a step of +131 on a slope of −6.7 per px, 7 px below the face); a step onto another
     // level is some other object's outline (a tilted strand's own, under a nozzle at the
     // background's level, once told which of a strand and a hair hung from the nozzle).
-    int further_pixels = 0;
-    const std::vector<EdgeSample> further =
-        ColumnProfile(img, a, s_guess + kReachPx, s_guess + 3 * kReachPx, std::min(u_in, u_out),
-                      std::max(u_in, u_out), &further_pixels);
-    double background = 0;
-    for (const EdgeSample& e : further) background += e.value / further.size();
     const double share = kMaxSlopeShareOfStep * std::abs(fit.step);
-    const bool face =
-        std::abs(fit.slope_per_px) * kReachPx <= share && !further.empty() &&
-        std::abs(EdgeModelValue(fit, fit.edge_px + 3.0 * fit.sigma_px) - background) <= share;
-    if (!face) {
+    const auto onto_background = [&] {
+      int pixels = 0;
+      const std::vector<EdgeSample> further =
+          ColumnProfile(img, a, s_guess + kReachPx, s_guess + 3 * kReachPx, std::min(u_in, u_out),
+                        std::max(u_in, u_out), &pixels);
+      if (further.empty()) return false;
+      double background = 0;
+      for (const EdgeSample& e : further) background += e.value / further.size();
+      return std::abs(EdgeModelValue(fit, fit.edge_px + 3.0 * fit.sigma_px) - background) <= share;
+    };
+    if (std::abs(fit.slope_per_px) * kReachPx > share || !onto_background()) {
       if (found.empty()) continue;
       break;
     }
@@ -200,15 +201,11 @@ TipEstimate LineAcross(const std::vector<LineReading>& left,
                        const std::vector<LineReading>& right) {
   TipEstimate e;
   if (left.empty() || right.empty()) return e;
-  // One line steps the same way on both sides: from the nozzle's level to the background's (a
-  // face), or to the strand's (the object's end).
-  int up = 0, down = 0;
-  for (const auto* side : {&left, &right})
-    for (const LineReading& r : *side) (r.step > 0 ? up : down) += 1;
-  if (up > 0 && down > 0) return e;
   double n = 0, su = 0, ss = 0, suu = 0, sus = 0, sigma = 0;
+  int up = 0;
   for (const auto* side : {&left, &right})
     for (const LineReading& r : *side) {
+      up += r.step > 0;
       n += 1;
       su += r.u_px;
       ss += r.s_px;
@@ -216,6 +213,9 @@ TipEstimate LineAcross(const std::vector<LineReading>& left,
       sus += r.u_px * r.s_px;
       sigma = std::max(sigma, r.sigma_px);
     }
+  // One line steps the same way on both sides: from the nozzle's level to the background's (a
+  // face), or to the strand's (the object's end).
+  if (up > 0 && up < n) return e;
   const double det = n * suu - su * su;
   if (det <= 0) return e;
   const double slope = (n * sus - su * ss) / det, at_axis = (ss - slope * su) / n;
@@ -227,23 +227,6 @@ TipEstimate LineAcross(const std::vector<LineReading>& left,
   e.s_px = at_axis;
   e.doubt_px = n > 2 ? std::max(sigma, std::sqrt(ssr / (n - 2))) : sigma;
   return e;
-}
-
-// The nozzle's face from the readings on both sides, and where they are not one line across the
-// axis (a face on one side only, a flank, a hair's end), the reading nearest the guess (pointing
-// into `readings`).
-struct FaceReadings {
-  TipEstimate face;
-  const LineReading* one = nullptr;
-};
-FaceReadings ReadFace(const std::vector<LineReading> (&readings)[2], double s_guess) {
-  FaceReadings out;
-  out.face = LineAcross(readings[0], readings[1]);
-  if (out.face.found) return out;
-  for (const auto& side : readings)
-    for (const LineReading& r : side)
-      if (!out.one || std::abs(r.s_px - s_guess) < std::abs(out.one->s_px - s_guess)) out.one = &r;
-  return out;
 }
 
 // The object's own end along the axis in columns u0..u1: where the strand gives way to the
@@ -291,9 +274,7 @@ TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0,
     const std::vector<LineReading> faces[2] = {
         FaceOnSide(img, centred, s_guess, half, min_face_step, -1),
         FaceOnSide(img, centred, s_guess, half, min_face_step, +1)};
-    const FaceReadings all = ReadFace(faces, s_guess);
-    const TipEstimate& face = all.face;
-    const LineReading* one = all.one;
+    const TipEstimate face = LineAcross(faces[0], faces[1]);
     const auto end_near = [&](double s) {
       return LineAcross(ObjectEnd(img, centred, s, -kEndColumns[1] * width, -kEndColumns[0] * width,
                                   min_face_step),
@@ -304,6 +285,13 @@ TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0,
     // end may lie beyond the reach below, and is looked for again half a reach further up.
     TipEstimate end = end_near(s_guess);
     if (!end.found) end = end_near(s_guess - 0.5 * kReachPx);
+    // A face on one side only, or two that are not one line (a flank, a hair's end): the reading
+    // nearest the guess.
+    const LineReading* one = nullptr;
+    if (!face.found)
+      for (const auto& side : faces)
+        for (const LineReading& r : side)
+          if (!one || std::abs(r.s_px - s_guess) < std::abs(one->s_px - s_guess)) one = &r;
     t.face_sides = face.found ? 2 : one ? 1 : 0;
     if (end.found) {
       // Confirmed by the face beside it, or alone (the nozzle at the background's level).
