@@ -18,12 +18,14 @@ build: deps
 test: build
 	@cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS) $(CTEST_ARGS)
 
-# The test suite under ASan + UBSan in its own build directory (any report fails the test). -O1 with
-# line tables and assertions on: fast enough to build and run within CI's budget beside `make test`.
+# The test suite under ASan + UBSan in its own build directory (any report fails the test), built by
+# clang 14: a second compiler on every change (gcc builds Release), and a third less time than gcc
+# with these checks (CI's budget holds both builds). -O1 with line tables and assertions on.
 SANITIZE_DIR ?= build-asan
-sanitize: deps
-	@cmake -S . -B $(SANITIZE_DIR) -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g1" \
-	  -DCLOGSCOPE_SANITIZE=ON >/dev/null
+sanitize:
+	@scripts/install-deps.sh --clang
+	@cmake -S . -B $(SANITIZE_DIR) -DCMAKE_CXX_COMPILER=clang++-14 -DCMAKE_BUILD_TYPE=Debug \
+	  -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g1" -DCLOGSCOPE_SANITIZE=ON >/dev/null
 	@cmake --build $(SANITIZE_DIR) -j $(JOBS)
 	@cd $(SANITIZE_DIR) && ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 \
 	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
@@ -35,7 +37,7 @@ FUZZ_DIR ?= build-fuzz
 FUZZ_SECONDS ?= 60
 FUZZ_TARGETS = csv manifest calibration extruder frame step lag
 fuzz:
-	@scripts/install-deps.sh --fuzz
+	@scripts/install-deps.sh --clang
 	@CC=clang-14 CXX=clang++-14 cmake -S . -B $(FUZZ_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo \
 	  -DCLOGSCOPE_FUZZ=ON >/dev/null
 	@cmake --build $(FUZZ_DIR) -j $(JOBS) --target $(addsuffix _fuzz,$(FUZZ_TARGETS))

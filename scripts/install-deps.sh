@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages ClogScope builds and runs with. Idempotent: does nothing when every
-# package is present. Runs as root, or through sudo when not root. `--fuzz` adds clang and its
-# libFuzzer runtime for `make fuzz`.
+# package is present. Runs as root, or through sudo when not root. `--clang` adds clang and its
+# sanitizer and libFuzzer runtimes, for `make sanitize` and `make fuzz` (`--fuzz`: the same).
 set -euo pipefail
 
 packages=(
@@ -30,8 +30,8 @@ packages=(
   python3-pytest         # the Python module's tests (python/tests, run by ctest)
   jupyter-nbconvert python3-ipykernel  # a test executes examples/measure_folder.ipynb (~30 MB)
 )
-if [ "${1:-}" = "--fuzz" ]; then
-  packages+=(clang-14 libclang-rt-14-dev)  # libFuzzer with ASan/UBSan
+if [ "${1:-}" = "--clang" ] || [ "${1:-}" = "--fuzz" ]; then
+  packages+=(clang-14 libclang-rt-14-dev)  # the sanitizer build; libFuzzer with ASan/UBSan
 fi
 
 missing=()

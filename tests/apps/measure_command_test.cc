@@ -386,7 +386,7 @@ TEST(MeasureCommandTest, LargeFramesAreBoundedOrRefused) {
   const double mb = PeakMemoryMb(bin + " measure " + (d / "big.mp4").string() + " --out-frames " +
                                  (d / "f.csv").string() + " 2>/dev/null");
   EXPECT_GT(mb, 0) << "measure failed";
-#if !defined(__SANITIZE_ADDRESS__)  // ASan's shadow memory and quarantine are not the tool's
+#if !defined(CLOGSCOPE_SANITIZED)  // ASan's shadow memory and quarantine are not the tool's
   EXPECT_LT(mb, 500) << "peak memory measuring 4096x4096 frames";
 #endif
   std::printf("peak memory measuring 4096x4096 H.264: %.0f MB\n", mb);
@@ -401,7 +401,7 @@ TEST(MeasureCommandTest, LargeFramesAreBoundedOrRefused) {
       << r.err;
   const double refs16_mb =
       PeakMemoryMb(bin + " measure " + refs16 + x_csv + " 2>/dev/null || true");
-#if !defined(__SANITIZE_ADDRESS__)
+#if !defined(CLOGSCOPE_SANITIZED)
   EXPECT_LT(refs16_mb, 500) << "peak memory refusing a 16-reference-frame 4096x4096 stream";
 #endif
   std::printf("peak memory refusing 16 reference frames of 4096x4096: %.0f MB\n", refs16_mb);

@@ -39,7 +39,7 @@ double SecondsSince(Clock::time_point t0) {
 
 // Under AddressSanitizer freed memory waits in a quarantine instead of being reused: resident
 // memory then says nothing about what a request keeps.
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(CLOGSCOPE_SANITIZED)
 constexpr bool kRssMeansSomething = false;
 #else
 constexpr bool kRssMeansSomething = true;
