@@ -86,8 +86,7 @@ void AssignSlots(const std::vector<LineMark>& m, double tol, Lattice* lat) {
   const auto main_run = std::max_element(
       runs.begin(), runs.end(), [](const Run& p, const Run& q) { return p.occupied < q.occupied; });
   auto run = runs.begin();
-  for (const auto& entry : in_slot) {
-    // Named, not a structured binding: C++17 lets no lambda capture those (clang).
+  for (const auto& entry : in_slot) {  // no structured binding: k is captured below
     const auto k = entry.first;
     const auto& marks = entry.second;
     while (k > run->last) ++run;

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages ClogScope builds and runs with. Idempotent: does nothing when every
 # package is present. Runs as root, or through sudo when not root. `--clang` adds clang and its
-# sanitizer and libFuzzer runtimes, for `make sanitize` and `make fuzz` (`--fuzz`: the same).
+# sanitizer and libFuzzer runtimes, for `make sanitize` and `make fuzz`.
 set -euo pipefail
 
 packages=(
@@ -30,7 +30,7 @@ packages=(
   python3-pytest         # the Python module's tests (python/tests, run by ctest)
   jupyter-nbconvert python3-ipykernel  # a test executes examples/measure_folder.ipynb (~30 MB)
 )
-if [ "${1:-}" = "--clang" ] || [ "${1:-}" = "--fuzz" ]; then
+if [ "${1:-}" = "--clang" ]; then
   packages+=(clang-14 libclang-rt-14-dev)  # the sanitizer build; libFuzzer with ASan/UBSan
 fi
 

@@ -170,8 +170,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       cf = CaliperFit{};
       for (int side = 0; side < 2; ++side) {
         const double e0 = (side == 0 ? left_guess : right_guess) + slope_guess * sc;
-        // Named variables, not a structured binding: C++17 lets no lambda capture those (clang).
-        const Window w = window(side, e0, outer, inner);
+        const Window w = window(side, e0, outer, inner);  // no structured binding: captured below
         const double u0 = w.u0, u1 = w.u1;
         int window_clipped = 0;
         if (!GatherEdgeSamples(img, f, s0, s1, u0, u1, clip, &samples, &window_clipped)) {
