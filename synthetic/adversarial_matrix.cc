@@ -110,12 +110,14 @@ MatrixResult RunAdversarialMatrix(const MatrixOptions& o) {
         r.scene = Describe(scene);
         Add(&out.classes[c], r);
         Add(&out.all, r);
+        if (r.strand) Add(&out.strands, r);
         out.frames.push_back(std::move(r));
       }
     }
     Moments(out.frames, c, &out.classes[c]);
   }
   Moments(out.frames, -1, &out.all);
+  Moments(out.frames, -1, &out.strands);  // Moments counts strand frames only
   return out;
 }
 
@@ -157,6 +159,7 @@ std::string MatrixTable(const MatrixResult& r) {
   for (int c = 0; c < kTroubleClassCount; ++c)
     row(TroubleClassName(static_cast<TroubleClass>(c)), r.classes[c]);
   row("**all**", r.all);
+  row("**all with a strand**", r.strands);
   return t;
 }
 

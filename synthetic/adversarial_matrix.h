@@ -64,6 +64,7 @@ struct MatrixResult {
   std::vector<FrameRecord> frames;
   ClassSummary classes[kTroubleClassCount];
   ClassSummary all;
+  ClassSummary strands;  // the frames with a strand: those where a width is wanted
 };
 
 MatrixResult RunAdversarialMatrix(const MatrixOptions& options);
