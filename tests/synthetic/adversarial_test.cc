@@ -304,6 +304,25 @@ TEST(AdversarialTest, AWidthX264LeftInPlaceStaysValid) {
   }
 }
 
+TEST(AdversarialTest, ANoisyStraightStrandIsNotTakenForADiscOrBend) {
+  // A straight 60 px strand, noise 11 grey levels on a contrast of 68, blur 2.2: its calipers'
+  // widths scatter by about half a px, and a quadratic through 7 of them bent by a px or two over
+  // the band, which once refused frames 0 and 2 as "the edges curve (a disc or bend)". A bend
+  // counts only beyond 3σ of the widths' own scatter: every frame gives a width, which its σ
+  // covers (valid or imprecise; the noise leaves 0.2-0.5 px).
+  const AdversarialScene p = RandomAdversarialScene(TroubleClass::kPlain, 22);
+  AdversarialTruth t;
+  const std::vector<cv::Mat> frames = MatrixFrames(p, &t);
+  for (int i = 0; i < 4; ++i) {
+    const vision::StrandMeasurement m = MeasureAdversarialFrame(frames[i], p);
+    ASSERT_TRUE(vision::GivesWidth(m.status))
+        << "frame " << i << ": " << vision::FrameStatusName(m.status) << " " << m.detail;
+    EXPECT_LE(std::abs(m.width_px - t.width_px), 3.0 * m.width_sigma_px)
+        << "frame " << i << ": " << m.width_px << " ± " << m.width_sigma_px << " px, truth "
+        << t.width_px;
+  }
+}
+
 TEST(AdversarialTest, NozzleAloneNeverGivesAWidth) {
   for (uint64_t seed = 1; seed <= 6; ++seed) {
     const AdversarialScene p = RandomAdversarialScene(TroubleClass::kNoStrand, seed);

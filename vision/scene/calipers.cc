@@ -31,6 +31,7 @@ constexpr int kReferenceCalipers = 5;  // outside the band, for the occlusion ch
 constexpr double kMaxRefusedTemplates = 0.25;
 // How far the tip may lie from where it was placed along the axis: set by the nozzle's face on
 // both sides of the strand, or inferred from the outline (tip.h).
+constexpr double kMinBendSigmas = 3.0;    // a bend in the widths beyond their noise
 constexpr double kTipSigmaWidths = 0.25;  // an unconfirmed tip's doubt, in widths
 // Curvature of the width along the band: more than 1 px of sag, bending like a disc (|w''|/2 above
 // 0.25/w, i.e. a chord of a circle less than 4 widths in radius).
@@ -501,6 +502,24 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       atb += row * c.width_px;
     }
     const Eigen::Vector3d coef = ata.ldlt().solve(atb);
+    // How surely the widths bend: the quadratic term over its σ from these calipers' own scatter
+    // about the fit (noise of 11 grey levels on a 60 px strand bent a straight strand's widths by
+    // a px over the band).
+    double bend_sigmas = std::numeric_limits<double>::infinity();
+    {
+      double ss = 0;
+      int n = 0;
+      for (int k = run_begin; k < run_end; ++k) {
+        const Caliper& c = m->calipers[k];
+        if (!c.fitted) continue;
+        const double ds = c.s_px - s_mid;
+        const double r = c.width_px - (coef[0] + coef[1] * ds + coef[2] * ds * ds);
+        ss += r * r;
+        ++n;
+      }
+      const double c2_var = n > 3 ? ss / (n - 3) * ata.inverse()(2, 2) : 0.0;
+      if (c2_var > 0) bend_sigmas = std::abs(coef[2]) / std::sqrt(c2_var);
+    }
     if (!filament && used >= 5) {
       double ss = 0;
       for (const Caliper& c : m->calipers) {
@@ -534,7 +553,8 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     // (or a filament's along a long stretch) bend hundreds of widths more gently.
     const double sag = std::abs(coef[2]) * half * half;
     // Only a width bulging in the middle: a swell relaxing down the band bends the other way.
-    if (coef[2] < 0 && sag > kMaxSagPx && std::abs(coef[2]) > kMaxBend / med) {
+    if (coef[2] < 0 && sag > kMaxSagPx && std::abs(coef[2]) > kMaxBend / med &&
+        bend_sigmas > kMinBendSigmas) {
       return fail(FrameStatus::kNoStrand,
                   fmt::format("the edges curve: the width changes by {:.1f} px over the band (a "
                               "disc or bend, not a straight strand)",
