@@ -304,6 +304,21 @@ TEST(AdversarialTest, AWidthX264LeftInPlaceStaysValid) {
   }
 }
 
+TEST(AdversarialTest, AStripeCloseInsideADarkStrandIsFittedWithTheEdge) {
+  // A dark 62 px strand (42 on 146) with a stripe 88 levels brighter whose near edge lies 3.4 px
+  // inside its right silhouette, blur 1.1, through H.264: a window stopping short of the stripe
+  // held too little of the edge, and no caliper fitted both edges (`occluded`). The window now
+  // reaches onto the stripe and the edge is fitted with the stripe's step.
+  const AdversarialScene p = RandomAdversarialScene(TroubleClass::kSpecularStripe, 114);
+  AdversarialTruth t;
+  vision::X264Settings encoder;
+  for (const cv::Mat& frame : MatrixFrames(p, &t, &encoder)) {
+    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, encoder);
+    ASSERT_TRUE(m.valid()) << m.detail << ": " << Describe(p);
+    EXPECT_LE(std::abs(m.width_px - t.width_px), WrongTolerancePx(t.width_px)) << Describe(p);
+  }
+}
+
 TEST(AdversarialTest, ANoisyStraightStrandIsNotTakenForADiscOrBend) {
   // A straight 60 px strand, noise 11 grey levels on a contrast of 68, blur 2.2: its calipers'
   // widths scatter by about half a px, and a quadratic through 7 of them bent by a px or two over

@@ -37,6 +37,29 @@ struct StepModel {
   }
 };
 
+// The blurred step and a second one of the same blur: 7 parameters, the second step's amplitude
+// and position after the first five.
+enum { kC2 = 5, kE2 = 6 };
+struct InnerStepModel {
+  static constexpr int kN = 7;
+  void operator()(double du, double u, const double* p, double* value, double* j) const {
+    const double inv_s = 1.0 / p[kS];
+    const double z = (u - p[kE]) * inv_s, z2 = (u - p[kE2]) * inv_s;
+    double f, df, f2, df2;
+    StepShape(z, &f, &df);
+    StepShape(z2, &f2, &df2);
+    *value = p[kA] + p[kB] * du + p[kC] * f + p[kC2] * f2;
+    const double de = -p[kC] * df * inv_s, de2 = -p[kC2] * df2 * inv_s;
+    j[kA] = 1.0;
+    j[kB] = du;
+    j[kC] = f;
+    j[kE] = de;
+    j[kS] = de * z + de2 * z2;
+    j[kC2] = f2;
+    j[kE2] = de2;
+  }
+};
+
 // The blurred step with a blurred √d shading ramp on the object side (ι = +1: object at +u).
 struct ShadedStepModel {
   static constexpr int kN = 6;
@@ -139,6 +162,7 @@ EdgeFit Solve(const std::vector<EdgeSample>& samples, const Vec<Model::kN>& p0, 
   fit.base = p[kA];
   fit.slope_per_px = p[kB];
   if constexpr (N > kK) fit.shading = p[kK];
+  if constexpr (N > kE2) fit.inner_edge_px = p[kE2];  // InnerStepModel's
   const int dof = fit.samples - N;
   fit.rms = std::sqrt(lm.cost / fit.samples);
   const double residual_var = dof > 0 ? lm.cost / dof : 0.0;
@@ -201,6 +225,46 @@ EdgeFit FitBlurredStep(const std::vector<EdgeSample>& samples, double edge_guess
   return fit;
 }
 
+EdgeFit FitStepBeforeInnerStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
+                               double sigma_guess_px, double u_ref, double inner_guess_px) {
+  EdgeFit fit;
+  fit.samples = static_cast<int>(samples.size());
+  if (samples.size() < 12) return fit;
+  // The three levels from −u to +u: before the first step, between the two, after the second.
+  const double first = std::min(edge_guess_px, inner_guess_px);
+  const double second = std::max(edge_guess_px, inner_guess_px);
+  const double guard = 1.5 * sigma_guess_px + 0.5;
+  double sum[3] = {0, 0, 0};
+  int n[3] = {0, 0, 0};
+  double nearest = 1e30, middle_value = 0;
+  for (const auto& smp : samples) {
+    const int region = smp.u_px < first - guard ? 0 : smp.u_px > second + guard ? 2 : 1;
+    if (region == 1 && (smp.u_px < first + guard || smp.u_px > second - guard)) {
+      // Between the steps but within their blur: only the nearest to the middle, if no other.
+      const double d = std::abs(smp.u_px - 0.5 * (first + second));
+      if (d < nearest) nearest = d, middle_value = smp.value;
+      continue;
+    }
+    sum[region] += smp.value;
+    ++n[region];
+  }
+  if (n[0] == 0 || n[2] == 0) return fit;
+  const double lo = sum[0] / n[0], hi = sum[2] / n[2];
+  const double mid = n[1] > 0 ? sum[1] / n[1] : middle_value;
+  const bool inner_first = inner_guess_px < edge_guess_px;
+  Vec<InnerStepModel::kN> p;
+  p << lo, 0.0, inner_first ? hi - mid : mid - lo, edge_guess_px, std::max(sigma_guess_px, 0.5),
+      inner_first ? mid - lo : hi - mid, inner_guess_px;
+  fit = Solve(samples, p, u_ref, InnerStepModel());
+  fit.u_ref = u_ref;
+  fit.inner_step = fit.shading;
+  fit.shading = 0;
+  fit.contrast = fit.step;
+  const double apart = (fit.inner_edge_px - fit.edge_px) * (inner_first ? -1.0 : 1.0);
+  if (!(apart >= fit.sigma_px)) fit.converged = false;
+  return fit;
+}
+
 EdgeFit FitShadedStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
                       double sigma_guess_px, double u_ref, int object_side) {
   ShadedStepModel model;
@@ -234,6 +298,11 @@ double EdgeModelValue(const EdgeFit& fit, double u_px) {
     double g, dg;
     BlurredSqrt::Get()(fit.object_side * z, &g, &dg);
     value += fit.shading * g;
+  }
+  if (fit.inner_step != 0) {
+    double f2, df2;
+    StepShape((u_px - fit.inner_edge_px) / fit.sigma_px, &f2, &df2);
+    value += fit.inner_step * f2;
   }
   return value;
 }

@@ -30,6 +30,8 @@ struct EdgeFit {
   double slope_change_per_px = 0;  // FitTwoSlopeStep: slope at +u minus slope at −u
   double u_ref = 0;                // where the linear term is anchored
   int object_side = 0;             // FitShadedStep: the object's side (±1); 0 for the plain step
+  // FitStepBeforeInnerStep: the second step inside the object (0 without one) and where it lies.
+  double inner_step = 0, inner_edge_px = 0;
 };
 
 // The blurred step whose sides slope differently (a background gradient or texture on one side of
@@ -49,6 +51,15 @@ double EdgeModelValue(const EdgeFit& fit, double u_px);
 // 5-parameter dense solve costs less than Ceres' per-problem set-up.
 EdgeFit FitBlurredStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
                        double sigma_guess_px, double u_ref);
+
+// FitBlurredStep with a second step of the same blur inside the object, started at
+// inner_guess_px: a stripe's or a lens core's near edge, too close to the silhouette for the
+// window to stop short of it (the window then reaches onto the stripe):
+//   value(u) = base + slope·(u − u_ref) + step·Φ(z) + inner_step·Φ((u − inner_edge_px)/sigma_px).
+// edge_px is the silhouette's step. Not converged unless the two steps lie apart by at least the
+// blur, the inner one on inner_guess_px's side of the silhouette.
+EdgeFit FitStepBeforeInnerStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
+                               double sigma_guess_px, double u_ref, double inner_guess_px);
 
 // The blurred step with a lit cylinder's shading on the object side:
 //   value(u) = base + slope·(u − u_ref) + step·Φ(z) + shading·G(ι·z),  z = (u − edge_px)/sigma_px,

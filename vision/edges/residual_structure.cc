@@ -159,7 +159,7 @@ BandEdgeDoubt JudgeBandEdge(const GreyImage& img, const AxisFrame& f, const Clip
     }
     doubt.AddCaliper(e.rms, e.edge_sigma_px, e.samples, u1 - u0);
     blur.push_back(e.sigma_px);
-    plain = plain && e.object_side == 0;
+    plain = plain && e.object_side == 0 && e.inner_step == 0;
   }
   BandEdgeDoubt out;
   if (doubt.calipers() < 2) return out;

@@ -31,11 +31,11 @@ constexpr int kReferenceCalipers = 5;  // outside the band, for the occlusion ch
 constexpr double kMaxRefusedTemplates = 0.25;
 // How far the tip may lie from where it was placed along the axis: set by the nozzle's face on
 // both sides of the strand, or inferred from the outline (tip.h).
-constexpr double kMinBendSigmas = 3.0;    // a bend in the widths beyond their noise
 constexpr double kTipSigmaWidths = 0.25;  // an unconfirmed tip's doubt, in widths
 // Curvature of the width along the band: more than 1 px of sag, bending like a disc (|w''|/2 above
-// 0.25/w, i.e. a chord of a circle less than 4 widths in radius).
-constexpr double kMaxSagPx = 1.0, kMaxBend = 0.25;
+// 0.25/w, i.e. a chord of a circle less than 4 widths in radius), by more than 3σ of the calipers'
+// own scatter about it.
+constexpr double kMaxSagPx = 1.0, kMaxBend = 0.25, kMinBendSigmas = 3.0;
 // Whether a side's calipers show shading: each caliper's F statistic for the shading term is about
 // χ²(1) without shading (mean 1, σ √2), so their mean over n calipers stays near 1 ± √(2/n).
 // Shading is taken when the mean (each F capped, so that one odd caliper cannot decide) is 6σ
@@ -117,14 +117,36 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     inner_edge_px[side] = InnerEdgeDistance(img, f, band_s0, band_s1, e, side == 0 ? 1 : -1,
                                             std::min(0.45 * width0, 40.0), min_contrast);
   }
+  // An edge inside a dark silhouette (a glossy strand's stripe) closer to it than a window needs
+  // to stop short of it, the blur as it stands: the window reaches onto the stripe instead, and
+  // the edge is fitted with the stripe's step (FitStepBeforeInnerStep; such frames had no caliper
+  // fit both edges). Only inside a silhouette darker than its background, whose edge is a plain
+  // step: a lit strand's shading by its rim is no second step.
+  // Decided once, at the first guess of the blur: the windows and models agree from pass to pass.
+  bool inner_step[2] = {false, false};
+  for (int side = 0; side < 2; ++side) {
+    inner_step[side] = g.polarity == Polarity::kDarkOnBright &&
+                       std::isfinite(inner_edge_px[side]) &&
+                       inner_edge_px[side] - 2.5 * sigma_guess - 1.0 < 2.0 * sigma_guess + 1.0;
+    if (inner_step[side]) shade[side] = 0;
+  }
   // One side's edge window about e0: `outer` px into the background, `inner` into the object
-  // but short of an edge inside it by the blur (sigma_guess as it stands).
+  // but short of an edge inside it by the blur (sigma_guess as it stands), or past it.
   struct Window {
     double u0, u1;
   };
   const auto window = [&](int side, double e0, double outer, double inner) {
-    const double in = std::min(inner, std::max(3.0, inner_edge_px[side] - 2.5 * sigma_guess - 1.0));
+    const double in =
+        inner_step[side]
+            ? std::min(0.5 * width0, inner_edge_px[side] + 2.5 * sigma_guess + 2.0)
+            : std::min(inner, std::max(3.0, inner_edge_px[side] - 2.5 * sigma_guess - 1.0));
     return side == 0 ? Window{e0 - outer, e0 + in} : Window{e0 - in, e0 + outer};
+  };
+  // A side's plain step in the window's samples about e0.
+  const auto fit_plain = [&](int side, double e0) {
+    return inner_step[side] ? FitStepBeforeInnerStep(samples, e0, sigma_guess, e0,
+                                                     e0 + (side == 0 ? 1 : -1) * inner_edge_px[side])
+                            : FitBlurredStep(samples, e0, sigma_guess, e0);
   };
   // Saturation is judged on the decoded frame: where a codec put the clipped plateau.
   const double mid_s = 0.5 * (band_s0 + band_s1), reach_px = 12.0;
@@ -185,7 +207,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
         // plain edge its extra parameter costs precision for nothing.
         const int model = shade[side];
         EdgeFit plain, shaded;
-        if (model != 1) plain = FitBlurredStep(samples, e0, sigma_guess, e0);
+        if (model != 1) plain = fit_plain(side, e0);
         if (model != 0) shaded = FitShadedStep(samples, e0, sigma_guess, e0, side == 0 ? 1 : -1);
         if (!usable(plain)) plain.converged = false;
         if (!usable(shaded)) shaded.converged = false;
@@ -304,7 +326,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
         if (!GatherEdgeSamples(img, f, s0, s1, u0, u1, clip, &samples)) break;
         const EdgeFit again = shade[side] == 1
                                   ? FitShadedStep(samples, e0, sigma_guess, e0, side == 0 ? 1 : -1)
-                                  : FitBlurredStep(samples, e0, sigma_guess, e0);
+                                  : fit_plain(side, e0);
         if (UsableFit(again, u0, u1, side == 0 ? g.left_sign : g.right_sign)) fit = again;
       }
     }
@@ -633,7 +655,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
         if (!ok) break;
         const EdgeFit fit = shade[side] == 1
                                 ? FitShadedStep(samples, e0, sigma_guess, e0, side == 0 ? 1 : -1)
-                                : FitBlurredStep(samples, e0, sigma_guess, e0);
+                                : fit_plain(side, e0);
         ok = UsableFit(fit, u0, u1, side == 0 ? g.left_sign : g.right_sign);
         edge[side] = fit.edge_px;
       }

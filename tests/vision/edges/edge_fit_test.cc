@@ -73,6 +73,39 @@ TEST(EdgeFitTest, TwoSlopeStepFindsAnEdgeWhoseBackgroundSlopesOnOneSide) {
   for (const EdgeSample& smp : s) EXPECT_NEAR(EdgeModelValue(two, smp.u_px), smp.value, 0.2);
 }
 
+// A dark silhouette (60 on a background of 200) with a bright stripe (170) 4 px inside it, all
+// blurred by numerical convolution: a window onto the stripe pulls the plain step inward by far more
+// than its noise would; with the stripe's step in the model the silhouette is where it lies, on
+// either side of the object.
+TEST(EdgeFitTest, StepBeforeInnerStepPutsTheSilhouetteWhereAStripeBesideItPulledThePlainStep) {
+  const double edge = 0.3, blur = 1.6, gap = 4.0;
+  for (const int inward : {+1, -1}) {
+    const auto scene = [&](double t) {
+      const double d = (t - edge) * inward;  // into the object
+      return d < 0 ? 200.0 : d < gap ? 60.0 : 170.0;
+    };
+    std::vector<EdgeSample> s;
+    for (double u = -12; u <= 12; u += 0.25) {
+      double sum = 0, weight = 0;
+      for (double t = u - 6 * blur; t <= u + 6 * blur; t += 0.01) {
+        const double w = std::exp(-0.5 * (t - u) * (t - u) / (blur * blur));
+        sum += w * scene(t);
+        weight += w;
+      }
+      s.push_back({static_cast<float>(u), static_cast<float>(sum / weight)});
+    }
+    const EdgeFit plain = FitBlurredStep(s, 0.0, 1.5, 0.0);
+    const EdgeFit both = FitStepBeforeInnerStep(s, 0.0, 1.5, 0.0, inward * gap);
+    ASSERT_TRUE(both.converged) << inward;
+    EXPECT_GT(std::abs(plain.edge_px - edge), 0.3) << inward;
+    EXPECT_NEAR(both.edge_px, edge, 0.01) << inward;
+    EXPECT_NEAR(both.inner_edge_px, edge + inward * gap, 0.01) << inward;
+    EXPECT_NEAR(both.sigma_px, blur, 0.02) << inward;
+    EXPECT_NEAR(both.contrast, inward * (60.0 - 200.0), 0.5) << inward;
+    for (const EdgeSample& smp : s) EXPECT_NEAR(EdgeModelValue(both, smp.u_px), smp.value, 0.2);
+  }
+}
+
 TEST(EdgeFitTest, ReportedSigmaMatchesScatter) {
   // The edge's standard error from the residuals should match its spread over noisy repeats.
   std::mt19937 rng(7);
