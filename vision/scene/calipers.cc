@@ -117,29 +117,33 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     inner_edge_px[side] = InnerEdgeDistance(img, f, band_s0, band_s1, e, side == 0 ? 1 : -1,
                                             std::min(0.45 * width0, 40.0), min_contrast);
   }
-  // An edge inside a dark silhouette (a glossy strand's stripe) closer to it than a window needs
-  // to stop short of it, the blur as it stands: the window reaches onto the stripe instead, and
-  // the edge is fitted with the stripe's step (FitStepBeforeInnerStep; such frames had no caliper
-  // fit both edges). Only inside a silhouette darker than its background, whose edge is a plain
-  // step: a lit strand's shading by its rim is no second step.
-  // Decided once, at the first guess of the blur: the windows and models agree from pass to pass.
+  // How far inside a side's window may reach and stop short of an edge inside the object by the
+  // blur (sigma_guess as it stands).
+  const auto short_of_inner_edge = [&](int side) {
+    return inner_edge_px[side] - 2.5 * sigma_guess - 1.0;
+  };
+  // An edge inside a dark silhouette (a glossy strand's stripe) so close that a window stopping
+  // short of it cannot hold the silhouette's inner flank (2 blurs and a px; such frames had no
+  // caliper fit both edges): the window reaches past it onto the stripe, and the edge is fitted
+  // with the stripe's step (FitStepBeforeInnerStep). Only inside a silhouette darker than its
+  // background, whose edge is a plain step: a lit strand's shading by its rim is no second step.
+  // Decided once, at the first guess of the blur, so that windows and models agree in every pass.
   bool inner_step[2] = {false, false};
   for (int side = 0; side < 2; ++side) {
     inner_step[side] = g.polarity == Polarity::kDarkOnBright &&
                        std::isfinite(inner_edge_px[side]) &&
-                       inner_edge_px[side] - 2.5 * sigma_guess - 1.0 < 2.0 * sigma_guess + 1.0;
+                       short_of_inner_edge(side) < 2.0 * sigma_guess + 1.0;
     if (inner_step[side]) shade[side] = 0;
   }
   // One side's edge window about e0: `outer` px into the background, `inner` into the object
-  // but short of an edge inside it by the blur (sigma_guess as it stands), or past it.
+  // but short of an edge inside it, or onto its far side (inner_step).
   struct Window {
     double u0, u1;
   };
   const auto window = [&](int side, double e0, double outer, double inner) {
-    const double in =
-        inner_step[side]
-            ? std::min(0.5 * width0, inner_edge_px[side] + 2.5 * sigma_guess + 2.0)
-            : std::min(inner, std::max(3.0, inner_edge_px[side] - 2.5 * sigma_guess - 1.0));
+    const double in = inner_step[side]
+                          ? std::min(0.5 * width0, inner_edge_px[side] + 2.5 * sigma_guess + 2.0)
+                          : std::min(inner, std::max(3.0, short_of_inner_edge(side)));
     return side == 0 ? Window{e0 - outer, e0 + in} : Window{e0 - in, e0 + outer};
   };
   // A side's plain step in the window's samples about e0.
