@@ -173,6 +173,17 @@ std::vector<cv::Mat> MatrixFrames(const AdversarialScene& p, AdversarialTruth* t
   return RenderAdversarial(p, 4, Scratch().string(), t, encoder);
 }
 
+// The scene's four matrix frames, each valid and within the matrix's tolerance of the truth.
+void ExpectMatrixFramesValidAndRight(const AdversarialScene& p) {
+  AdversarialTruth t;
+  vision::X264Settings encoder;
+  for (const cv::Mat& frame : MatrixFrames(p, &t, &encoder)) {
+    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, encoder);
+    ASSERT_TRUE(m.valid()) << m.detail << ": " << Describe(p);
+    EXPECT_LE(std::abs(m.width_px - t.width_px), WrongTolerancePx(t.width_px)) << Describe(p);
+  }
+}
+
 TEST(AdversarialTest, AStrandAndAHairUnderANozzleAtTheBackgroundsLevelAreAmbiguous) {
   // An 83 px strand 19° off vertical and a 10 px hair beside it, under a nozzle 2 grey levels
   // above the background: no face shows beside either. What the columns beside them read are
@@ -295,13 +306,7 @@ TEST(AdversarialTest, AWidthX264LeftInPlaceStaysValid) {
   // second pass moves it by hardly more than its noise, and the frames stay valid and right.
   const AdversarialScene p = RandomAdversarialScene(TroubleClass::kPlain, 3);
   ASSERT_EQ(p.codec, Codec::kH264);
-  AdversarialTruth t;
-  vision::X264Settings encoder;
-  for (const cv::Mat& frame : MatrixFrames(p, &t, &encoder)) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, encoder);
-    ASSERT_TRUE(m.valid()) << m.detail << ": " << Describe(p);
-    EXPECT_LE(std::abs(m.width_px - t.width_px), WrongTolerancePx(t.width_px)) << Describe(p);
-  }
+  ExpectMatrixFramesValidAndRight(p);
 }
 
 TEST(AdversarialTest, AStripeCloseInsideADarkStrandIsFittedWithTheEdge) {
@@ -310,13 +315,7 @@ TEST(AdversarialTest, AStripeCloseInsideADarkStrandIsFittedWithTheEdge) {
   // held too little of the edge, and no caliper fitted both edges (`occluded`). The window now
   // reaches onto the stripe and the edge is fitted with the stripe's step.
   const AdversarialScene p = RandomAdversarialScene(TroubleClass::kSpecularStripe, 114);
-  AdversarialTruth t;
-  vision::X264Settings encoder;
-  for (const cv::Mat& frame : MatrixFrames(p, &t, &encoder)) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, encoder);
-    ASSERT_TRUE(m.valid()) << m.detail << ": " << Describe(p);
-    EXPECT_LE(std::abs(m.width_px - t.width_px), WrongTolerancePx(t.width_px)) << Describe(p);
-  }
+  ExpectMatrixFramesValidAndRight(p);
 }
 
 TEST(AdversarialTest, ANoisyStraightStrandIsNotTakenForADiscOrBend) {

@@ -46,14 +46,12 @@ TEST(EdgeFitTest, RecoversEdgeWithoutNoise) {
   EXPECT_NEAR(f.step, -160, 0.5);
 }
 
-// A background that slopes up to a flat object's silhouette (a lamp's gradient, a textured bed),
-// blurred by numerical convolution: the plain step trades the slope's bend at the edge against the
-// edge's position; the two-slope step describes it.
-TEST(EdgeFitTest, TwoSlopeStepFindsAnEdgeWhoseBackgroundSlopesOnOneSide) {
-  const double edge = 0.3, blur = 2.0, gradient = 4.0;  // grey levels per px, left of the edge
-  const auto scene = [&](double t) { return t < edge ? 60 + gradient * (t - edge) : 200.0; };
+// A scene's profile (grey level at t px) blurred by numerical convolution with a Gaussian, sampled
+// every 0.25 px over [from, to].
+template <typename Scene>
+std::vector<EdgeSample> NumericallyBlurred(const Scene& scene, double blur, double from, double to) {
   std::vector<EdgeSample> s;
-  for (double u = -14; u <= 14; u += 0.25) {
+  for (double u = from; u <= to; u += 0.25) {
     double sum = 0, weight = 0;
     for (double t = u - 6 * blur; t <= u + 6 * blur; t += 0.01) {
       const double w = std::exp(-0.5 * (t - u) * (t - u) / (blur * blur));
@@ -62,6 +60,16 @@ TEST(EdgeFitTest, TwoSlopeStepFindsAnEdgeWhoseBackgroundSlopesOnOneSide) {
     }
     s.push_back({static_cast<float>(u), static_cast<float>(sum / weight)});
   }
+  return s;
+}
+
+// A background that slopes up to a flat object's silhouette (a lamp's gradient, a textured bed),
+// blurred by numerical convolution: the plain step trades the slope's bend at the edge against the
+// edge's position; the two-slope step describes it.
+TEST(EdgeFitTest, TwoSlopeStepFindsAnEdgeWhoseBackgroundSlopesOnOneSide) {
+  const double edge = 0.3, blur = 2.0, gradient = 4.0;  // grey levels per px, left of the edge
+  const auto scene = [&](double t) { return t < edge ? 60 + gradient * (t - edge) : 200.0; };
+  const std::vector<EdgeSample> s = NumericallyBlurred(scene, blur, -14, 14);
   const EdgeFit plain = FitBlurredStep(s, 0.0, 1.5, 0.0);
   const EdgeFit two = FitTwoSlopeStep(s, 0.0, 1.5, 0.0);
   ASSERT_TRUE(plain.converged && two.converged);
@@ -84,16 +92,7 @@ TEST(EdgeFitTest, StepBeforeInnerStepPutsTheSilhouetteWhereAStripeBesideItPulled
       const double d = (t - edge) * inward;  // into the object
       return d < 0 ? 200.0 : d < gap ? 60.0 : 170.0;
     };
-    std::vector<EdgeSample> s;
-    for (double u = -12; u <= 12; u += 0.25) {
-      double sum = 0, weight = 0;
-      for (double t = u - 6 * blur; t <= u + 6 * blur; t += 0.01) {
-        const double w = std::exp(-0.5 * (t - u) * (t - u) / (blur * blur));
-        sum += w * scene(t);
-        weight += w;
-      }
-      s.push_back({static_cast<float>(u), static_cast<float>(sum / weight)});
-    }
+    const std::vector<EdgeSample> s = NumericallyBlurred(scene, blur, -12, 12);
     const EdgeFit plain = FitBlurredStep(s, 0.0, 1.5, 0.0);
     const EdgeFit both = FitStepBeforeInnerStep(s, 0.0, 1.5, 0.0, inward * gap);
     ASSERT_TRUE(both.converged) << inward;
