@@ -137,11 +137,12 @@ double Evaluate(const std::vector<EdgeSample>& samples, const Vec<Model::kN>& p,
   return cost;
 }
 
-// Levenberg–Marquardt from p; fills the fit's common fields. The position's standard error comes
-// from the inverse normal matrix scaled by the residual variance.
+// Levenberg–Marquardt from p; fills the fit's common fields, and *solved (when given) with all
+// the parameters, for the model's own. The position's standard error comes from the inverse
+// normal matrix scaled by the residual variance.
 template <typename Model>
 EdgeFit Solve(const std::vector<EdgeSample>& samples, const Vec<Model::kN>& p0, double u_ref,
-              const Model& model) {
+              const Model& model, Vec<Model::kN>* solved = nullptr) {
   constexpr int N = Model::kN;
   EdgeFit fit;
   fit.samples = static_cast<int>(samples.size());
@@ -161,8 +162,7 @@ EdgeFit Solve(const std::vector<EdgeSample>& samples, const Vec<Model::kN>& p0, 
   fit.step = p[kC];
   fit.base = p[kA];
   fit.slope_per_px = p[kB];
-  if constexpr (N > kK) fit.shading = p[kK];
-  if constexpr (N > kE2) fit.inner_edge_px = p[kE2];  // InnerStepModel's
+  if (solved) *solved = p;
   const int dof = fit.samples - N;
   fit.rms = std::sqrt(lm.cost / fit.samples);
   const double residual_var = dof > 0 ? lm.cost / dof : 0.0;
@@ -197,12 +197,15 @@ bool PlateauStart(const std::vector<EdgeSample>& samples, double edge_guess_px, 
 }  // namespace
 
 namespace {
-// A step model fitted from the plateaus' levels on either side of the guess (extra terms from 0).
+// A step model fitted from the plateaus' levels on either side of the guess (extra terms from 0);
+// *solved as Solve's, zero when there was nothing to fit.
 template <typename Model>
 EdgeFit FitStepModel(const std::vector<EdgeSample>& samples, double edge_guess_px,
-                     double sigma_guess_px, double u_ref, size_t min_samples, const Model& model) {
+                     double sigma_guess_px, double u_ref, size_t min_samples, const Model& model,
+                     Vec<Model::kN>* solved = nullptr) {
   EdgeFit fit;
   fit.samples = static_cast<int>(samples.size());
+  if (solved) solved->setZero();
   double lo, hi;
   if (samples.size() < min_samples ||
       !PlateauStart(samples, edge_guess_px, sigma_guess_px, &lo, &hi))
@@ -212,7 +215,7 @@ EdgeFit FitStepModel(const std::vector<EdgeSample>& samples, double edge_guess_p
   p[kC] = hi - lo;
   p[kE] = edge_guess_px;
   p[kS] = std::max(sigma_guess_px, 0.5);
-  fit = Solve(samples, p, u_ref, model);
+  fit = Solve(samples, p, u_ref, model, solved);
   fit.u_ref = u_ref;
   return fit;
 }
@@ -255,10 +258,11 @@ EdgeFit FitStepBeforeInnerStep(const std::vector<EdgeSample>& samples, double ed
   Vec<InnerStepModel::kN> p;
   p << lo, 0.0, inner_first ? hi - mid : mid - lo, edge_guess_px, std::max(sigma_guess_px, 0.5),
       inner_first ? mid - lo : hi - mid, inner_guess_px;
-  fit = Solve(samples, p, u_ref, InnerStepModel());
+  Vec<InnerStepModel::kN> solved;
+  fit = Solve(samples, p, u_ref, InnerStepModel(), &solved);
   fit.u_ref = u_ref;
-  fit.inner_step = fit.shading;
-  fit.shading = 0;
+  fit.inner_step = solved[kC2];
+  fit.inner_edge_px = solved[kE2];
   fit.contrast = fit.step;
   const double apart = (fit.inner_edge_px - fit.edge_px) * (inner_first ? -1.0 : 1.0);
   if (!(apart >= fit.sigma_px)) fit.converged = false;
@@ -269,7 +273,9 @@ EdgeFit FitShadedStep(const std::vector<EdgeSample>& samples, double edge_guess_
                       double sigma_guess_px, double u_ref, int object_side) {
   ShadedStepModel model;
   model.iota = object_side > 0 ? 1.0 : -1.0;
-  EdgeFit fit = FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 10, model);
+  Vec<ShadedStepModel::kN> solved;
+  EdgeFit fit = FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 10, model, &solved);
+  fit.shading = solved[kK];
   if (fit.samples < 10) return fit;
   fit.object_side = object_side > 0 ? 1 : -1;
   double g2, dg2;
@@ -280,10 +286,10 @@ EdgeFit FitShadedStep(const std::vector<EdgeSample>& samples, double edge_guess_
 
 EdgeFit FitTwoSlopeStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
                         double sigma_guess_px, double u_ref) {
-  EdgeFit fit =
-      FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 10, TwoSlopeStepModel());
-  fit.slope_change_per_px = fit.shading;
-  fit.shading = 0;
+  Vec<TwoSlopeStepModel::kN> solved;
+  EdgeFit fit = FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 10,
+                             TwoSlopeStepModel(), &solved);
+  fit.slope_change_per_px = solved[kK];
   fit.contrast = fit.step;
   return fit;
 }

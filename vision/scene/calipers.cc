@@ -528,35 +528,32 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       atb += row * c.width_px;
     }
     const Eigen::Vector3d coef = ata.ldlt().solve(atb);
-    // How surely the widths bend: the quadratic term over its σ from these calipers' own scatter
-    // about the fit (noise of 11 grey levels on a 60 px strand bent a straight strand's widths by
-    // a px over the band).
-    double bend_sigmas = std::numeric_limits<double>::infinity();
-    {
-      double ss = 0;
-      int n = 0;
-      for (int k = run_begin; k < run_end; ++k) {
-        const Caliper& c = m->calipers[k];
-        if (!c.fitted) continue;
-        const double ds = c.s_px - s_mid;
-        const double r = c.width_px - (coef[0] + coef[1] * ds + coef[2] * ds * ds);
-        ss += r * r;
-        ++n;
-      }
-      const double c2_var = n > 3 ? ss / (n - 3) * ata.inverse()(2, 2) : 0.0;
-      if (c2_var > 0) bend_sigmas = std::abs(coef[2]) / std::sqrt(c2_var);
+    const Eigen::Matrix3d ata_inv = ata.inverse();
+    const auto trend = [&](double s_px) {
+      const double ds = s_px - s_mid;
+      return coef[0] + coef[1] * ds + coef[2] * ds * ds;
+    };
+    // The widths' scatter about the trend: every fitted caliper's, and the mean's (the inliers').
+    double ss_fitted = 0, ss_inliers = 0;
+    int n_fitted = 0;
+    for (int k = run_begin; k < run_end; ++k) {
+      const Caliper& c = m->calipers[k];
+      if (!c.fitted) continue;
+      const double r = c.width_px - trend(c.s_px);
+      ss_fitted += r * r;
+      ++n_fitted;
+      if (c.inlier) ss_inliers += r * r;
     }
+    // How surely the widths bend: the quadratic term over its σ from the fitted calipers' scatter
+    // (noise of 11 grey levels on a 60 px strand bent a straight strand's widths by a px over the
+    // band).
+    const double bend_var = n_fitted > 3 ? ss_fitted / (n_fitted - 3) * ata_inv(2, 2) : 0.0;
+    const double bend_sigmas = bend_var > 0 ? std::abs(coef[2]) / std::sqrt(bend_var)
+                                            : std::numeric_limits<double>::infinity();
     if (!filament && used >= 5) {
-      double ss = 0;
-      for (const Caliper& c : m->calipers) {
-        if (!c.inlier) continue;
-        const double ds = c.s_px - s_mid;
-        const double r = c.width_px - (coef[0] + coef[1] * ds + coef[2] * ds * ds);
-        ss += r * r;
-      }
-      trend_var = ss / (used - 3);
+      trend_var = ss_inliers / (used - 3);
       // Only a width that clearly changes: the slope of a straight strand's noisy widths is noise.
-      const double slope_sigma = std::sqrt(trend_var * ata.inverse()(1, 1));
+      const double slope_sigma = std::sqrt(trend_var * ata_inv(1, 1));
       if (std::abs(coef[1]) > 3.0 * slope_sigma) width_slope = coef[1];
       // The band's width is the mean over all its rows: where the width changes along it (a swell
       // relaxing), a caliper missing from the mean (no edge found, an outlier) takes its part of
@@ -566,7 +563,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
         int n_all = 0, n_in = 0;
         for (int k = run_begin; k < run_end; ++k) {
           const Caliper& c = m->calipers[k];
-          const double ds = c.s_px - s_mid, w = coef[0] + coef[1] * ds + coef[2] * ds * ds;
+          const double w = trend(c.s_px);
           all += w;
           ++n_all;
           if (c.inlier) in += w, ++n_in;
