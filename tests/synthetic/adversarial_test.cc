@@ -277,18 +277,13 @@ TEST(AdversarialTest, ALitCylinderThatTradedItsBlurForAStripeIsNotTrusted) {
   }
 }
 
-TEST(AdversarialTest, AWidthX264MovedCarriesTheCodecsDoubt) {
-  // A lit strand through x264 at its defaults (matrix seed 109 of the unseen set, bend below the
-  // band, with a third of its noise): x264's adaptive quantisation moved its edges so that every
-  // frame came out 0.32 px narrow, valid at σ 0.085. A second pass through x264 moves it by
-  // 0.15-0.38 px: that doubt makes the frames imprecise, not confidently wrong.
-  AdversarialScene p = RandomAdversarialScene(TroubleClass::kBend, 109);
-  p.noise_sigma *= 0.3;
-  ASSERT_EQ(p.codec, Codec::kH264);
+// The scene's four matrix frames each give a width within 3σ of the truth, and within the
+// matrix's tolerance where valid.
+void ExpectMatrixFramesWithinTheirSigma(const AdversarialScene& p) {
   AdversarialTruth t;
   vision::X264Settings encoder;
   const std::vector<cv::Mat> frames = MatrixFrames(p, &t, &encoder);
-  ASSERT_TRUE(encoder.found);
+  if (p.codec == Codec::kH264) ASSERT_TRUE(encoder.found);
   for (const cv::Mat& frame : frames) {
     const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, encoder);
     ASSERT_TRUE(m.gave_width()) << m.detail << ": " << Describe(p);
@@ -299,6 +294,29 @@ TEST(AdversarialTest, AWidthX264MovedCarriesTheCodecsDoubt) {
       EXPECT_LE(std::abs(m.width_px - t.width_px), WrongTolerancePx(t.width_px)) << Describe(p);
     }
   }
+}
+
+TEST(AdversarialTest, AWidthX264MovedCarriesTheCodecsDoubt) {
+  // A lit strand through x264 at its defaults (matrix seed 109 of the unseen set, bend below the
+  // band, with a third of its noise): x264's adaptive quantisation moved its edges so that every
+  // frame came out 0.32 px narrow, valid at σ 0.085. A second pass through x264 moves it by
+  // 0.15-0.38 px: that doubt makes the frames imprecise, not confidently wrong.
+  AdversarialScene p = RandomAdversarialScene(TroubleClass::kBend, 109);
+  p.noise_sigma *= 0.3;
+  ASSERT_EQ(p.codec, Codec::kH264);
+  ExpectMatrixFramesWithinTheirSigma(p);
+}
+
+TEST(AdversarialTest, AColourCamerasFlatStrandIsNotTakenForALitOne) {
+  // A flat dark strand (119 on 201) through a Bayer mosaic, bilinear demosaicing and H.264, blur
+  // 0.7, with a third of its noise (matrix seed 21): the demosaiced luma's edge, whose shape
+  // changes with the mosaic's phase along the tilted edge, looked shaded on its left side, and
+  // the shaded step put it 0.2-0.5 px outward: three frames valid at σ 0.10-0.13, one of them
+  // 3.6σ off. Shading is taken only where most calipers show it, beyond what a step through a
+  // symmetric PSF of any peakedness describes.
+  AdversarialScene p = RandomAdversarialScene(TroubleClass::kBayer, 21);
+  p.noise_sigma *= 0.3;
+  ExpectMatrixFramesWithinTheirSigma(p);
 }
 
 TEST(AdversarialTest, AWidthX264LeftInPlaceStaysValid) {

@@ -102,6 +102,30 @@ struct TwoSlopeStepModel {
   }
 };
 
+// The blurred step through a symmetric PSF that is not a Gaussian (more peaked, or flatter: a
+// colour camera's luma mixes channels demosaiced at different blurs): the Gram–Charlier term
+// k·H(z), H(z) = φ(z)·(3z − z³), odd about the edge, so the edge stays the step's middle.
+struct PeakedStepModel {
+  static constexpr int kN = 6;
+  void operator()(double du, double u, const double* p, double* value, double* j) const {
+    const double inv_s = 1.0 / p[kS];
+    const double z = (u - p[kE]) * inv_s;
+    double f, df;
+    StepShape(z, &f, &df);
+    const double z2 = z * z;
+    const double h = df * z * (3.0 - z2);
+    const double dh = df * (z2 * z2 - 6.0 * z2 + 3.0);
+    *value = p[kA] + p[kB] * du + p[kC] * f + p[kK] * h;
+    const double de = -(p[kC] * df + p[kK] * dh) * inv_s;
+    j[kA] = 1.0;
+    j[kB] = du;
+    j[kC] = f;
+    j[kE] = de;
+    j[kS] = de * z;
+    j[kK] = h;
+  }
+};
+
 // A thin line's blurred profile, close to a Gaussian; symmetric, so its centre is unbiased.
 struct LineModel {
   static constexpr int kN = 5;
@@ -281,6 +305,13 @@ EdgeFit FitShadedStep(const std::vector<EdgeSample>& samples, double edge_guess_
   double g2, dg2;
   BlurredSqrt::Get()(2.0, &g2, &dg2);
   fit.contrast = fit.step + model.iota * fit.shading * g2;
+  return fit;
+}
+
+EdgeFit FitPeakedStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
+                      double sigma_guess_px, double u_ref) {
+  EdgeFit fit = FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 10, PeakedStepModel());
+  fit.contrast = fit.step;
   return fit;
 }
 

@@ -48,7 +48,19 @@ double ShadingEvidenceSigmas(const std::vector<double>& f) {
   const double n = static_cast<double>(f.size());
   return (sum / n - 1.0 - 10.0 / n) / std::sqrt(2.0 / n);
 }
-bool ShadingEvident(const std::vector<double>& f) { return ShadingEvidenceSigmas(f) > 6.0; }
+// On a strand's band, most calipers must show it too (their median F beyond kMinMedianShadingF):
+// a lit cylinder's shading is the same all along the band, while a colour camera's demosaicing
+// artefacts change with the Bayer phase along a tilted edge and made a few calipers of a flat
+// strand's edge look strongly shaded (F 30–70 on 3 of 7, the rest below 3). Not on a filament's
+// stretch, parts of which gear and knurl marks spoil (on Greeff's lit filament the median left 5
+// frames of 281 measured afresh without the shading they have).
+constexpr double kMinMedianShadingF = 4.0;
+bool ShadingEvident(const std::vector<double>& f, bool strand) {
+  return ShadingEvidenceSigmas(f) > 6.0 && (!strand || Median(f) > kMinMedianShadingF);
+}
+// A caliper's evidence for shading over the plain step from which it is weighed against the
+// symmetric alternative (FitPeakedStep) as well: below it, it does not decide.
+constexpr double kPeakedCheckEvidence = 4.0;
 
 // A fit counts when it converged inside its window [u0, u1] (not within 1 px of its ends) with
 // the edge's expected sign of contrast.
@@ -222,14 +234,36 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
           // And where the silhouette moves: shading pulls a plain fit inward, so the shaded edge
           // lies outward of it; structured noise moves it either way.
           double evidence = 0, outward = 0;
-          if (shaded.converged && !plain.converged) {
-            evidence = 1e9;
-            outward = 1.0;
-          } else if (shaded.converged && plain.converged && shaded.samples > 6) {
-            const double rss_p = plain.rms * plain.rms * plain.samples;
+          if (shaded.converged && shaded.samples > 6) {
             const double rss_s = shaded.rms * shaded.rms * shaded.samples;
-            evidence = (rss_p - rss_s) / std::max(1e-12, rss_s / (shaded.samples - 6));
-            outward = (shaded.edge_px - plain.edge_px) * (side == 0 ? -1.0 : 1.0);
+            const double unit = std::max(1e-12, rss_s / (shaded.samples - 6));
+            double rss_alt = std::numeric_limits<double>::infinity();
+            double alt_edge_px = 0;
+            if (plain.converged) {
+              rss_alt = plain.rms * plain.rms * plain.samples;
+              alt_edge_px = plain.edge_px;
+            }
+            // Shading is one-sided; a step through a PSF that is not a Gaussian differs from the
+            // plain step on both sides alike, and the shaded model takes part of that too (a
+            // colour camera's demosaiced luma on a flat strand, at low noise, looked shaded on
+            // one side, 0.3 px outward). Only what the symmetric alternative cannot describe
+            // counts.
+            if ((rss_alt - rss_s) / unit > kPeakedCheckEvidence && !inner_step[side]) {
+              const EdgeFit& start = plain.converged ? plain : shaded;
+              const EdgeFit peaked = FitPeakedStep(samples, start.edge_px, start.sigma_px, e0);
+              const double rss_k = peaked.rms * peaked.rms * peaked.samples;
+              if (usable(peaked) && rss_k < rss_alt) {
+                rss_alt = rss_k;
+                alt_edge_px = peaked.edge_px;
+              }
+            }
+            if (std::isinf(rss_alt)) {
+              evidence = 1e9;
+              outward = 1.0;
+            } else {
+              evidence = std::max(0.0, rss_alt - rss_s) / unit;
+              outward = (shaded.edge_px - alt_edge_px) * (side == 0 ? -1.0 : 1.0);
+            }
           }
           if (plain.converged || shaded.converged) {
             shade_evidence[side].push_back(evidence);
@@ -258,7 +292,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     for (int side = 0; side < 2; ++side) {
       if (shade[side] >= 0) continue;
       const double shift = Median(shade_shift[side]);
-      shade[side] = ShadingEvident(shade_evidence[side]) && shift > kMinShadingShiftPx;
+      shade[side] = ShadingEvident(shade_evidence[side], !filament) && shift > kMinShadingShiftPx;
       // A side taken as plain may still be shaded, whatever the evidence says: noise hides the
       // shading of a strand lit almost flat (ambient 0.9, which pulls a plain fit 0.07 px
       // inward at blur 2.9) long before it stops mattering. The width's σ carries the shaded

@@ -105,6 +105,39 @@ TEST(EdgeFitTest, StepBeforeInnerStepPutsTheSilhouetteWhereAStripeBesideItPulled
   }
 }
 
+// A flat strand's edge through a PSF that is not a Gaussian (a colour camera's luma: channels
+// demosaiced at different blurs), 60 % at blur 0.9 and 40 % at 2.2, against a lit cylinder's edge
+// (a √d ramp inside the silhouette) through a Gaussian. The symmetric peaked step describes the
+// first to the edge, the shaded step no better than it; the shaded step describes the second far
+// better than the peaked one. What tells a lit cylinder's shading from a PSF's shape
+// (calipers.cc).
+TEST(EdgeFitTest, PeakedStepDescribesANonGaussianPsfButNotALitCylindersShading) {
+  const double edge = 0.3;
+  const auto flat = [&](double t) { return t < edge ? 200.0 : 60.0; };  // object at +u
+  const std::vector<EdgeSample> a = NumericallyBlurred(flat, 0.9, -12, 12);
+  const std::vector<EdgeSample> b = NumericallyBlurred(flat, 2.2, -12, 12);
+  std::vector<EdgeSample> mixed;
+  for (size_t i = 0; i < a.size(); ++i)
+    mixed.push_back({a[i].u_px, 0.6f * a[i].value + 0.4f * b[i].value});
+  const auto rss = [](const EdgeFit& f) { return f.rms * f.rms * f.samples; };
+  const EdgeFit plain = FitBlurredStep(mixed, 0.0, 1.5, 0.0);
+  const EdgeFit shaded = FitShadedStep(mixed, 0.0, 1.5, 0.0, +1);
+  const EdgeFit peaked = FitPeakedStep(mixed, 0.0, 1.5, 0.0);
+  ASSERT_TRUE(plain.converged && shaded.converged && peaked.converged);
+  EXPECT_LT(rss(peaked), 0.2 * rss(plain));
+  EXPECT_LT(rss(peaked), rss(shaded));
+  EXPECT_NEAR(peaked.edge_px, edge, 0.01);
+
+  // A lit cylinder's rim, 40 on the background of 200, brightening by 25·√d inward.
+  const auto lit = [&](double t) { return t < edge ? 200.0 : 40.0 + 25.0 * std::sqrt(t - edge); };
+  const std::vector<EdgeSample> c = NumericallyBlurred(lit, 1.5, -12, 12);
+  const EdgeFit lit_shaded = FitShadedStep(c, 0.0, 1.5, 0.0, +1);
+  const EdgeFit lit_peaked = FitPeakedStep(c, 0.0, 1.5, 0.0);
+  ASSERT_TRUE(lit_shaded.converged && lit_peaked.converged);
+  EXPECT_LT(rss(lit_shaded), 0.1 * rss(lit_peaked));
+  EXPECT_NEAR(lit_shaded.edge_px, edge, 0.05);
+}
+
 TEST(EdgeFitTest, ReportedSigmaMatchesScatter) {
   // The edge's standard error from the residuals should match its spread over noisy repeats.
   std::mt19937 rng(7);
