@@ -48,13 +48,14 @@ double ShadingEvidenceSigmas(const std::vector<double>& f) {
   const double n = static_cast<double>(f.size());
   return (sum / n - 1.0 - 10.0 / n) / std::sqrt(2.0 / n);
 }
-// On a strand's band, most calipers must show it too (their median F beyond kMinMedianShadingF):
-// a lit cylinder's shading is the same all along the band, while a colour camera's demosaicing
-// artefacts change with the Bayer phase along a tilted edge and made a few calipers of a flat
-// strand's edge look strongly shaded (F 30–70 on 3 of 7, the rest below 3). Not on a filament's
-// stretch, parts of which gear and knurl marks spoil (on Greeff's lit filament the median left 5
-// frames of 281 measured afresh without the shading they have).
-constexpr double kMinMedianShadingF = 4.0;
+// On a strand's band, most calipers must show it too: their median F beyond chance's 90 % point
+// (2.7). A lit cylinder's shading is the same all along the band, while a colour camera's
+// demosaicing artefacts change with the Bayer phase along a tilted edge and made a few calipers
+// of a flat strand's edge look strongly shaded (F 30–70 on 3 of 7, the rest below 2.5). (At 4,
+// chance's 95 % point, weakly lit strands lost their shading: 0.6 % fewer valid.) Not on a
+// filament's stretch, parts of which gear and knurl marks spoil (on Greeff's lit filament the
+// median left 5 frames of 281 measured afresh without the shading they have).
+constexpr double kMinMedianShadingF = 2.7;
 bool ShadingEvident(const std::vector<double>& f, bool strand) {
   return ShadingEvidenceSigmas(f) > 6.0 && (!strand || Median(f) > kMinMedianShadingF);
 }
