@@ -283,7 +283,9 @@ void ExpectMatrixFramesWithinTheirSigma(const AdversarialScene& p) {
   AdversarialTruth t;
   vision::X264Settings encoder;
   const std::vector<cv::Mat> frames = MatrixFrames(p, &t, &encoder);
-  if (p.codec == Codec::kH264) ASSERT_TRUE(encoder.found);
+  if (p.codec == Codec::kH264) {
+    ASSERT_TRUE(encoder.found);
+  }
   for (const cv::Mat& frame : frames) {
     const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, encoder);
     ASSERT_TRUE(m.gave_width()) << m.detail << ": " << Describe(p);
@@ -316,6 +318,7 @@ TEST(AdversarialTest, AColourCamerasFlatStrandIsNotTakenForALitOne) {
   // symmetric PSF of any peakedness describes.
   AdversarialScene p = RandomAdversarialScene(TroubleClass::kBayer, 21);
   p.noise_sigma *= 0.3;
+  ASSERT_EQ(p.codec, Codec::kH264);
   ExpectMatrixFramesWithinTheirSigma(p);
 }
 

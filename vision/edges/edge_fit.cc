@@ -15,8 +15,9 @@ using fitcore::Mat;
 using fitcore::StepShape;
 using fitcore::Vec;
 
-// Parameters: base a, slope b, amplitude c, position e, width s, and for the shaded model the
-// shading amplitude k. value(u) = a + b·(u − u_ref) + c·f((u − e)/s) [+ k·G(ι·(u − e)/s)].
+// Parameters: base a, slope b, amplitude c, position e, width s, and for the shaded, two-slope and
+// peaked models their sixth, k. value(u) = a + b·(u − u_ref) + c·f((u − e)/s) [+ k·(the model's
+// own shape)].
 enum { kA, kB, kC, kE, kS, kK };
 
 // The blurred step: 5 parameters.
@@ -102,8 +103,8 @@ struct TwoSlopeStepModel {
   }
 };
 
-// The blurred step through a symmetric PSF that is not a Gaussian (more peaked, or flatter: a
-// colour camera's luma mixes channels demosaiced at different blurs): the Gram–Charlier term
+// The blurred step through a symmetric PSF somewhat more or less peaked than a Gaussian (a colour
+// camera's luma mixes channels demosaiced at different blurs): the Gram–Charlier term
 // k·H(z), H(z) = φ(z)·(3z − z³), odd about the edge, so the edge stays the step's middle.
 struct PeakedStepModel {
   static constexpr int kN = 6;

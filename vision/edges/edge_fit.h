@@ -42,8 +42,8 @@ struct EdgeFit {
 EdgeFit FitTwoSlopeStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
                         double sigma_guess_px, double u_ref);
 
-// The blurred step through a symmetric PSF of any peakedness (a colour camera's demosaiced luma,
-// a lens's aberrations), to the first Gram–Charlier term:
+// The blurred step through a symmetric PSF somewhat more or less peaked than a Gaussian (a colour
+// camera's demosaiced luma, a lens's aberrations), to the first Gram–Charlier term:
 //   value(u) = base + slope·(u − u_ref) + step·Φ(z) + k·φ(z)·(3z − z³).
 // Symmetric about the edge: where it describes an edge as well as FitShadedStep does, the edge's
 // profile is no evidence of a lit cylinder's one-sided shading. One parameter more than

@@ -59,9 +59,8 @@ constexpr double kMinMedianShadingF = 2.7;
 bool ShadingEvident(const std::vector<double>& f, bool strand) {
   return ShadingEvidenceSigmas(f) > 6.0 && (!strand || Median(f) > kMinMedianShadingF);
 }
-// A caliper's evidence for shading over the plain step from which it is weighed against the
-// symmetric alternative (FitPeakedStep) as well: below it, it does not decide.
-constexpr double kPeakedCheckEvidence = 4.0;
+// A fit's residual sum of squares.
+double Rss(const EdgeFit& fit) { return fit.rms * fit.rms * fit.samples; }
 
 // A fit counts when it converged inside its window [u0, u1] (not within 1 px of its ends) with
 // the edge's expected sign of contrast.
@@ -229,42 +228,30 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
         if (!usable(plain)) plain.converged = false;
         if (!usable(shaded)) shaded.converged = false;
         if (model < 0) {
-          // Evidence for shading: how much the extra term lowers the residuals, in units of the
-          // residual variance (an F statistic with 1 and n − 6 degrees of freedom). An edge only
-          // the shaded model describes counts as strong evidence.
+          // Evidence for shading: how much the shaded model lowers the residuals below the
+          // plain step's, in units of the residual variance (an F statistic with 1 and n − 6
+          // degrees of freedom). An edge only the shaded model describes counts as strong
+          // evidence. Shading is one-sided, while a PSF that is not a Gaussian changes the edge's
+          // profile on both sides alike and the shaded model takes part of that too (a colour
+          // camera's demosaiced luma on a flat strand, at low noise, looked shaded on one side,
+          // 0.2–0.5 px outward): wherever the F could count (ShadingEvident's median), it is
+          // taken over the better of the plain and the peaked step. That comparison is not
+          // nested, so the F is floored at 0 and is an upper bound on the χ²(1) one.
           // And where the silhouette moves: shading pulls a plain fit inward, so the shaded edge
           // lies outward of it; structured noise moves it either way.
           double evidence = 0, outward = 0;
           if (shaded.converged && shaded.samples > 6) {
-            const double rss_s = shaded.rms * shaded.rms * shaded.samples;
+            const double rss_s = Rss(shaded);
             const double unit = std::max(1e-12, rss_s / (shaded.samples - 6));
-            double rss_alt = std::numeric_limits<double>::infinity();
-            double alt_edge_px = 0;
-            if (plain.converged) {
-              rss_alt = plain.rms * plain.rms * plain.samples;
-              alt_edge_px = plain.edge_px;
-            }
-            // Shading is one-sided; a step through a PSF that is not a Gaussian differs from the
-            // plain step on both sides alike, and the shaded model takes part of that too (a
-            // colour camera's demosaiced luma on a flat strand, at low noise, looked shaded on
-            // one side, 0.3 px outward). Only what the symmetric alternative cannot describe
-            // counts.
-            if ((rss_alt - rss_s) / unit > kPeakedCheckEvidence && !inner_step[side]) {
+            double rss_alt = plain.converged ? Rss(plain) : std::numeric_limits<double>::infinity();
+            if (!plain.converged || (rss_alt - rss_s) / unit > kMinMedianShadingF) {
               const EdgeFit& start = plain.converged ? plain : shaded;
               const EdgeFit peaked = FitPeakedStep(samples, start.edge_px, start.sigma_px, e0);
-              const double rss_k = peaked.rms * peaked.rms * peaked.samples;
-              if (usable(peaked) && rss_k < rss_alt) {
-                rss_alt = rss_k;
-                alt_edge_px = peaked.edge_px;
-              }
+              if (usable(peaked)) rss_alt = std::min(rss_alt, Rss(peaked));
             }
-            if (std::isinf(rss_alt)) {
-              evidence = 1e9;
-              outward = 1.0;
-            } else {
-              evidence = std::max(0.0, rss_alt - rss_s) / unit;
-              outward = (shaded.edge_px - alt_edge_px) * (side == 0 ? -1.0 : 1.0);
-            }
+            evidence = std::isinf(rss_alt) ? 1e9 : std::max(0.0, rss_alt - rss_s) / unit;
+            outward = plain.converged ? (shaded.edge_px - plain.edge_px) * (side == 0 ? -1.0 : 1.0)
+                                      : 1.0;
           }
           if (plain.converged || shaded.converged) {
             shade_evidence[side].push_back(evidence);

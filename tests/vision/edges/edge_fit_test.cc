@@ -124,7 +124,7 @@ TEST(EdgeFitTest, PeakedStepDescribesANonGaussianPsfButNotALitCylindersShading) 
   const EdgeFit shaded = FitShadedStep(mixed, 0.0, 1.5, 0.0, +1);
   const EdgeFit peaked = FitPeakedStep(mixed, 0.0, 1.5, 0.0);
   ASSERT_TRUE(plain.converged && shaded.converged && peaked.converged);
-  EXPECT_LT(rss(peaked), 0.2 * rss(plain));
+  EXPECT_LT(rss(peaked), 0.15 * rss(plain));  // 0.12; 0.2 with its Jacobian's k column wrong
   EXPECT_LT(rss(peaked), rss(shaded));
   EXPECT_NEAR(peaked.edge_px, edge, 0.01);
 
@@ -135,7 +135,7 @@ TEST(EdgeFitTest, PeakedStepDescribesANonGaussianPsfButNotALitCylindersShading) 
   const EdgeFit lit_peaked = FitPeakedStep(c, 0.0, 1.5, 0.0);
   ASSERT_TRUE(lit_shaded.converged && lit_peaked.converged);
   EXPECT_LT(rss(lit_shaded), 0.1 * rss(lit_peaked));
-  EXPECT_NEAR(lit_shaded.edge_px, edge, 0.05);
+  EXPECT_NEAR(lit_shaded.edge_px, edge, 0.01);
 }
 
 TEST(EdgeFitTest, ReportedSigmaMatchesScatter) {
