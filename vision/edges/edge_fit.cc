@@ -20,6 +20,17 @@ using fitcore::Vec;
 // own shape)].
 enum { kA, kB, kC, kE, kS, kK };
 
+// The Jacobian's columns every model shares: base, slope, the amplitude of its step shape f, and
+// position and width through de = ∂value/∂e (the shapes are functions of z = (u − e)/s, so
+// ∂value/∂s = de·z). A model adds its own terms to them.
+void StepColumns(double du, double f, double de, double z, double* j) {
+  j[kA] = 1.0;
+  j[kB] = du;
+  j[kC] = f;
+  j[kE] = de;
+  j[kS] = de * z;
+}
+
 // The blurred step: 5 parameters.
 struct StepModel {
   static constexpr int kN = 5;
@@ -30,11 +41,7 @@ struct StepModel {
     StepShape(z, &f, &df);
     *value = p[kA] + p[kB] * du + p[kC] * f;
     const double de = -p[kC] * df * inv_s;
-    j[kA] = 1.0;
-    j[kB] = du;
-    j[kC] = f;
-    j[kE] = de;
-    j[kS] = de * z;
+    StepColumns(du, f, de, z, j);
   }
 };
 
@@ -51,11 +58,8 @@ struct InnerStepModel {
     StepShape(z2, &f2, &df2);
     *value = p[kA] + p[kB] * du + p[kC] * f + p[kC2] * f2;
     const double de = -p[kC] * df * inv_s, de2 = -p[kC2] * df2 * inv_s;
-    j[kA] = 1.0;
-    j[kB] = du;
-    j[kC] = f;
-    j[kE] = de;
-    j[kS] = de * z + de2 * z2;
+    StepColumns(du, f, de, z, j);
+    j[kS] += de2 * z2;
     j[kC2] = f2;
     j[kE2] = de2;
   }
@@ -74,11 +78,7 @@ struct ShadedStepModel {
     (*sqrt_table)(iota * z, &g, &dg);
     *value = p[kA] + p[kB] * du + p[kC] * f + p[kK] * g;
     const double de = -(p[kC] * df + p[kK] * iota * dg) * inv_s;
-    j[kA] = 1.0;
-    j[kB] = du;
-    j[kC] = f;
-    j[kE] = de;
-    j[kS] = de * z;
+    StepColumns(du, f, de, z, j);
     j[kK] = g;
   }
 };
@@ -94,11 +94,9 @@ struct TwoSlopeStepModel {
     StepShape(z, &f, &df);
     const double ramp = z * f + df;
     *value = p[kA] + p[kB] * du + p[kC] * f + p[kK] * p[kS] * ramp;
-    j[kA] = 1.0;
-    j[kB] = du;
-    j[kC] = f;
-    j[kE] = -p[kC] * df * inv_s - p[kK] * f;
-    j[kS] = -p[kC] * df * inv_s * z + p[kK] * df;
+    StepColumns(du, f, -p[kC] * df * inv_s, z, j);
+    j[kE] -= p[kK] * f;
+    j[kS] += p[kK] * df;
     j[kK] = p[kS] * ramp;
   }
 };
@@ -118,11 +116,7 @@ struct PeakedStepModel {
     const double dh = df * (z2 * z2 - 6.0 * z2 + 3.0);
     *value = p[kA] + p[kB] * du + p[kC] * f + p[kK] * h;
     const double de = -(p[kC] * df + p[kK] * dh) * inv_s;
-    j[kA] = 1.0;
-    j[kB] = du;
-    j[kC] = f;
-    j[kE] = de;
-    j[kS] = de * z;
+    StepColumns(du, f, de, z, j);
     j[kK] = h;
   }
 };
@@ -136,11 +130,7 @@ struct LineModel {
     const double f = std::exp(-0.5 * z * z);
     *value = p[kA] + p[kB] * du + p[kC] * f;
     const double de = p[kC] * z * f * inv_s;
-    j[kA] = 1.0;
-    j[kB] = du;
-    j[kC] = f;
-    j[kE] = de;
-    j[kS] = de * z;
+    StepColumns(du, f, de, z, j);
   }
 };
 
@@ -242,15 +232,14 @@ EdgeFit FitStepModel(const std::vector<EdgeSample>& samples, double edge_guess_p
   p[kS] = std::max(sigma_guess_px, 0.5);
   fit = Solve(samples, p, u_ref, model, solved);
   fit.u_ref = u_ref;
+  fit.contrast = fit.step;  // FitShadedStep adds its ramp's part
   return fit;
 }
 }  // namespace
 
 EdgeFit FitBlurredStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
                        double sigma_guess_px, double u_ref) {
-  EdgeFit fit = FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 8, StepModel());
-  fit.contrast = fit.step;
-  return fit;
+  return FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 8, StepModel());
 }
 
 EdgeFit FitStepBeforeInnerStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
@@ -311,18 +300,15 @@ EdgeFit FitShadedStep(const std::vector<EdgeSample>& samples, double edge_guess_
 
 EdgeFit FitPeakedStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
                       double sigma_guess_px, double u_ref) {
-  EdgeFit fit = FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 10, PeakedStepModel());
-  fit.contrast = fit.step;
-  return fit;
+  return FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 10, PeakedStepModel());
 }
 
 EdgeFit FitTwoSlopeStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
                         double sigma_guess_px, double u_ref) {
   Vec<TwoSlopeStepModel::kN> solved;
-  EdgeFit fit = FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 10,
-                             TwoSlopeStepModel(), &solved);
+  EdgeFit fit =
+      FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 10, TwoSlopeStepModel(), &solved);
   fit.slope_change_per_px = solved[kK];
-  fit.contrast = fit.step;
   return fit;
 }
 

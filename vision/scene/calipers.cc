@@ -164,6 +164,13 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
                                                      e0 + (side == 0 ? 1 : -1) * inner_edge_px[side])
                             : FitBlurredStep(samples, e0, sigma_guess, e0);
   };
+  // Its shaded step, and the step as its side's model stands (shaded once decided so).
+  const auto fit_shaded = [&](int side, double e0) {
+    return FitShadedStep(samples, e0, sigma_guess, e0, side == 0 ? 1 : -1);
+  };
+  const auto fit_as_decided = [&](int side, double e0) {
+    return shade[side] == 1 ? fit_shaded(side, e0) : fit_plain(side, e0);
+  };
   // Saturation is judged on the decoded frame: where a codec put the clipped plateau.
   const double mid_s = 0.5 * (band_s0 + band_s1), reach_px = 12.0;
   const ClipLevels clip =
@@ -224,7 +231,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
         const int model = shade[side];
         EdgeFit plain, shaded;
         if (model != 1) plain = fit_plain(side, e0);
-        if (model != 0) shaded = FitShadedStep(samples, e0, sigma_guess, e0, side == 0 ? 1 : -1);
+        if (model != 0) shaded = fit_shaded(side, e0);
         if (!usable(plain)) plain.converged = false;
         if (!usable(shaded)) shaded.converged = false;
         if (model < 0) {
@@ -240,7 +247,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
           // And where the silhouette moves: shading pulls a plain fit inward, so the shaded edge
           // lies outward of it; structured noise moves it either way.
           double evidence = 0, outward = 0;
-          if (shaded.converged && shaded.samples > 6) {
+          if (shaded.converged) {  // (on 10 samples at least: FitShadedStep)
             const double rss_s = Rss(shaded);
             const double unit = std::max(1e-12, rss_s / (shaded.samples - 6));
             double rss_alt = plain.converged ? Rss(plain) : std::numeric_limits<double>::infinity();
@@ -350,9 +357,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
         const double e0 = 2 * e1 - e2;
         const auto [u0, u1] = window(side, e0, outer, inner);
         if (!GatherEdgeSamples(img, f, s0, s1, u0, u1, clip, &samples)) break;
-        const EdgeFit again = shade[side] == 1
-                                  ? FitShadedStep(samples, e0, sigma_guess, e0, side == 0 ? 1 : -1)
-                                  : fit_plain(side, e0);
+        const EdgeFit again = fit_as_decided(side, e0);
         if (UsableFit(again, u0, u1, side == 0 ? g.left_sign : g.right_sign)) fit = again;
       }
     }
@@ -676,9 +681,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
         const auto [u0, u1] = window(side, e0, outer, inner);
         ok = GatherEdgeSamples(img, f, s0, s1, u0, u1, clip, &samples);
         if (!ok) break;
-        const EdgeFit fit = shade[side] == 1
-                                ? FitShadedStep(samples, e0, sigma_guess, e0, side == 0 ? 1 : -1)
-                                : fit_plain(side, e0);
+        const EdgeFit fit = fit_as_decided(side, e0);
         ok = UsableFit(fit, u0, u1, side == 0 ? g.left_sign : g.right_sign);
         edge[side] = fit.edge_px;
       }
