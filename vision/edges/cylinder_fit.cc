@@ -57,7 +57,7 @@ inline double Model(const EdgeSample& smp, const Vec<Layout<kBg>::kN>& p, double
                     const fitcore::BlurredSqrt& root, double* j) {
   using L = Layout<kBg>;
   Shapes sh;
-  EvalShapes(smp.u_px, u_ref, p[L::kC], p[L::kR], p[L::kS], root, &sh);
+  EvalShapes<kBg == 4>(smp.u_px, u_ref, p[L::kC], p[L::kR], p[L::kS], root, &sh);
   double v[L::kAmplitudes], d[L::kAmplitudes][3];
   L::Amplitudes(sh, smp.u_px - u_ref, v, d);
   double value = 0;
@@ -85,7 +85,7 @@ void SolveAmplitudes(const std::vector<EdgeSample>& samples, const std::vector<d
   Row atb = Row::Zero();
   for (size_t i = 0; i < samples.size(); ++i) {
     Shapes sh;
-    EvalShapes(samples[i].u_px, u_ref, (*p)[L::kC], (*p)[L::kR], (*p)[L::kS], root, &sh);
+    EvalShapes<kBg == 4>(samples[i].u_px, u_ref, (*p)[L::kC], (*p)[L::kR], (*p)[L::kS], root, &sh);
     Row row;
     double d[L::kAmplitudes][3];
     L::Amplitudes(sh, samples[i].u_px - u_ref, row.data(), d);
@@ -139,8 +139,9 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   // (c·s)²·log(1 + (r/(c·s))²) at that scale, whose Gauss–Newton system carries the weights
   // 1/(1 + (r/(c·s))²) at the trial's own residuals (iteratively reweighted inside one LM run).
   double cauchy_scale = 0;
+  fitcore::NormalSystem<kN> normal;
+  normal.Resize(samples.size());
   const auto evaluate = [&](const Vec<kN>& q, Mat<kN>* jtj, Vec<kN>* jtr) {
-    double h[kN][kN] = {}, g[kN] = {};
     double cost = 0;
     const double cs = kCauchyC * cauchy_scale, inv_cs2 = cs > 0 ? 1.0 / (cs * cs) : 0.0;
     for (size_t i = 0; i < samples.size(); ++i) {
@@ -154,9 +155,9 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
       } else {
         cost += wi * r * r;
       }
-      fitcore::Accumulate<kN>(j, r, wi, h, g);
+      normal.Set(i, j, r, wi);
     }
-    fitcore::Symmetric<kN>(h, g, jtj, jtr);
+    normal.Get(jtj, jtr);
     return cost;
   };
   // The geometry stays near its guess: a silhouette cannot be further than the blur's reach

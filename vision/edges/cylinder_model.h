@@ -25,7 +25,9 @@ constexpr double kCauchyC = 2.385;
 // blur.
 enum Shape { kLeft0, kLeft1, kRight0, kRight1, kBox, kLit, kTilt, kShapes };
 
-// The seven shapes at one u, blurred, and their derivatives by centre, radius and blur.
+// The seven shapes at one u, blurred, and their derivatives by centre, radius and blur; without
+// kEachSide only the object's three (box, lit, tilt: a model with one background line needs no
+// more, and the others were a third of the evaluation).
 // With dl = u − c + R and dr = c + R − u the distances inside the left and right silhouettes,
 // a = dl/σ, b = dr/σ and x = u − u_ref:
 //   left = 1 − Φ(a),  left·x = x·(1 − Φ(a)) − σφ(a)   (exact: blurred 1[t < c − R] and t·1[…])
@@ -41,6 +43,7 @@ struct Shapes {
   double d[kShapes][3];  // d[shape][c, R, σ]
 };
 
+template <bool kEachSide = true>
 inline void EvalShapes(double u, double u_ref, double c, double r, double s,
                        const fitcore::BlurredSqrt& root, Shapes* out) {
   const double inv_s = 1.0 / s, inv_r = 1.0 / r;
@@ -57,12 +60,14 @@ inline void EvalShapes(double u, double u_ref, double c, double r, double s,
     out->d[i][1] = dr;
     out->d[i][2] = ds;
   };
-  set(kLeft0, 1.0 - fa, pa * inv_s, -pa * inv_s, a * pa * inv_s);
-  set(kLeft1, xr * (1.0 - fa) - s * pa, xr * pa * inv_s - a * pa, -xr * pa * inv_s + a * pa,
-      xr * a * pa * inv_s - pa - a * a * pa);
-  set(kRight0, 1.0 - fb, -pb * inv_s, -pb * inv_s, b * pb * inv_s);
-  set(kRight1, xr * (1.0 - fb) + s * pb, -xr * pb * inv_s - b * pb, -xr * pb * inv_s - b * pb,
-      xr * b * pb * inv_s + pb + b * b * pb);
+  if constexpr (kEachSide) {
+    set(kLeft0, 1.0 - fa, pa * inv_s, -pa * inv_s, a * pa * inv_s);
+    set(kLeft1, xr * (1.0 - fa) - s * pa, xr * pa * inv_s - a * pa, -xr * pa * inv_s + a * pa,
+        xr * a * pa * inv_s - pa - a * a * pa);
+    set(kRight0, 1.0 - fb, -pb * inv_s, -pb * inv_s, b * pb * inv_s);
+    set(kRight1, xr * (1.0 - fb) + s * pb, -xr * pb * inv_s - b * pb, -xr * pb * inv_s - b * pb,
+        xr * b * pb * inv_s + pb + b * b * pb);
+  }
   const double box = fa + fb - 1.0;
   set(kBox, box, (pb - pa) * inv_s, (pa + pb) * inv_s, -(a * pa + b * pb) * inv_s);
   const double k = s * std::sqrt(s) / (2.0 * std::sqrt(2.0 * r));

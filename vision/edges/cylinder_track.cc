@@ -40,9 +40,9 @@ struct System {
 };
 
 System Evaluate(const CylinderTemplate& t, const std::vector<EdgeSample>& samples, const Vec<kN>& q,
-                double noise, std::vector<double>* residuals) {
-  double h[kN][kN] = {}, g[kN] = {};
+                double noise, std::vector<double>* residuals, fitcore::NormalSystem<kN>* normal) {
   System out;
+  normal->Resize(samples.size());
   const double cs = kCauchyC * noise, inv_cs2 = 1.0 / (cs * cs);
   const double amp[3] = {q[kA], q[kK], q[kL]};
   const double dg[3] = {q[kDc], q[kDr], q[kDs]};
@@ -65,10 +65,30 @@ System Evaluate(const CylinderTemplate& t, const std::vector<EdgeSample>& sample
     const double w = 1.0 / (1.0 + r * r * inv_cs2);
     out.wsum += w;
     out.wrss += w * r * r;
-    fitcore::Accumulate<kN>(j, r, w, h, g);
+    normal->Set(i, j, r, w);
   }
-  fitcore::Symmetric<kN>(h, g, &out.jtj, &out.jtr);
+  normal->Get(&out.jtj, &out.jtr);
   return out;
+}
+
+// The template's shapes at the geometry (centre, radius, blur) on `samples`, kept in t.
+void Linearise(const std::vector<EdgeSample>& samples, double u_ref_px, double centre_px,
+               double radius_px, double sigma_px, CylinderTemplate* t) {
+  const auto& root = fitcore::BlurredSqrt::Get();
+  t->centre_px = centre_px;
+  t->radius_px = radius_px;
+  t->sigma_px = sigma_px;
+  t->samples.resize(samples.size());
+  for (size_t i = 0; i < samples.size(); ++i) {
+    Shapes sh;
+    EvalShapes<false>(samples[i].u_px, u_ref_px, centre_px, radius_px, sigma_px, root, &sh);
+    CylinderTemplate::Sample& s = t->samples[i];
+    s.du_px = static_cast<float>(samples[i].u_px - u_ref_px);
+    for (int k = 0; k < 3; ++k) {
+      s.shape[k] = static_cast<float>(sh.v[kObjectShapes[k]]);
+      for (int m = 0; m < 3; ++m) s.d_shape[k][m] = static_cast<float>(sh.d[kObjectShapes[k]][m]);
+    }
+  }
 }
 
 }  // namespace
@@ -96,47 +116,40 @@ bool MakeCylinderTemplate(const std::vector<EdgeSample>& samples, const Cylinder
   if (!fit.converged || fit.background != CylinderBackground::kOneLine || samples.empty() ||
       fit.samples != static_cast<int>(samples.size()))
     return false;
-  const auto& root = fitcore::BlurredSqrt::Get();
   out->reference = fit;
-  out->samples.resize(samples.size());
   out->first_u_px = samples.front().u_px;
   out->last_u_px = samples.back().u_px;
   // The full fit's bound (cylinder_fit.cc) about its own start; here about the fitted blur.
   out->max_sigma_px = std::max(3.0 * fit.sigma_px, std::min(8.0, fit.radius_px / 3.0));
+  Linearise(samples, fit.u_ref_px, fit.centre_px, fit.radius_px, fit.sigma_px, out);
   std::vector<double> residuals(samples.size());
   const double b0 = LineLevel(fit);
   for (size_t i = 0; i < samples.size(); ++i) {
-    Shapes sh;
-    EvalShapes(samples[i].u_px, fit.u_ref_px, fit.centre_px, fit.radius_px, fit.sigma_px, root,
-               &sh);
-    CylinderTemplate::Sample& s = out->samples[i];
-    s.du_px = static_cast<float>(samples[i].u_px - fit.u_ref_px);
-    for (int k = 0; k < 3; ++k) {
-      s.shape[k] = static_cast<float>(sh.v[kObjectShapes[k]]);
-      for (int m = 0; m < 3; ++m) s.d_shape[k][m] = static_cast<float>(sh.d[kObjectShapes[k]][m]);
-    }
-    const double model = b0 + fit.background_slope_left_per_px * s.du_px +
-                         fit.ambient * sh.v[kObjectShapes[0]] +
-                         fit.shading * sh.v[kObjectShapes[1]] + fit.tilt * sh.v[kObjectShapes[2]];
+    const CylinderTemplate::Sample& s = out->samples[i];
+    const double model = b0 + fit.background_slope_left_per_px * s.du_px + fit.ambient * s.shape[0] +
+                         fit.shading * s.shape[1] + fit.tilt * s.shape[2];
     residuals[i] = model - samples[i].value;
   }
   out->noise = RobustScale(residuals);
   return true;
 }
 
-CylinderTrackRefusal TrackLitCylinder(const CylinderTemplate& t,
-                                      const std::vector<EdgeSample>& samples,
-                                      const CylinderTrackOptions& opt, CylinderFit* out) {
-  const CylinderFit& ref = t.reference;
+CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t, const std::vector<EdgeSample>& samples,
+                                      const CylinderTrackOptions& opt, CylinderFit* out,
+                                      const CylinderFit* start) {
+  const CylinderFit& ref = t->reference;
+  // Where the fit starts: the last frame's fit of this template, else the template's own.
+  const CylinderFit& from = start && start->converged ? *start : ref;
   *out = CylinderFit{};
   out->samples = static_cast<int>(samples.size());
-  if (samples.size() != t.samples.size() || samples.empty() ||
-      samples.front().u_px != t.first_u_px || samples.back().u_px != t.last_u_px)
+  if (samples.size() != t->samples.size() || samples.empty() ||
+      samples.front().u_px != t->first_u_px || samples.back().u_px != t->last_u_px)
     return CylinderTrackRefusal::kOtherSamples;
   Vec<kN> q;
-  q << LineLevel(ref), ref.background_slope_left_per_px, ref.ambient, ref.shading, ref.tilt, 0, 0,
-      0;
+  q << LineLevel(from), from.background_slope_left_per_px, from.ambient, from.shading, from.tilt,
+      from.centre_px - t->centre_px, from.radius_px - t->radius_px, from.sigma_px - t->sigma_px;
   std::vector<double> residuals(samples.size());
+  fitcore::NormalSystem<kN> normal;
   const auto step = [](const System& s) -> Vec<kN> {
     Mat<kN> a = s.jtj;
     a.diagonal().array() += 1e-12;
@@ -147,25 +160,41 @@ CylinderTrackRefusal TrackLitCylinder(const CylinderTemplate& t,
   // that scale (half a px per unit of relative change on Greeff's video: knurl and compression
   // leave structure the model lacks). The reference's scale, then, in the ratio of this frame's
   // residuals to the reference's, once the first steps have brought the fit near its minimum.
-  constexpr int kMaxIterations = 8, kScaleIteration = 1;
-  double noise = ref.noise;
+  // Its weights are iterated to their fixed point, which they approach by a constant ratio
+  // (mostly 0.3 to 0.6): more iterations than a least-squares fit needs, far fewer than a full fit.
+  constexpr int kMaxIterations = 16, kScaleIteration = 1;
+  double noise = from.noise > 0 ? from.noise : ref.noise;
   System sys;
-  bool converged = false;
-  for (int it = 0; it < kMaxIterations && !converged; ++it) {
-    sys = Evaluate(t, samples, q, noise, &residuals);
-    if (it == kScaleIteration) noise = ref.noise * RobustScale(residuals) / t.noise;
-    const Vec<kN> d = step(sys);
-    q += d;
-    out->iterations = it + 1;
-    // The full fit's tolerance (cylinder_fit.cc).
-    converged = it > kScaleIteration && std::abs(d[kDc]) < 1e-3 && std::abs(d[kDr]) < 1e-3 &&
-                std::abs(d[kDs]) < 1e-2;
+  const auto beyond_first_order = [&](const Vec<kN>& q) {
+    return std::abs(q[kDc]) > opt.max_shift_px || std::abs(q[kDr]) > opt.max_shift_px ||
+           std::abs(q[kDs]) > opt.max_blur_change_px;
+  };
+  for (int lin = 0;; ++lin) {
+    bool converged = false;
+    for (int it = 0; it < kMaxIterations && !converged; ++it) {
+      sys = Evaluate(*t, samples, q, noise, &residuals, &normal);
+      if (lin == 0 && it == kScaleIteration)
+        noise = ref.noise * RobustScale(residuals) / t->noise;
+      const Vec<kN> d = step(sys);
+      q += d;
+      ++out->iterations;
+      // The full fit's tolerance (cylinder_fit.cc).
+      converged = (lin > 0 || it > kScaleIteration) && std::abs(d[kDc]) < 1e-3 &&
+                  std::abs(d[kDr]) < 1e-3 && std::abs(d[kDs]) < 1e-2;
+    }
+    if (!converged || !q.allFinite()) return CylinderTrackRefusal::kNotConverged;
+    const double sigma = t->sigma_px + q[kDs];
+    if (sigma < kMinSigmaPx || sigma > t->max_sigma_px) return CylinderTrackRefusal::kMoved;
+    if (!beyond_first_order(q)) break;
+    // Moved beyond the first order's reach: the shapes evaluated again where it moved to, kept for
+    // the frames after, and the fit done again from there (one evaluation of the full model's
+    // shapes, where a full fit takes dozens).
+    if (lin == opt.max_relinearisations) return CylinderTrackRefusal::kMoved;
+    Linearise(samples, ref.u_ref_px, t->centre_px + q[kDc], t->radius_px + q[kDr], sigma, t);
+    q[kDc] = q[kDr] = q[kDs] = 0;
+    ++t->relinearisations;
   }
-  if (!converged || !q.allFinite()) return CylinderTrackRefusal::kNotConverged;
-  const double sigma = ref.sigma_px + q[kDs];
-  if (std::abs(q[kDc]) > opt.max_shift_px || std::abs(q[kDr]) > opt.max_shift_px ||
-      std::abs(q[kDs]) > opt.max_blur_change_px || sigma < kMinSigmaPx || sigma > t.max_sigma_px)
-    return CylinderTrackRefusal::kMoved;
+  // The lighting and the noise are judged against the full fit the template was made from.
   const double shading_change =
       std::abs(q[kA] - ref.ambient) + std::abs(q[kK] - ref.shading) + std::abs(q[kL] - ref.tilt);
   if (shading_change > opt.max_shading_change_fraction * std::abs(ref.ambient + ref.shading))
@@ -173,11 +202,11 @@ CylinderTrackRefusal TrackLitCylinder(const CylinderTemplate& t,
   if (noise > opt.max_noise_ratio * ref.noise) return CylinderTrackRefusal::kNoisier;
 
   out->converged = true;
-  out->centre_px = ref.centre_px + q[kDc];
-  out->radius_px = ref.radius_px + q[kDr];
+  out->centre_px = t->centre_px + q[kDc];
+  out->radius_px = t->radius_px + q[kDr];
   out->left_px = out->centre_px - out->radius_px;
   out->right_px = out->centre_px + out->radius_px;
-  out->sigma_px = sigma;
+  out->sigma_px = t->sigma_px + q[kDs];
   out->background = CylinderBackground::kOneLine;
   out->u_ref_px = ref.u_ref_px;
   out->background_left = q[kB0] + q[kB1] * (out->left_px - ref.u_ref_px);

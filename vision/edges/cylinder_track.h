@@ -29,14 +29,20 @@ struct CylinderTemplate {
   float first_u_px = 0, last_u_px = 0;  // the samples' ends, to tell that they are the same pixels
   CylinderFit reference;                // the full fit the template was made from
   double max_sigma_px = 0;              // the full fit's bound on the blur
+  // The geometry the shapes are evaluated at: the reference's, until the object moves beyond the
+  // first order's reach (CylinderTrackOptions) and TrackLitCylinder evaluates them again there.
+  double centre_px = 0, radius_px = 0, sigma_px = 0;
+  int relinearisations = 0;  // how often it did
 };
 
 // Limits beyond which the template refuses. Lengths in px.
 struct CylinderTrackOptions {
-  // Centre or radius this far from the template's: beyond its first order's reach (untested
-  // beyond this; a fit from afresh makes a new template).
+  // Centre or radius this far from the geometry the template's shapes were evaluated at: beyond
+  // its first order's reach. The shapes are then evaluated again where the fit moved to, and the
+  // fit done again, at most max_relinearisations times; beyond, it refuses (kMoved).
   double max_shift_px = 0.3;
   double max_blur_change_px = 0.3;
+  int max_relinearisations = 2;
   // The residuals' robust scale above this many times the template's: something the template does
   // not describe (a particle, a gear tooth, a change of the scene).
   double max_noise_ratio = 1.5;
@@ -67,8 +73,12 @@ bool MakeCylinderTemplate(const std::vector<EdgeSample>& samples, const Cylinder
 // the full fit's robust (Cauchy) loss, at the reference fit's scale. On
 // success fills *out as FitLitCylinder would (edges, their σ from the weighted normal matrix,
 // blur, amplitudes, noise) and returns kNone; otherwise the reason, and *out is not converged.
-CylinderTrackRefusal TrackLitCylinder(const CylinderTemplate& t,
+// Where the object moved beyond the first order's reach, *t keeps its shapes evaluated where it
+// moved to. `start`, when given and converged, is where the fit starts (the same template's fit
+// in the frame before, which lies nearer this frame's than the template's own).
+CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t,
                                       const std::vector<EdgeSample>& samples,
-                                      const CylinderTrackOptions& options, CylinderFit* out);
+                                      const CylinderTrackOptions& options, CylinderFit* out,
+                                      const CylinderFit* start = nullptr);
 
 }  // namespace clogscope::vision

@@ -172,6 +172,37 @@ inline void Accumulate(const double* j, double r, double w, double (*h)[N], doub
   }
 }
 
+// The Gauss–Newton system of many weighted residuals as one matrix product: each row of the
+// Jacobian and its residual are kept scaled by √w, column by column, then each entry of JᵀJ and
+// Jᵀr is one vectorised dot product of two columns. For the fits over a few hundred samples (the
+// lit cylinder's) this is faster than adding each row's outer product into a triangle
+// (Accumulate), whose loads and stores were most of the fit's time, and than Eigen's blocked
+// product, whose packing costs more than the product at 8 columns.
+template <int N>
+class NormalSystem {
+ public:
+  void Resize(size_t n) {
+    j_.resize(static_cast<Eigen::Index>(n), N);
+    r_.resize(static_cast<Eigen::Index>(n));
+  }
+  void Set(size_t i, const double* j, double r, double w) {
+    const double s = std::sqrt(w);
+    const auto row = static_cast<Eigen::Index>(i);
+    for (int k = 0; k < N; ++k) j_(row, k) = s * j[k];
+    r_(row) = s * r;
+  }
+  void Get(Mat<N>* jtj, Vec<N>* jtr) const {
+    for (int a = 0; a < N; ++a) {
+      (*jtr)(a) = j_.col(a).dot(r_);
+      for (int b = a; b < N; ++b) (*jtj)(a, b) = (*jtj)(b, a) = j_.col(a).dot(j_.col(b));
+    }
+  }
+
+ private:
+  Eigen::Matrix<double, Eigen::Dynamic, N> j_;
+  Eigen::VectorXd r_;
+};
+
 template <int N>
 inline void Symmetric(const double (*h)[N], const double* g, Mat<N>* jtj, Vec<N>* jtr) {
   for (int i = 0; i < N; ++i) {

@@ -60,7 +60,13 @@ CylinderMemory::Caliper* CylinderMemory::Find(double s0_px) {
 void CylinderMemory::Keep(const Caliper& slab, const std::vector<EdgeSample>& samples,
                           const CylinderFit& fit) {
   Caliper c = slab;
-  c.rest_frames = MakeCylinderTemplate(samples, fit, &c.cylinder) ? 0 : kRestFrames;
+  if (MakeCylinderTemplate(samples, fit, &c.cylinder)) {
+    c.failures = 0;
+  } else {
+    const Caliper* before = Find(slab.s0_px);
+    c.failures = std::min(before ? before->failures + 1 : 1, kMaxRestDoublings + 1);
+    c.rest_frames = kRestFrames << (c.failures - 1);
+  }
   calipers_[Key(slab.s0_px)] = std::move(c);
 }
 
@@ -93,9 +99,10 @@ TrackedCylinders TrackCylinders(const GreyImage& img, const AxisFrame& f, const 
         out.border = true;
         continue;
       }
-      const auto refusal = TrackLitCylinder(c->cylinder, samples, options, &fit);
+      const auto refusal = TrackLitCylinder(&c->cylinder, samples, options, &fit, &c->last);
       if (refusal == CylinderTrackRefusal::kNone) {
         ++out.from_template;
+        c->last = fit;
         out.samples += at_edges.samples;
         out.saturated += at_edges.clipped;
         continue;

@@ -31,11 +31,16 @@ class CylinderMemory {
     double s0_px = 0, s1_px = 0, left_px = 0, right_px = 0, sigma_px = 0;  // its slab
     CylinderTemplate cylinder;  // no samples while the caliper rests
     int rest_frames = 0;        // frames it is left out before its full fit is tried again
+    int failures = 0;           // full fits in a row that failed
+    CylinderFit last;           // its template's last fit, where the next one starts
   };
   // After a full fit that failed (a gear tooth over an edge, mostly), a caliper is left out for
   // this many frames: on a drive's video the same few calipers failed again in most frames, at
-  // the full fit's most iterations, and cost an eighth of the path's instructions.
+  // the full fit's most iterations, and cost an eighth of the path's instructions. Each failure
+  // in a row doubles the rest, up to kMaxRestDoublings times (4 ... 64 frames): a caliper on the
+  // gear's side of the stretch fails whenever it is tried.
   static constexpr int kRestFrames = 4;
+  static constexpr int kMaxRestDoublings = 4;
 
   // Forgets the templates unless they were made in axis frame f on calipers `spacing_px` long.
   void Use(const AxisFrame& f, double spacing_px);

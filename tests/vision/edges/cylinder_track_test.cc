@@ -83,7 +83,8 @@ TEST(CylinderTrackTest, SmallMovesAgreeWithTheTruthAsTheFullFitDoes) {
     for (int i = 0; i < kDraws; ++i) {
       const auto s = Noisy(clean, kNoise, &rng);
       CylinderFit tracked;
-      ASSERT_EQ(TrackLitCylinder(t, s, {}, &tracked), CylinderTrackRefusal::kNone)
+      CylinderTemplate each = t;  // the same template in every draw
+      ASSERT_EQ(TrackLitCylinder(&each, s, {}, &tracked), CylinderTrackRefusal::kNone)
           << move[0] << " " << move[1] << " draw " << i;
       ASSERT_TRUE(tracked.converged);
       const CylinderFit full = FitLitCylinder(s, t.reference.left_px, t.reference.right_px,
@@ -119,50 +120,93 @@ TEST(CylinderTrackTest, SmallMovesAgreeWithTheTruthAsTheFullFitDoes) {
   }
 }
 
-TEST(CylinderTrackTest, RefusesAMoveBeyondItsReach) {
+// Beyond the first order's reach (0.3 px) the template's shapes are evaluated again where the fit
+// moved to: a move of 0.6–1 px is followed, its edges where the full fit on the same pixels puts
+// them; a move too far to follow within max_relinearisations is refused, never a width elsewhere.
+TEST(CylinderTrackTest, FollowsAMoveBeyondItsFirstOrderByEvaluatingItsShapesAgain) {
   std::mt19937 rng(23);
-  const CylinderTemplate t = ReferenceTemplate(&rng);
-  for (const double shift : {0.6, -0.6, 1.0}) {
+  const CylinderTemplate reference = ReferenceTemplate(&rng);
+  const double moves[][2] = {{0.6, 0}, {-0.6, 0}, {1.0, 0}, {0, 0.6}, {-0.8, -0.5}};
+  for (const auto& move : moves) {
+    const double c = kCentre + move[0], r = kRadius + move[1];
+    const auto s = Noisy(Profile(c, r), kNoise, &rng);
+    CylinderTemplate t = reference;
+    CylinderFit out;
+    const auto refusal = TrackLitCylinder(&t, s, {}, &out);
+    const std::string where = ::testing::PrintToString(std::vector<double>{move[0], move[1]});
+    ASSERT_EQ(refusal, CylinderTrackRefusal::kNone) << where << ": "
+                                                    << CylinderTrackRefusalName(refusal);
+    EXPECT_GE(t.relinearisations, 1) << where;
+    const CylinderFit full = FitLitCylinder(s, reference.reference.left_px,
+                                            reference.reference.right_px,
+                                            reference.reference.sigma_px,
+                                            CylinderBackground::kOneLine);
+    ASSERT_TRUE(full.converged);
+    // One draw's edges scatter by ~0.03 px: 0.1 px is beyond 3 σ; the full fit on the same
+    // pixels differs only by the robust scale each takes.
+    EXPECT_NEAR(out.left_px, c - r, 0.1) << where;
+    EXPECT_NEAR(out.right_px, c + r, 0.1) << where;
+    EXPECT_NEAR(out.left_px, full.left_px, 0.01) << where;
+    EXPECT_NEAR(out.right_px, full.right_px, 0.01) << where;
+    // The template now holds the shapes where it moved to: the next frame there needs no more.
+    CylinderFit again;
+    const int before = t.relinearisations;
+    ASSERT_EQ(TrackLitCylinder(&t, Noisy(Profile(c, r), kNoise, &rng), {}, &again, &out),
+              CylinderTrackRefusal::kNone)
+        << where;
+    EXPECT_EQ(t.relinearisations, before) << where;
+    EXPECT_NEAR(again.right_px - again.left_px, 2 * r, 0.1) << where;
+  }
+  // Far moves: followed to the right edges or refused, never a width elsewhere.
+  for (const double shift : {2.0, -3.0, 5.0}) {
+    CylinderTemplate t = reference;
     CylinderFit out;
     const auto refusal =
-        TrackLitCylinder(t, Noisy(Profile(kCentre + shift, kRadius), kNoise, &rng), {}, &out);
-    // Beyond the first order's reach: refused as moved, never a width.
-    EXPECT_EQ(refusal, CylinderTrackRefusal::kMoved)
-        << shift << ": " << CylinderTrackRefusalName(refusal);
-    EXPECT_FALSE(out.converged);
+        TrackLitCylinder(&t, Noisy(Profile(kCentre + shift, kRadius), kNoise, &rng), {}, &out);
+    if (refusal != CylinderTrackRefusal::kNone) {
+      EXPECT_FALSE(out.converged) << shift;
+      continue;
+    }
+    EXPECT_NEAR(out.left_px, kCentre + shift - kRadius, 0.1) << shift;
+    EXPECT_NEAR(out.right_px, kCentre + shift + kRadius, 0.1) << shift;
   }
-  // A radius grown by 0.6 px, the centre kept.
+  // No more shapes evaluated again than the options allow: refused as moved.
+  CylinderTemplate t = reference;
+  CylinderTrackOptions first_order_only;
+  first_order_only.max_relinearisations = 0;
   CylinderFit out;
-  EXPECT_EQ(TrackLitCylinder(t, Noisy(Profile(kCentre, kRadius + 0.6), kNoise, &rng), {}, &out),
+  EXPECT_EQ(TrackLitCylinder(&t, Noisy(Profile(kCentre + 0.6, kRadius), kNoise, &rng),
+                             first_order_only, &out),
             CylinderTrackRefusal::kMoved);
+  EXPECT_FALSE(out.converged);
 }
 
 TEST(CylinderTrackTest, RefusesChangedShadingOrLightButFollowsSmallChanges) {
   std::mt19937 rng(29);
-  const CylinderTemplate t = ReferenceTemplate(&rng);
+  CylinderTemplate t = ReferenceTemplate(&rng);
   CylinderFit out;
   // The Lambertian part 40 % stronger: a change of 0.4·96 = 38 levels, 24 % of a + k = 160.
-  EXPECT_EQ(TrackLitCylinder(t, Noisy(Profile(kCentre, kRadius, 1.4), kNoise, &rng), {}, &out),
+  EXPECT_EQ(TrackLitCylinder(&t, Noisy(Profile(kCentre, kRadius, 1.4), kNoise, &rng), {}, &out),
             CylinderTrackRefusal::kShadingChanged);
   EXPECT_FALSE(out.converged);
   // The whole object 25 % brighter: 40 levels of 160.
   EXPECT_EQ(
-      TrackLitCylinder(t, Noisy(Profile(kCentre, kRadius, 1.0, 1.25), kNoise, &rng), {}, &out),
+      TrackLitCylinder(&t, Noisy(Profile(kCentre, kRadius, 1.0, 1.25), kNoise, &rng), {}, &out),
       CylinderTrackRefusal::kShadingChanged);
   // 5 % brighter is within the limit (8 levels): followed, the edges where they are.
   ASSERT_EQ(
-      TrackLitCylinder(t, Noisy(Profile(kCentre, kRadius, 1.0, 1.05), kNoise, &rng), {}, &out),
+      TrackLitCylinder(&t, Noisy(Profile(kCentre, kRadius, 1.0, 1.05), kNoise, &rng), {}, &out),
       CylinderTrackRefusal::kNone);
   EXPECT_NEAR(out.left_px, kCentre - kRadius, 0.1);  // ~4 σ of one draw
   EXPECT_NEAR(out.right_px, kCentre + kRadius, 0.1);
   EXPECT_NEAR(out.ambient + out.shading, 1.05 * kLevel, 3.0);
   // Three times the noise: refused as noisier.
-  EXPECT_EQ(TrackLitCylinder(t, Noisy(Profile(kCentre, kRadius), 3 * kNoise, &rng), {}, &out),
+  EXPECT_EQ(TrackLitCylinder(&t, Noisy(Profile(kCentre, kRadius), 3 * kNoise, &rng), {}, &out),
             CylinderTrackRefusal::kNoisier);
   // Other pixels (one sample fewer): refused.
   auto fewer = Noisy(Profile(kCentre, kRadius), kNoise, &rng);
   fewer.pop_back();
-  EXPECT_EQ(TrackLitCylinder(t, fewer, {}, &out), CylinderTrackRefusal::kOtherSamples);
+  EXPECT_EQ(TrackLitCylinder(&t, fewer, {}, &out), CylinderTrackRefusal::kOtherSamples);
 }
 
 TEST(CylinderTrackTest, NoTemplateOfAFitWithALineEachSide) {
