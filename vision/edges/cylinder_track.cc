@@ -159,9 +159,11 @@ CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t, const std::vector<Edg
   // fit, from the residuals of a first weighted fit, and on real profiles its width moves with
   // that scale (half a px per unit of relative change on Greeff's video: knurl and compression
   // leave structure the model lacks). The reference's scale, then, in the ratio of this frame's
-  // residuals to the reference's, once the first steps have brought the fit near its minimum.
-  // Its weights are iterated to their fixed point, which they approach by a constant ratio
-  // (mostly 0.3 to 0.6): more iterations than a least-squares fit needs, far fewer than a full fit.
+  // residuals to the reference's, once a first step has brought the fit near its minimum (not at
+  // the last frame's fit: a filament whose width changed by a tenth of a px then looked noisier
+  // at its edges, and its templates were refused in half the frames). Its weights are iterated
+  // to their fixed point, which they approach by a constant ratio (mostly 0.3 to 0.6): more
+  // iterations than a least-squares fit needs, far fewer than a full fit.
   constexpr int kMaxIterations = 16, kScaleIteration = 1;
   double noise = from.noise > 0 ? from.noise : ref.noise;
   System sys;

@@ -132,12 +132,16 @@ bool StrandTracker::Follow(const cv::Mat& frame, StrandMeasurement* out) {
     if (short_part && n >= kFirstLookFrame &&
         ((n & (n - 1)) == 0 || n % kRegrowAtMostFrames == 0)) {
       // Perhaps straight again beyond it: the whole stretch's longest straight part, if longer.
-      // Every caliper fitted in full, into a memory of its own (most of the whole stretch's
-      // calipers the templates do not describe: a gear's marks): taken, its templates replace
-      // the part's; not taken, the part's templates, lines and doubt stay.
+      // Into a copy of the memory, which holds templates for the whole stretch's calipers (the
+      // full measurement that found the part fitted them all): each caliper from its template
+      // where it holds, in full where it refuses or has none, and the whole stretch measured in
+      // full when more than a few refuse (calipers.cc). Taken, its templates replace the part's;
+      // not taken, the part's templates, lines and doubt stay. (Greeff's video: every look was
+      // taken; from the templates a look costs about a tenth of a full one, and the video was
+      // measured 1.4 times as fast, 137.653 ± 0.048 px against 137.651 ± 0.064.)
       StrandGeometry whole = g;
       whole.straight_s0_px = whole.straight_s1_px = 0;
-      CylinderMemory look;
+      CylinderMemory look = cylinders_;
       StrandMeasurement w =
           MeasureInScene(channel, data_max, FrameStatus::kValid, "", whole, roi, options_, &look);
       if (w.valid() && StraightCalipers(w, spacing) > StraightCalipers(m, spacing)) {
