@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "common/robust.h"
 #include "vision/edges/cylinder_model.h"
@@ -138,13 +139,18 @@ CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t, const std::vector<Edg
                                       const CylinderTrackOptions& opt, CylinderFit* out,
                                       const CylinderFit* start) {
   const CylinderFit& ref = t->reference;
-  // Where the fit starts: the last frame's fit of this template, else the template's own.
-  const CylinderFit& from = start && start->converged ? *start : ref;
+  // Where the fit starts: the last frame's fit of this template, else the template's own. (A
+  // copy: *out may be *start.)
+  const CylinderFit from = start && start->converged ? *start : ref;
   *out = CylinderFit{};
   out->samples = static_cast<int>(samples.size());
   if (samples.size() != t->samples.size() || samples.empty() ||
       samples.front().u_px != t->first_u_px || samples.back().u_px != t->last_u_px)
     return CylinderTrackRefusal::kOtherSamples;
+  // The shapes fitted: the template's, or where they were evaluated again; *t takes the latter
+  // only when the frame's fit is accepted.
+  const CylinderTemplate* shapes = t;
+  CylinderTemplate moved;
   Vec<kN> q;
   q << LineLevel(from), from.background_slope_left_per_px, from.ambient, from.shading, from.tilt,
       from.centre_px - t->centre_px, from.radius_px - t->radius_px, from.sigma_px - t->sigma_px;
@@ -159,42 +165,45 @@ CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t, const std::vector<Edg
   // fit, from the residuals of a first weighted fit, and on real profiles its width moves with
   // that scale (half a px per unit of relative change on Greeff's video: knurl and compression
   // leave structure the model lacks). The reference's scale, then, in the ratio of this frame's
-  // residuals to the reference's, once a first step has brought the fit near its minimum (not at
-  // the last frame's fit: a filament whose width changed by a tenth of a px then looked noisier
-  // at its edges, and its templates were refused in half the frames). Its weights are iterated
-  // to their fixed point, which they approach by a constant ratio (mostly 0.3 to 0.6): more
-  // iterations than a least-squares fit needs, far fewer than a full fit.
+  // residuals to the reference's, once a first step on the shapes fitted has brought the fit near
+  // its minimum (not at the last frame's fit: a filament whose width changed by a tenth of a px
+  // then looked noisier at its edges, and its templates were refused in half the frames; nor on
+  // shapes a move left behind, whose first-order error inflated it by up to a quarter). Its
+  // weights are iterated to their fixed point, which they approach by a constant ratio (0.3 to
+  // 0.85 per step on Greeff's knurled profiles): more steps than a least-squares fit needs, far
+  // fewer than a full fit.
   constexpr int kMaxIterations = 16, kScaleIteration = 1;
   double noise = from.noise > 0 ? from.noise : ref.noise;
   System sys;
-  const auto beyond_first_order = [&](const Vec<kN>& q) {
-    return std::abs(q[kDc]) > opt.max_shift_px || std::abs(q[kDr]) > opt.max_shift_px ||
-           std::abs(q[kDs]) > opt.max_blur_change_px;
+  const auto beyond_first_order = [&](const Vec<kN>& p) {
+    return std::abs(p[kDc]) > opt.max_shift_px || std::abs(p[kDr]) > opt.max_shift_px ||
+           std::abs(p[kDs]) > opt.max_blur_change_px;
   };
   for (int lin = 0;; ++lin) {
     bool converged = false;
     for (int it = 0; it < kMaxIterations && !converged; ++it) {
-      sys = Evaluate(*t, samples, q, noise, &residuals, &normal);
-      if (lin == 0 && it == kScaleIteration)
-        noise = ref.noise * RobustScale(residuals) / t->noise;
+      sys = Evaluate(*shapes, samples, q, noise, &residuals, &normal);
+      if (it == kScaleIteration) noise = ref.noise * RobustScale(residuals) / t->noise;
       const Vec<kN> d = step(sys);
       q += d;
       ++out->iterations;
       // The full fit's tolerance (cylinder_fit.cc).
-      converged = (lin > 0 || it > kScaleIteration) && std::abs(d[kDc]) < 1e-3 &&
-                  std::abs(d[kDr]) < 1e-3 && std::abs(d[kDs]) < 1e-2;
+      converged = it > kScaleIteration && std::abs(d[kDc]) < 1e-3 && std::abs(d[kDr]) < 1e-3 &&
+                  std::abs(d[kDs]) < 1e-2;
     }
     if (!converged || !q.allFinite()) return CylinderTrackRefusal::kNotConverged;
-    const double sigma = t->sigma_px + q[kDs];
+    const double sigma = shapes->sigma_px + q[kDs];
     if (sigma < kMinSigmaPx || sigma > t->max_sigma_px) return CylinderTrackRefusal::kMoved;
     if (!beyond_first_order(q)) break;
-    // Moved beyond the first order's reach: the shapes evaluated again where it moved to, kept for
-    // the frames after, and the fit done again from there (one evaluation of the full model's
-    // shapes, where a full fit takes dozens).
-    if (lin == opt.max_relinearisations) return CylinderTrackRefusal::kMoved;
-    Linearise(samples, ref.u_ref_px, t->centre_px + q[kDc], t->radius_px + q[kDr], sigma, t);
+    // Moved beyond the first order's reach: the shapes evaluated again where it moved to and the
+    // fit done again from there (one evaluation of the full model's shapes, where a full fit
+    // takes dozens).
+    if (lin >= opt.max_relinearisations) return CylinderTrackRefusal::kMoved;
+    if (shapes == t) moved = *t;
+    Linearise(samples, ref.u_ref_px, shapes->centre_px + q[kDc], shapes->radius_px + q[kDr],
+              sigma, &moved);
+    shapes = &moved;
     q[kDc] = q[kDr] = q[kDs] = 0;
-    ++t->relinearisations;
   }
   // The lighting and the noise are judged against the full fit the template was made from.
   const double shading_change =
@@ -203,6 +212,11 @@ CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t, const std::vector<Edg
     return CylinderTrackRefusal::kShadingChanged;
   if (noise > opt.max_noise_ratio * ref.noise) return CylinderTrackRefusal::kNoisier;
 
+  if (shapes != t) {
+    moved.relinearisations = t->relinearisations + 1;
+    *t = std::move(moved);
+    shapes = t;
+  }
   out->converged = true;
   out->centre_px = t->centre_px + q[kDc];
   out->radius_px = t->radius_px + q[kDr];

@@ -3,11 +3,12 @@
 // A lit cylinder fitted in full once (cylinder_fit.h), fitted again in later frames of a steady
 // scene as a template: the model's three shapes (box, lit, tilt) and their derivatives by centre,
 // radius and blur are kept at each of the caliper's samples, so that a later frame's fit on the
-// same pixels needs no shape evaluated again. The template's model is exact in the background and
-// the three amplitudes (a change of lighting is followed), and first order in the geometry: it
-// refuses when the centre, radius or blur moved further than its first order holds, and when the
-// profile no longer looks like the template's (more noise, other shading), rather than give a
-// width the full fit would not.
+// same pixels needs them evaluated again only when the object has moved. The template's model is
+// exact in the background and the three amplitudes (a change of lighting is followed), and first
+// order in the geometry about where its shapes were evaluated: when the centre, radius or blur
+// moved further than that holds, the shapes are evaluated again there; it refuses when they moved
+// too far for that, and when the profile no longer looks like the reference's (more noise, other
+// shading), rather than give a width the full fit would not.
 #include <array>
 #include <vector>
 
@@ -18,7 +19,7 @@ namespace clogscope::vision {
 
 struct CylinderTemplate {
   // One sample's u − u_ref, shapes and their derivatives d[shape][centre, radius, blur], at the
-  // reference geometry. (Floats: the shapes are of order 1, the model needs 1e-5 of them.)
+  // geometry below. (Floats: the shapes are of order 1, the model needs 1e-5 of them.)
   struct Sample {
     float du_px;
     float shape[3];
@@ -29,10 +30,10 @@ struct CylinderTemplate {
   float first_u_px = 0, last_u_px = 0;  // the samples' ends, to tell that they are the same pixels
   CylinderFit reference;                // the full fit the template was made from
   double max_sigma_px = 0;              // the full fit's bound on the blur
-  // The geometry the shapes are evaluated at: the reference's, until the object moves beyond the
-  // first order's reach (CylinderTrackOptions) and TrackLitCylinder evaluates them again there.
+  // The geometry the shapes are evaluated at: the reference's, or where a fit that moved beyond
+  // the first order's reach (CylinderTrackOptions) evaluated them again.
   double centre_px = 0, radius_px = 0, sigma_px = 0;
-  int relinearisations = 0;  // how often it did
+  int relinearisations = 0;  // frames whose accepted fit evaluated them again
 };
 
 // Limits beyond which the template refuses. Lengths in px.
@@ -56,7 +57,7 @@ struct CylinderTrackOptions {
 enum class CylinderTrackRefusal {
   kNone,
   kOtherSamples,    // not the template's pixels
-  kMoved,           // centre, radius or blur beyond the options' limits
+  kMoved,           // beyond max_relinearisations, or the blur beyond the full fit's bounds
   kShadingChanged,  // amplitudes beyond max_shading_change_fraction
   kNoisier,         // residual scale beyond max_noise_ratio
   kNotConverged,
@@ -73,9 +74,9 @@ bool MakeCylinderTemplate(const std::vector<EdgeSample>& samples, const Cylinder
 // the full fit's robust (Cauchy) loss, at the reference fit's scale. On
 // success fills *out as FitLitCylinder would (edges, their σ from the weighted normal matrix,
 // blur, amplitudes, noise) and returns kNone; otherwise the reason, and *out is not converged.
-// Where the object moved beyond the first order's reach, *t keeps its shapes evaluated where it
-// moved to. `start`, when given and converged, is where the fit starts (the same template's fit
-// in the frame before, which lies nearer this frame's than the template's own).
+// On success only, *t keeps its shapes evaluated again where the object moved to, if it did.
+// `start`, when given and converged, is where the fit starts (the same template's fit in the frame
+// before, which lies nearer this frame's than the template's own).
 CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t,
                                       const std::vector<EdgeSample>& samples,
                                       const CylinderTrackOptions& options, CylinderFit* out,

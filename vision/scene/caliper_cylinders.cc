@@ -48,12 +48,19 @@ void RefitAsCylinders(const GreyImage& img, const AxisFrame& f, const ClipLevels
     if (GatherCylinderSamples(img, f, clip, s0, s0 + spacing, l, r, sigma_px, &samples))
       cyl = FitLitCylinder(samples, l, r, sigma_start, background,
                            structure_doubt_px ? &residuals : nullptr);
-    const bool ok = cyl.converged && std::abs(cyl.left_px - l) < outer - 1.0 &&
-                    std::abs(cyl.right_px - r) < outer - 1.0;
+    const bool ok = SilhouettesInSlab(cyl, l, r, sigma_px);
     cf.left.converged = cf.right.converged = ok;
     cyl.converged = ok;
     // A caliper whose fit failed loses its template: counted as none, not as refused every frame.
-    if (memory) memory->Keep({s0, s0 + spacing, l, r, sigma_px, {}}, samples, cyl);
+    if (memory) {
+      CylinderMemory::Caliper slab;
+      slab.s0_px = s0;
+      slab.s1_px = s0 + spacing;
+      slab.left_px = l;
+      slab.right_px = r;
+      slab.sigma_px = sigma_px;
+      memory->Keep(slab, samples, cyl);
+    }
     if (ok) sigma_start = cyl.sigma_px;
     if (!ok) continue;
     for (int side = 0; side < 2 && structure_doubt_px; ++side) {

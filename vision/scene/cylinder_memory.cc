@@ -10,6 +10,12 @@ long Key(double s0_px) { return std::lround(s0_px * 1024.0); }
 
 double CylinderReachPx(double sigma_px) { return std::max(10.0, 3.0 * sigma_px + 2.5); }
 
+bool SilhouettesInSlab(const CylinderFit& fit, double left_px, double right_px, double sigma_px) {
+  const double outer = CylinderReachPx(sigma_px);
+  return fit.converged && std::abs(fit.left_px - left_px) < outer - 1.0 &&
+         std::abs(fit.right_px - right_px) < outer - 1.0;
+}
+
 bool GatherCylinderSamples(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
                            double s0_px, double s1_px, double left_px, double right_px,
                            double sigma_px, std::vector<EdgeSample>* samples,
@@ -36,6 +42,10 @@ bool GatherCylinderSamples(const GreyImage& img, const AxisFrame& f, const ClipL
   }
   samples->resize(n);
   return true;
+}
+
+void CylinderMemory::Wake() {
+  for (auto& [key, caliper] : calipers_) caliper.rest_frames = 0;
 }
 
 void CylinderMemory::Use(const AxisFrame& f, double spacing_px) {
@@ -99,8 +109,10 @@ TrackedCylinders TrackCylinders(const GreyImage& img, const AxisFrame& f, const 
         out.border = true;
         continue;
       }
+      // A template may follow its object from frame to frame: not out of the pixels it has.
       const auto refusal = TrackLitCylinder(&c->cylinder, samples, options, &fit, &c->last);
-      if (refusal == CylinderTrackRefusal::kNone) {
+      if (refusal == CylinderTrackRefusal::kNone &&
+          SilhouettesInSlab(fit, c->left_px, c->right_px, c->sigma_px)) {
         ++out.from_template;
         c->last = fit;
         out.samples += at_edges.samples;
@@ -126,9 +138,7 @@ TrackedCylinders TrackCylinders(const GreyImage& img, const AxisFrame& f, const 
     ++out.fitted_in_full;
     fit = FitLitCylinder(samples, slab.left_px, slab.right_px, slab.sigma_px,
                          CylinderBackground::kOneLine);
-    const double outer = CylinderReachPx(slab.sigma_px);
-    fit.converged = fit.converged && std::abs(fit.left_px - slab.left_px) < outer - 1.0 &&
-                    std::abs(fit.right_px - slab.right_px) < outer - 1.0;
+    fit.converged = SilhouettesInSlab(fit, slab.left_px, slab.right_px, slab.sigma_px);
     memory->Keep(slab, samples, fit);  // a failed fit drops the caliper's template, rests it
   }
   return out;

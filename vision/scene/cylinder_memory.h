@@ -12,6 +12,10 @@ namespace clogscope::vision {
 // How far beyond each edge a caliper's lit cylinder is fitted, for a blur sigma_px.
 double CylinderReachPx(double sigma_px);
 
+// Whether a caliper's fitted cylinder converged with its silhouettes inside the slab it was fitted
+// on (left_px and right_px, blur sigma_px, as GatherCylinderSamples): a pixel short of its reach.
+bool SilhouettesInSlab(const CylinderFit& fit, double left_px, double right_px, double sigma_px);
+
 // The pixels one caliper's lit cylinder is fitted to: the slab s0 <= s < s1 across both edges
 // (left_px and right_px at its middle) and far enough beyond them for a blur sigma_px, every
 // fourth pixel deep inside the object. Counts the pixels in both edges' transitions and how many
@@ -44,6 +48,8 @@ class CylinderMemory {
 
   // Forgets the templates unless they were made in axis frame f on calipers `spacing_px` long.
   void Use(const AxisFrame& f, double spacing_px);
+  // Ends every caliper's rest: each is fitted again in the next frame.
+  void Wake();
   void Clear() { calipers_.clear(); }
   bool empty() const { return calipers_.empty(); }
 
@@ -71,7 +77,8 @@ class CylinderMemory {
 };
 
 // Every caliper of [band_s0_px, band_s0_px + n·spacing_px) fitted as a lit cylinder: from its
-// template where it has one that holds in this frame; none while it rests; else in full
+// template where it has one that holds in this frame and keeps its silhouettes in its slab; none
+// while it rests; else in full
 // (FitLitCylinder on the template's slab, or on one about the memory's lines), its template then
 // kept. The slabs stay where the full measurement put them: on real profiles the full fit's width
 // moves with the pixels it is given by a tenth of a px.

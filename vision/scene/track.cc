@@ -14,10 +14,13 @@ constexpr double kTipHysteresisPx = 1.5;  // tip moves smaller than this keep th
 // for a longer part in the second frame in a row the part is short, then ever more rarely while
 // it stays short (its 4th, 8th … frame), and at least every kRegrowAtMostFrames frames. (Greeff's
 // real video: a part of 10 calipers, kept 20 frames, read 137.38–137.49 px where the 17 found
-// again then read 137.65, and 4 of 281 widths were left out as outliers; with the looks, none.
-// Looking from the first short frame: 7 looks in 281 frames, each costing a few dozen tracked
-// frames' time; from the second: 4, the video measured 1.26 times as fast, and its widths' frame-
-// to-frame σ 0.066 px instead of 0.062.)
+// again then read 137.65, and 4 of 281 widths were left out as outliers; with the looks, none
+// (3 once the looks from templates brought the frame-to-frame σ to 0.046 px: the same few frames
+// then stand further out).
+// Looking from the first short frame: 7 looks in 281 frames, each then measured in full at the
+// cost of a few dozen tracked frames; from the second: 4, the video measured 1.26 times as fast,
+// and its widths' frame-to-frame σ 0.066 px instead of 0.062. A look from the templates a look
+// taken before left costs about a tenth of one in full.)
 constexpr int kShortStraightPartTimes = 2;
 constexpr int kRegrowAtMostFrames = 32;
 constexpr int kFirstLookFrame = 2;
@@ -132,16 +135,16 @@ bool StrandTracker::Follow(const cv::Mat& frame, StrandMeasurement* out) {
     if (short_part && n >= kFirstLookFrame &&
         ((n & (n - 1)) == 0 || n % kRegrowAtMostFrames == 0)) {
       // Perhaps straight again beyond it: the whole stretch's longest straight part, if longer.
-      // Into a copy of the memory, which holds templates for the whole stretch's calipers (the
-      // full measurement that found the part fitted them all): each caliper from its template
-      // where it holds, in full where it refuses or has none, and the whole stretch measured in
-      // full when more than a few refuse (calipers.cc). Taken, its templates replace the part's;
-      // not taken, the part's templates, lines and doubt stay. (Greeff's video: every look was
-      // taken; from the templates a look costs about a tenth of a full one, and the video was
-      // measured 1.4 times as fast, 137.653 ± 0.048 px against 137.651 ± 0.064.)
+      // Into a copy of the memory, every rest ended (a caliper beside a gear mark may have
+      // straightened): each caliper from its template where it holds (a look taken before left
+      // templates for the whole stretch), in full where it refuses or has none (on slabs about
+      // the memory's edge lines, as when the part no longer holds, above), and the whole stretch
+      // measured in full when more than a few refuse (calipers.cc). Taken, its templates replace
+      // the part's; not taken, the part's templates, lines and doubt stay.
       StrandGeometry whole = g;
       whole.straight_s0_px = whole.straight_s1_px = 0;
       CylinderMemory look = cylinders_;
+      look.Wake();
       StrandMeasurement w =
           MeasureInScene(channel, data_max, FrameStatus::kValid, "", whole, roi, options_, &look);
       if (w.valid() && StraightCalipers(w, spacing) > StraightCalipers(m, spacing)) {

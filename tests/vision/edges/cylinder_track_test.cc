@@ -142,12 +142,14 @@ TEST(CylinderTrackTest, FollowsAMoveBeyondItsFirstOrderByEvaluatingItsShapesAgai
                                             reference.reference.sigma_px,
                                             CylinderBackground::kOneLine);
     ASSERT_TRUE(full.converged);
-    // One draw's edges scatter by ~0.03 px: 0.1 px is beyond 3 σ; the full fit on the same
-    // pixels differs only by the robust scale each takes.
+    // One draw's edges scatter by ~0.03 px: 0.1 px is beyond 3 σ. The full fit on the same
+    // pixels differs by the robust scale each takes and the last evaluation's first order (up to
+    // 0.3 px from where it ends): up to 0.019 px over 1000 draws (a review's count), where a
+    // template's first order alone is off by 0.05–0.1 px at these moves.
     EXPECT_NEAR(out.left_px, c - r, 0.1) << where;
     EXPECT_NEAR(out.right_px, c + r, 0.1) << where;
-    EXPECT_NEAR(out.left_px, full.left_px, 0.01) << where;
-    EXPECT_NEAR(out.right_px, full.right_px, 0.01) << where;
+    EXPECT_NEAR(out.left_px, full.left_px, 0.025) << where;
+    EXPECT_NEAR(out.right_px, full.right_px, 0.025) << where;
     // The template now holds the shapes where it moved to: the next frame there needs no more.
     CylinderFit again;
     const int before = t.relinearisations;
@@ -157,16 +159,22 @@ TEST(CylinderTrackTest, FollowsAMoveBeyondItsFirstOrderByEvaluatingItsShapesAgai
     EXPECT_EQ(t.relinearisations, before) << where;
     EXPECT_NEAR(again.right_px - again.left_px, 2 * r, 0.1) << where;
   }
-  // Far moves: followed to the right edges or refused, never a width elsewhere.
+  // Far moves: 2 and 3 px followed to the right edges within two evaluations; 5 px too far to
+  // follow, refused and the template left as it was.
   for (const double shift : {2.0, -3.0, 5.0}) {
     CylinderTemplate t = reference;
     CylinderFit out;
     const auto refusal =
         TrackLitCylinder(&t, Noisy(Profile(kCentre + shift, kRadius), kNoise, &rng), {}, &out);
-    if (refusal != CylinderTrackRefusal::kNone) {
+    if (shift == 5.0) {
+      EXPECT_NE(refusal, CylinderTrackRefusal::kNone) << shift;
       EXPECT_FALSE(out.converged) << shift;
+      EXPECT_EQ(t.centre_px, reference.centre_px) << shift;
+      EXPECT_EQ(t.relinearisations, 0) << shift;
       continue;
     }
+    ASSERT_EQ(refusal, CylinderTrackRefusal::kNone) << shift << ": "
+                                                    << CylinderTrackRefusalName(refusal);
     EXPECT_NEAR(out.left_px, kCentre + shift - kRadius, 0.1) << shift;
     EXPECT_NEAR(out.right_px, kCentre + shift + kRadius, 0.1) << shift;
   }

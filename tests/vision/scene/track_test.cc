@@ -137,6 +137,38 @@ TEST(StrandTrackerTest, FilamentCalipersSpoiledForAWhileRestThenReturn) {
   EXPECT_LE(tracker.full_detections(), 2);
 }
 
+// A tooth that stays over the silhouette longer than one rest: the calipers it spoils fail their
+// full fit again when their first rest ends, and rest twice as long (CylinderMemory::
+// kMaxRestDoublings), so they come back 8 frames after that second failure, not 4 after the tooth
+// has gone.
+TEST(StrandTrackerTest, FilamentCalipersFailingAgainRestTwiceAsLong) {
+  const SceneParams p = LitFilament();
+  StrandTracker tracker(WholeStretch());
+  constexpr int kToothFrom = 3, kToothUntil = 10;  // first failure 3, again at 3 + 1 + 4 = 8
+  constexpr int kBack = 8 + 1 + 2 * CylinderMemory::kRestFrames, kFrames = kBack + 2;
+  int calipers_clean = 0;
+  for (int i = 0; i < kFrames; ++i) {
+    FrameTruth t;
+    cv::Mat img = RenderFrame(p, i, &t);
+    if (i >= kToothFrom && i < kToothUntil) {
+      const int left = static_cast<int>(std::lround(t.tip_x_px - 0.5 * t.width_px));
+      cv::rectangle(img, cv::Rect(left - 12, img.rows / 2, 24, 16), cv::Scalar::all(0), cv::FILLED);
+    }
+    const StrandMeasurement m = tracker.Measure(img);
+    ASSERT_TRUE(m.valid()) << i << ": " << m.detail;
+    EXPECT_NEAR(m.width_px, t.width_px, 0.05) << "frame " << i;
+    if (i == kToothFrom - 1) calipers_clean = m.calipers_used;
+    // Gone at 10, but resting until 16 (a single rest of 4 would have tried them again at 13).
+    if (i >= kToothFrom && i < kBack) {
+      EXPECT_LT(m.calipers_used, calipers_clean) << i;
+    }
+    if (i >= kBack) {
+      EXPECT_EQ(m.calipers_used, calipers_clean) << i;
+    }
+  }
+  EXPECT_LE(tracker.full_detections(), 2);
+}
+
 TEST(StrandTrackerTest, LosesTheStrandAndFindsItAgain) {
   SceneParams p;
   StrandTracker tracker({});
