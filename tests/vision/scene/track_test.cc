@@ -107,25 +107,34 @@ TEST(StrandTrackerTest, FilamentFromTemplatesJudgesClippingAtItsEdges) {
   EXPECT_GE(tracker.cylinders().frames_from_templates, kFrames - 3);
 }
 
+// Frame i of the lit filament, with a gear tooth over its left silhouette (a dark block across it
+// at the middle of the stretch) in frames tooth_from ≤ i < tooth_until, measured by the tracker:
+// valid, and the rendered width within 0.05 px.
+StrandMeasurement MeasureLitFilamentFrame(StrandTracker* tracker, int i, int tooth_from,
+                                          int tooth_until) {
+  FrameTruth t;
+  cv::Mat img = RenderFrame(LitFilament(), i, &t);
+  if (i >= tooth_from && i < tooth_until) {
+    const int left = static_cast<int>(std::lround(t.tip_x_px - 0.5 * t.width_px));
+    cv::rectangle(img, cv::Rect(left - 12, img.rows / 2, 24, 16), cv::Scalar::all(0), cv::FILLED);
+  }
+  const StrandMeasurement m = tracker->Measure(img);
+  EXPECT_TRUE(m.valid()) << i << ": " << m.detail;
+  EXPECT_NEAR(m.width_px, t.width_px, 0.05) << "frame " << i;
+  return m;
+}
+
 // A gear tooth over the left silhouette for three frames (a dark block across it at the middle of
 // the stretch): the calipers it spoils fail their full fits and rest (CylinderMemory::kRestFrames)
 // instead of being fitted in full again in every frame; once it has gone they are fitted again
 // and count again. The widths stay the rendered ones throughout.
 TEST(StrandTrackerTest, FilamentCalipersSpoiledForAWhileRestThenReturn) {
-  const SceneParams p = LitFilament();
   StrandTracker tracker(WholeStretch());
   constexpr int kFrames = 16, kToothFrom = 3, kToothUntil = 6;
   int calipers_clean = 0;
   for (int i = 0; i < kFrames; ++i) {
-    FrameTruth t;
-    cv::Mat img = RenderFrame(p, i, &t);
-    if (i >= kToothFrom && i < kToothUntil) {
-      const int left = static_cast<int>(std::lround(t.tip_x_px - 0.5 * t.width_px));
-      cv::rectangle(img, cv::Rect(left - 12, img.rows / 2, 24, 16), cv::Scalar::all(0), cv::FILLED);
-    }
-    const StrandMeasurement m = tracker.Measure(img);
-    ASSERT_TRUE(m.valid()) << i << ": " << m.detail;
-    EXPECT_NEAR(m.width_px, t.width_px, 0.05) << "frame " << i;
+    const StrandMeasurement m = MeasureLitFilamentFrame(&tracker, i, kToothFrom, kToothUntil);
+    if (HasFailure()) return;
     if (i == kToothFrom - 1) calipers_clean = m.calipers_used;
     if (i >= kToothFrom && i < kToothUntil) {
       EXPECT_LT(m.calipers_used, calipers_clean) << i;
@@ -142,21 +151,13 @@ TEST(StrandTrackerTest, FilamentCalipersSpoiledForAWhileRestThenReturn) {
 // kMaxRestDoublings), so they come back 8 frames after that second failure, not 4 after the tooth
 // has gone.
 TEST(StrandTrackerTest, FilamentCalipersFailingAgainRestTwiceAsLong) {
-  const SceneParams p = LitFilament();
   StrandTracker tracker(WholeStretch());
   constexpr int kToothFrom = 3, kToothUntil = 10;  // first failure 3, again at 3 + 1 + 4 = 8
   constexpr int kBack = 8 + 1 + 2 * CylinderMemory::kRestFrames, kFrames = kBack + 2;
   int calipers_clean = 0;
   for (int i = 0; i < kFrames; ++i) {
-    FrameTruth t;
-    cv::Mat img = RenderFrame(p, i, &t);
-    if (i >= kToothFrom && i < kToothUntil) {
-      const int left = static_cast<int>(std::lround(t.tip_x_px - 0.5 * t.width_px));
-      cv::rectangle(img, cv::Rect(left - 12, img.rows / 2, 24, 16), cv::Scalar::all(0), cv::FILLED);
-    }
-    const StrandMeasurement m = tracker.Measure(img);
-    ASSERT_TRUE(m.valid()) << i << ": " << m.detail;
-    EXPECT_NEAR(m.width_px, t.width_px, 0.05) << "frame " << i;
+    const StrandMeasurement m = MeasureLitFilamentFrame(&tracker, i, kToothFrom, kToothUntil);
+    if (HasFailure()) return;
     if (i == kToothFrom - 1) calipers_clean = m.calipers_used;
     // Gone at 10, but resting until 16 (a single rest of 4 would have tried them again at 13).
     if (i >= kToothFrom && i < kBack) {
