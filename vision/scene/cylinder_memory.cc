@@ -120,6 +120,7 @@ TrackedCylinders TrackCylinders(const GreyImage& img, const AxisFrame& f, const 
         continue;
       }
       ++out.refused;
+      fit.converged = false;  // (a fit outside its slab) until the full fit below replaces it
     }
     if (c) {  // its template's slab, or the one of the fit that failed before its rest
       slab.left_px = c->left_px;
