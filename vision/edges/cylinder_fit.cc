@@ -139,8 +139,7 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   // (c·s)²·log(1 + (r/(c·s))²) at that scale, whose Gauss–Newton system carries the weights
   // 1/(1 + (r/(c·s))²) at the trial's own residuals (iteratively reweighted inside one LM run).
   double cauchy_scale = 0;
-  fitcore::NormalSystem<kN> normal;
-  normal.Resize(samples.size());
+  fitcore::NormalSystem<kN> normal(samples.size());
   const auto evaluate = [&](const Vec<kN>& q, Mat<kN>* jtj, Vec<kN>* jtr) {
     double cost = 0;
     const double cs = kCauchyC * cauchy_scale, inv_cs2 = cs > 0 ? 1.0 / (cs * cs) : 0.0;
@@ -244,8 +243,8 @@ CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_g
 double CylinderEdgeContrast(const CylinderFit& fit, int side) {
   const double u = side == 0 ? fit.left_px + 2.0 * fit.sigma_px : fit.right_px - 2.0 * fit.sigma_px;
   Shapes sh;
-  EvalShapes(u, fit.u_ref_px, fit.centre_px, fit.radius_px, fit.sigma_px,
-             fitcore::BlurredSqrt::Get(), &sh);
+  EvalShapes<false>(u, fit.u_ref_px, fit.centre_px, fit.radius_px, fit.sigma_px,
+                    fitcore::BlurredSqrt::Get(), &sh);
   const double object =
       fit.ambient * sh.v[kBox] + fit.shading * sh.v[kLit] + fit.tilt * sh.v[kTilt];
   return side == 0 ? object : -object;

@@ -27,9 +27,32 @@ enum { kB0, kB1, kA, kK, kL, kDc, kDr, kDs, kN };
 constexpr fitcore::cylinder::Shape kObjectShapes[3] = {
     fitcore::cylinder::kBox, fitcore::cylinder::kLit, fitcore::cylinder::kTilt};
 
-// The one line's level at u_ref from its level at the left silhouette.
-double LineLevel(const CylinderFit& fit) {
-  return fit.background_left - fit.background_slope_left_per_px * (fit.left_px - fit.u_ref_px);
+// A fit's parameters about the template's geometry: the one line's level at u_ref (from its
+// level at the left silhouette) and slope, the amplitudes, and the geometry's offsets.
+Vec<kN> Parameters(const CylinderFit& fit, const CylinderTemplate& t) {
+  Vec<kN> q;
+  q << fit.background_left - fit.background_slope_left_per_px * (fit.left_px - fit.u_ref_px),
+      fit.background_slope_left_per_px, fit.ambient, fit.shading, fit.tilt,
+      fit.centre_px - t.centre_px, fit.radius_px - t.radius_px, fit.sigma_px - t.sigma_px;
+  return q;
+}
+
+// The template's model at one sample for parameters q, and its Jacobian row j.
+double Model(const CylinderTemplate::Sample& s, const Vec<kN>& q, double* j) {
+  const double amp[3] = {q[kA], q[kK], q[kL]};
+  const double dg[3] = {q[kDc], q[kDr], q[kDs]};
+  j[kB0] = 1.0;
+  j[kB1] = s.du_px;
+  double model = q[kB0] + q[kB1] * s.du_px;
+  for (int k = 0; k < 3; ++k) {
+    const double shape =
+        s.shape[k] + s.d_shape[k][0] * dg[0] + s.d_shape[k][1] * dg[1] + s.d_shape[k][2] * dg[2];
+    j[kA + k] = shape;
+    model += amp[k] * shape;
+  }
+  for (int k = 0; k < 3; ++k)
+    j[kDc + k] = amp[0] * s.d_shape[0][k] + amp[1] * s.d_shape[1][k] + amp[2] * s.d_shape[2][k];
+  return model;
 }
 
 // The Gauss–Newton system at q over all samples with Cauchy weights at the residuals and scale
@@ -43,25 +66,10 @@ struct System {
 System Evaluate(const CylinderTemplate& t, const std::vector<EdgeSample>& samples, const Vec<kN>& q,
                 double noise, std::vector<double>* residuals, fitcore::NormalSystem<kN>* normal) {
   System out;
-  normal->Resize(samples.size());
   const double cs = kCauchyC * noise, inv_cs2 = 1.0 / (cs * cs);
-  const double amp[3] = {q[kA], q[kK], q[kL]};
-  const double dg[3] = {q[kDc], q[kDr], q[kDs]};
   for (size_t i = 0; i < samples.size(); ++i) {
-    const CylinderTemplate::Sample& s = t.samples[i];
     double j[kN];
-    j[kB0] = 1.0;
-    j[kB1] = s.du_px;
-    double model = q[kB0] + q[kB1] * s.du_px;
-    for (int k = 0; k < 3; ++k) {
-      const double shape =
-          s.shape[k] + s.d_shape[k][0] * dg[0] + s.d_shape[k][1] * dg[1] + s.d_shape[k][2] * dg[2];
-      j[kA + k] = shape;
-      model += amp[k] * shape;
-    }
-    for (int k = 0; k < 3; ++k)
-      j[kDc + k] = amp[0] * s.d_shape[0][k] + amp[1] * s.d_shape[1][k] + amp[2] * s.d_shape[2][k];
-    const double r = model - samples[i].value;
+    const double r = Model(t.samples[i], q, j) - samples[i].value;
     (*residuals)[i] = r;
     const double w = 1.0 / (1.0 + r * r * inv_cs2);
     out.wsum += w;
@@ -124,12 +132,10 @@ bool MakeCylinderTemplate(const std::vector<EdgeSample>& samples, const Cylinder
   out->max_sigma_px = std::max(3.0 * fit.sigma_px, std::min(8.0, fit.radius_px / 3.0));
   Linearise(samples, fit.u_ref_px, fit.centre_px, fit.radius_px, fit.sigma_px, out);
   std::vector<double> residuals(samples.size());
-  const double b0 = LineLevel(fit);
+  const Vec<kN> q = Parameters(fit, *out);
   for (size_t i = 0; i < samples.size(); ++i) {
-    const CylinderTemplate::Sample& s = out->samples[i];
-    const double model = b0 + fit.background_slope_left_per_px * s.du_px + fit.ambient * s.shape[0] +
-                         fit.shading * s.shape[1] + fit.tilt * s.shape[2];
-    residuals[i] = model - samples[i].value;
+    double j[kN];
+    residuals[i] = Model(out->samples[i], q, j) - samples[i].value;
   }
   out->noise = RobustScale(residuals);
   return true;
@@ -151,11 +157,9 @@ CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t, const std::vector<Edg
   // only when the frame's fit is accepted.
   const CylinderTemplate* shapes = t;
   CylinderTemplate moved;
-  Vec<kN> q;
-  q << LineLevel(from), from.background_slope_left_per_px, from.ambient, from.shading, from.tilt,
-      from.centre_px - t->centre_px, from.radius_px - t->radius_px, from.sigma_px - t->sigma_px;
+  Vec<kN> q = Parameters(from, *t);
   std::vector<double> residuals(samples.size());
-  fitcore::NormalSystem<kN> normal;
+  fitcore::NormalSystem<kN> normal(samples.size());
   const auto step = [](const System& s) -> Vec<kN> {
     Mat<kN> a = s.jtj;
     a.diagonal().array() += 1e-12;

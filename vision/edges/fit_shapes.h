@@ -181,10 +181,8 @@ inline void Accumulate(const double* j, double r, double w, double (*h)[N], doub
 template <int N>
 class NormalSystem {
  public:
-  void Resize(size_t n) {
-    j_.resize(static_cast<Eigen::Index>(n), N);
-    r_.resize(static_cast<Eigen::Index>(n));
-  }
+  // For n residuals.
+  explicit NormalSystem(size_t n) : j_(static_cast<Eigen::Index>(n), N), r_(n) {}
   void Set(size_t i, const double* j, double r, double w) {
     const double s = std::sqrt(w);
     const auto row = static_cast<Eigen::Index>(i);

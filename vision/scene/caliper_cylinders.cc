@@ -52,15 +52,8 @@ void RefitAsCylinders(const GreyImage& img, const AxisFrame& f, const ClipLevels
     cf.left.converged = cf.right.converged = ok;
     cyl.converged = ok;
     // A caliper whose fit failed loses its template: counted as none, not as refused every frame.
-    if (memory) {
-      CylinderMemory::Caliper slab;
-      slab.s0_px = s0;
-      slab.s1_px = s0 + spacing;
-      slab.left_px = l;
-      slab.right_px = r;
-      slab.sigma_px = sigma_px;
-      memory->Keep(slab, samples, cyl);
-    }
+    if (memory)
+      memory->Keep(CylinderMemory::Caliper::OnSlab(s0, s0 + spacing, l, r, sigma_px), samples, cyl);
     if (ok) sigma_start = cyl.sigma_px;
     if (!ok) continue;
     for (int side = 0; side < 2 && structure_doubt_px; ++side) {

@@ -91,13 +91,6 @@ TrackedCylinders TrackCylinders(const GreyImage& img, const AxisFrame& f, const 
     const double s0 = band_s0_px + k * spacing_px, s1 = s0 + spacing_px;
     CylinderFit& fit = out.fits[k];
     ClippedCount at_edges;
-    CylinderMemory::Caliper slab;
-    const double sc = 0.5 * (s0 + s1);
-    slab.s0_px = s0;
-    slab.s1_px = s1;
-    slab.left_px = memory->left_u0_px + memory->slope * sc;
-    slab.right_px = memory->right_u0_px + memory->slope * sc;
-    slab.sigma_px = memory->sigma_px;
     CylinderMemory::Caliper* c = memory->Find(s0);
     if (c && c->rest_frames > 0) {  // resting after a failed full fit
       --c->rest_frames;
@@ -122,11 +115,14 @@ TrackedCylinders TrackCylinders(const GreyImage& img, const AxisFrame& f, const 
       ++out.refused;
       fit.converged = false;  // (a fit outside its slab) until the full fit below replaces it
     }
-    if (c) {  // its template's slab, or the one of the fit that failed before its rest
-      slab.left_px = c->left_px;
-      slab.right_px = c->right_px;
-      slab.sigma_px = c->sigma_px;
-    }
+    // Its template's slab, or the one of the fit that failed before its rest; else one about the
+    // memory's lines.
+    const double sc = 0.5 * (s0 + s1);
+    const CylinderMemory::Caliper slab =
+        c ? CylinderMemory::Caliper::OnSlab(s0, s1, c->left_px, c->right_px, c->sigma_px)
+          : CylinderMemory::Caliper::OnSlab(s0, s1, memory->left_u0_px + memory->slope * sc,
+                                            memory->right_u0_px + memory->slope * sc,
+                                            memory->sigma_px);
     // In full, as calipers.cc's RefitAsCylinders (a cylinder whose silhouettes leave their slab
     // does not count).
     if (!GatherCylinderSamples(img, f, clip, s0, s1, slab.left_px, slab.right_px, slab.sigma_px,

@@ -37,6 +37,17 @@ class CylinderMemory {
     int rest_frames = 0;        // frames it is left out before its full fit is tried again
     int failures = 0;           // full fits in a row that failed
     CylinderFit last;           // its template's last fit, where the next one starts
+    // A caliper on the slab s0 <= s < s1 about left_px and right_px, for a blur sigma_px.
+    static Caliper OnSlab(double s0_px, double s1_px, double left_px, double right_px,
+                          double sigma_px) {
+      Caliper c;
+      c.s0_px = s0_px;
+      c.s1_px = s1_px;
+      c.left_px = left_px;
+      c.right_px = right_px;
+      c.sigma_px = sigma_px;
+      return c;
+    }
   };
   // After a full fit that failed (a gear tooth over an edge, mostly), a caliper is left out for
   // this many frames: on a drive's video the same few calipers failed again in most frames, at
