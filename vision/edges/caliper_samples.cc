@@ -114,6 +114,30 @@ bool GatherEdgeSamples(const GreyImage& img, const AxisFrame& f, double s0, doub
   return true;
 }
 
+PixelGroups GroupByU(const std::vector<EdgeSample>& samples, double span_px) {
+  PixelGroups out;
+  const size_t n = samples.size();
+  out.pixels.resize(n);
+  for (size_t i = 0; i < n; ++i) out.pixels[i] = static_cast<int>(i);
+  std::stable_sort(out.pixels.begin(), out.pixels.end(),
+                   [&](int a, int b) { return samples[a].u_px < samples[b].u_px; });
+  out.offset_px.resize(n);
+  for (size_t begin = 0; begin < n;) {
+    const double first = samples[out.pixels[begin]].u_px;
+    size_t end = begin + 1;
+    while (end < n && samples[out.pixels[end]].u_px - first <= span_px) ++end;
+    double mean = 0;
+    for (size_t k = begin; k < end; ++k) mean += samples[out.pixels[k]].u_px;
+    mean /= static_cast<double>(end - begin);
+    for (size_t k = begin; k < end; ++k)
+      out.offset_px[k] = static_cast<float>(samples[out.pixels[k]].u_px - mean);
+    out.end.push_back(static_cast<int>(end));
+    out.mean_u_px.push_back(mean);
+    begin = end;
+  }
+  return out;
+}
+
 ClippedCount CountClippedNear(const std::vector<EdgeSample>& samples, const ClipLevels& clip,
                               double edge_u, double half_px) {
   ClippedCount n;

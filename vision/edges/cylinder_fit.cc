@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "common/robust.h"
+#include "vision/edges/caliper_samples.h"
 #include "vision/edges/cylinder_model.h"
 #include "vision/edges/fit_shapes.h"
 
@@ -52,14 +53,16 @@ struct Layout {
   }
 };
 
+// The model at u, its Jacobian row j and its slope across u: the object's shapes and each side's
+// level depend on u − centre, and each side's line moves with u besides.
 template <int kBg>
-inline double Model(const EdgeSample& smp, const Vec<Layout<kBg>::kN>& p, double u_ref,
-                    const fitcore::BlurredSqrt& root, double* j) {
+inline double Model(double u, const Vec<Layout<kBg>::kN>& p, double u_ref,
+                    const fitcore::BlurredSqrt& root, double* j, double* slope) {
   using L = Layout<kBg>;
   Shapes sh;
-  EvalShapes<kBg == 4>(smp.u_px, u_ref, p[L::kC], p[L::kR], p[L::kS], root, &sh);
+  EvalShapes<kBg == 4>(u, u_ref, p[L::kC], p[L::kR], p[L::kS], root, &sh);
   double v[L::kAmplitudes], d[L::kAmplitudes][3];
-  L::Amplitudes(sh, smp.u_px - u_ref, v, d);
+  L::Amplitudes(sh, u - u_ref, v, d);
   double value = 0;
   for (int i = 0; i < L::kAmplitudes; ++i) {
     j[i] = v[i];
@@ -70,27 +73,37 @@ inline double Model(const EdgeSample& smp, const Vec<Layout<kBg>::kN>& p, double
     for (int i = 0; i < L::kAmplitudes; ++i) dq += p[i] * d[i][q];
     j[L::kC + q] = dq;
   }
+  *slope = -j[L::kC] + p[1] * v[0] + (kBg == 4 ? p[3] * v[2] : 0.0);
   return value;
 }
 
-// The amplitudes by weighted least squares for fixed centre, radius and blur: the start.
+// The amplitudes by weighted least squares for fixed centre, radius and blur: the start (each
+// group's pixels taken at its mean u).
 template <int kBg>
-void SolveAmplitudes(const std::vector<EdgeSample>& samples, const std::vector<double>& w,
-                     double u_ref, Vec<Layout<kBg>::kN>* p) {
+void SolveAmplitudes(const std::vector<EdgeSample>& samples, const PixelGroups& groups,
+                     const std::vector<double>& w, double u_ref, Vec<Layout<kBg>::kN>* p) {
   using L = Layout<kBg>;
   const auto& root = fitcore::BlurredSqrt::Get();
   using Row = Eigen::Matrix<double, L::kAmplitudes, 1>;
   Eigen::Matrix<double, L::kAmplitudes, L::kAmplitudes> ata;
   ata.setZero();
   Row atb = Row::Zero();
-  for (size_t i = 0; i < samples.size(); ++i) {
+  int k = 0;
+  for (size_t g = 0; g < groups.size(); ++g) {
+    const double u = groups.mean_u_px[g];
     Shapes sh;
-    EvalShapes<kBg == 4>(samples[i].u_px, u_ref, (*p)[L::kC], (*p)[L::kR], (*p)[L::kS], root, &sh);
+    EvalShapes<kBg == 4>(u, u_ref, (*p)[L::kC], (*p)[L::kR], (*p)[L::kS], root, &sh);
     Row row;
     double d[L::kAmplitudes][3];
-    L::Amplitudes(sh, samples[i].u_px - u_ref, row.data(), d);
-    ata += w[i] * row * row.transpose();
-    atb += w[i] * samples[i].value * row;
+    L::Amplitudes(sh, u - u_ref, row.data(), d);
+    double w_sum = 0, wv_sum = 0;
+    for (const int end = groups.end[g]; k < end; ++k) {
+      const int i = groups.pixels[k];
+      w_sum += w[i];
+      wv_sum += w[i] * samples[i].value;
+    }
+    ata += w_sum * row * row.transpose();
+    atb += wv_sum * row;
   }
   ata.diagonal().array() += 1e-9;
   p->template head<L::kAmplitudes>() = ata.ldlt().solve(atb);
@@ -111,11 +124,18 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   p[kC] = u_ref;
   p[kR] = 0.5 * (right_guess_px - left_guess_px);
   p[kS] = std::max(sigma_guess_px, 0.5);
+  // The pixels in groups at about the same u (caliper_samples.h): the model once a group.
+  const PixelGroups groups = GroupByU(samples, CylinderGroupSpanPx(p[kS]));
   std::vector<double> w(samples.size(), 1.0), residuals(samples.size());
   const auto residuals_at = [&](const Vec<kN>& q) {
-    for (size_t i = 0; i < samples.size(); ++i) {
-      double j[kN];
-      residuals[i] = Model<kBg>(samples[i], q, u_ref, root, j) - samples[i].value;
+    int k = 0;
+    for (size_t g = 0; g < groups.size(); ++g) {
+      double j[kN], slope;
+      const double model = Model<kBg>(groups.mean_u_px[g], q, u_ref, root, j, &slope);
+      for (const int end = groups.end[g]; k < end; ++k) {
+        const int i = groups.pixels[k];
+        residuals[i] = model + slope * groups.offset_px[k] - samples[i].value;
+      }
     }
   };
   // Cauchy weights from the residuals at a scale (RobustScale).
@@ -128,33 +148,41 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   // Robust amplitudes at the guessed geometry before any of it moves: a specular stripe is then
   // already down-weighted when the nonlinear fit starts, instead of dragging blur and radius to
   // wherever it fits best (a stripe 40 levels high once pulled the blur to 14 px).
-  SolveAmplitudes<kBg>(samples, w, u_ref, &p);
+  SolveAmplitudes<kBg>(samples, groups, w, u_ref, &p);
   for (int round = 0; round < 2; ++round) {
     residuals_at(p);
     reweight(RobustScale(residuals));
-    SolveAmplitudes<kBg>(samples, w, u_ref, &p);
+    SolveAmplitudes<kBg>(samples, groups, w, u_ref, &p);
   }
 
   // Weighted least squares with the weights w while cauchy_scale is 0; else the Cauchy loss
   // (c·s)²·log(1 + (r/(c·s))²) at that scale, whose Gauss–Newton system carries the weights
   // 1/(1 + (r/(c·s))²) at the trial's own residuals (iteratively reweighted inside one LM run).
   double cauchy_scale = 0;
-  fitcore::NormalSystem<kN> normal(samples.size());
+  fitcore::NormalSystem<kN> normal(groups.size());
   const auto evaluate = [&](const Vec<kN>& q, Mat<kN>* jtj, Vec<kN>* jtr) {
     double cost = 0;
     const double cs = kCauchyC * cauchy_scale, inv_cs2 = cs > 0 ? 1.0 / (cs * cs) : 0.0;
-    for (size_t i = 0; i < samples.size(); ++i) {
-      double j[kN];
-      const double r = Model<kBg>(samples[i], q, u_ref, root, j) - samples[i].value;
-      double wi = w[i];
-      if (cs > 0) {
-        const double z2 = r * r * inv_cs2;
-        wi = 1.0 / (1.0 + z2);
-        cost += cs * cs * std::log1p(z2);
-      } else {
-        cost += wi * r * r;
+    int k = 0;
+    for (size_t g = 0; g < groups.size(); ++g) {
+      double j[kN], slope;
+      const double model = Model<kBg>(groups.mean_u_px[g], q, u_ref, root, j, &slope);
+      double w_sum = 0, wr_sum = 0;
+      for (const int end = groups.end[g]; k < end; ++k) {
+        const int i = groups.pixels[k];
+        const double r = model + slope * groups.offset_px[k] - samples[i].value;
+        double wi = w[i];
+        if (cs > 0) {
+          const double z2 = r * r * inv_cs2;
+          wi = 1.0 / (1.0 + z2);
+          cost += cs * cs * std::log1p(z2);
+        } else {
+          cost += wi * r * r;
+        }
+        w_sum += wi;
+        wr_sum += wi * r;
       }
-      normal.Set(i, j, r, wi);
+      normal.Set(g, j, w_sum > 0 ? wr_sum / w_sum : 0.0, w_sum);
     }
     normal.Get(jtj, jtr);
     return cost;

@@ -51,12 +51,17 @@ struct CylinderFit {
 };
 
 // Fits the model to samples spanning both edges and the background beyond each, started from the
-// two edges (left < right) and a blur. residuals_out, when given, receives each sample's residual
-// (value − model) at the fit.
+// two edges (left < right) and a blur; samples at about the same u are taken in groups (GroupByU
+// with CylinderGroupSpanPx of the blur's guess). residuals_out, when given, receives each sample's
+// residual (model − value) at the fit.
 CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_guess_px,
                            double right_guess_px, double sigma_guess_px,
                            CylinderBackground background = CylinderBackground::kEachSide,
                            std::vector<double>* residuals_out = nullptr);
+
+// The span of u a fit of blur sigma_px takes its pixels' groups over (GroupByU): the model's
+// curvature over it is below 1e-4 of the edge's step, and odd about the edge (it moves no edge).
+inline double CylinderGroupSpanPx(double sigma_px) { return 0.05 * sigma_px; }
 
 // A fitted cylinder's contrast at one silhouette (side 0 left, 1 right), as a per-edge fit's
 // (EdgeFit::contrast): the object's part of the model (a, k, l; over the background behind it)

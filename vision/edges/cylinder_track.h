@@ -12,20 +12,25 @@
 #include <array>
 #include <vector>
 
+#include "vision/edges/caliper_samples.h"
 #include "vision/edges/cylinder_fit.h"
 #include "vision/edges/edge_fit.h"
 
 namespace clogscope::vision {
 
 struct CylinderTemplate {
-  // One sample's u − u_ref, shapes and their derivatives d[shape][centre, radius, blur], at the
-  // geometry below. (Floats: the shapes are of order 1, the model needs 1e-5 of them.)
+  // The caliper's pixels in groups at about the same u (GroupByU, over CylinderGroupSpanPx of the
+  // reference fit's blur). One group's mean u − u_ref, shapes and their derivatives
+  // d[shape][centre, radius, blur], at the geometry below. (Floats: the shapes are of order 1, the
+  // model needs 1e-5 of them.)
   struct Sample {
     float du_px;
     float shape[3];
     float d_shape[3][3];
   };
-  std::vector<Sample> samples;
+  std::vector<Sample> samples;  // per group; empty: no template
+  PixelGroups groups;
+  int pixels = 0;    // the caliper's samples
   double noise = 0;  // robust scale (1.4826·MAD) of the reference fit's residuals, grey levels
   float first_u_px = 0, last_u_px = 0;  // the samples' ends, to tell that they are the same pixels
   CylinderFit reference;                // the full fit the template was made from
@@ -70,15 +75,15 @@ const char* CylinderTrackRefusalName(CylinderTrackRefusal r);
 bool MakeCylinderTemplate(const std::vector<EdgeSample>& samples, const CylinderFit& fit,
                           CylinderTemplate* out);
 
-// Fits the template to `samples`, the template's pixels in a later frame: Gauss–Newton steps on
-// the full fit's robust (Cauchy) loss, at the reference fit's scale. On
-// success fills *out as FitLitCylinder would (edges, their σ from the weighted normal matrix,
-// blur, amplitudes, noise) and returns kNone; otherwise the reason, and *out is not converged.
-// On success only, *t keeps its shapes evaluated again where the object moved to, if it did.
-// `start`, when given and converged, is where the fit starts (the same template's fit in the frame
-// before, which lies nearer this frame's than the template's own).
-CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t,
-                                      const std::vector<EdgeSample>& samples,
+// Fits the template to `samples`, the template's pixels in a later frame: steps on the full fit's
+// robust (Cauchy) loss at the reference fit's scale (Gauss–Newton ones until the scale is taken,
+// then Newton's, on the loss's and the model's own curvature). On success fills *out as
+// FitLitCylinder would (edges, their σ from the weighted normal matrix, blur, amplitudes, noise)
+// and returns kNone; otherwise the reason, and *out is not converged. On success only, *t keeps its
+// shapes evaluated again where the object moved to, if it did. `start`, when given and converged,
+// is where the fit starts (the same template's fit in the frame before, which lies nearer this
+// frame's than the template's own).
+CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t, const std::vector<EdgeSample>& samples,
                                       const CylinderTrackOptions& options, CylinderFit* out,
                                       const CylinderFit* start = nullptr);
 

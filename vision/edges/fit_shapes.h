@@ -189,6 +189,14 @@ class NormalSystem {
     for (int k = 0; k < N; ++k) j_(row, k) = s * j[k];
     r_(row) = s * r;
   }
+  // With one weight for JᵀJ (w_curvature > 0) and another for Jᵀr: a robust loss's Newton
+  // system, whose curvature is not its gradient's weight.
+  void Set(size_t i, const double* j, double r, double w_gradient, double w_curvature) {
+    const double s = std::sqrt(w_curvature);
+    const auto row = static_cast<Eigen::Index>(i);
+    for (int k = 0; k < N; ++k) j_(row, k) = s * j[k];
+    r_(row) = w_gradient / s * r;
+  }
   void Get(Mat<N>* jtj, Vec<N>* jtr) const {
     for (int a = 0; a < N; ++a) {
       (*jtr)(a) = j_.col(a).dot(r_);
