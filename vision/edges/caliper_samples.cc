@@ -114,7 +114,8 @@ bool GatherEdgeSamples(const GreyImage& img, const AxisFrame& f, double s0, doub
   return true;
 }
 
-PixelGroups GroupByU(const std::vector<EdgeSample>& samples, double span_px) {
+PixelGroups GroupByU(const std::vector<EdgeSample>& samples, double span_px, double interior_lo_px,
+                     double interior_hi_px, double interior_span_px) {
   PixelGroups out;
   const size_t n = samples.size();
   out.pixels.resize(n);
@@ -124,8 +125,11 @@ PixelGroups GroupByU(const std::vector<EdgeSample>& samples, double span_px) {
   out.offset_px.resize(n);
   for (size_t begin = 0; begin < n;) {
     const double first = samples[out.pixels[begin]].u_px;
+    const bool inside = first >= interior_lo_px && first < interior_hi_px;
+    const double last =
+        inside ? std::min(first + interior_span_px, interior_hi_px) : first + span_px;
     size_t end = begin + 1;
-    while (end < n && samples[out.pixels[end]].u_px - first <= span_px) ++end;
+    while (end < n && samples[out.pixels[end]].u_px <= last) ++end;
     double mean = 0;
     for (size_t k = begin; k < end; ++k) mean += samples[out.pixels[k]].u_px;
     mean /= static_cast<double>(end - begin);

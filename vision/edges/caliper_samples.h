@@ -30,10 +30,11 @@ bool GatherEdgeSamples(const GreyImage& img, const AxisFrame& f, double s0, doub
                        int* saturated = nullptr);
 
 // A caliper's pixels in groups at about the same u: sorted by u, a group takes the next pixel
-// while it lies within span_px of the group's first. On an object nearly along a pixel axis a
-// slab's rows give a group per column, and a fit evaluates its model and Jacobian once a group, at
-// its mean u, and each pixel's value from there by the model's slope across u: what that leaves
-// out is the model's curvature over the span (CylinderGroupSpanPx).
+// while it lies within span_px of the group's first, or within interior_span_px where the group
+// starts inside [interior_lo_px, interior_hi_px) (not past its end). On an object nearly along a
+// pixel axis a slab's rows give a group per column, and a fit evaluates its model and Jacobian
+// once a group, at its mean u, and each pixel's value from there by the model's slope across u:
+// what that leaves out is the model's curvature over the span (GroupCylinderPixels).
 struct PixelGroups {
   std::vector<int> pixels;        // indices into the samples, group by group
   std::vector<float> offset_px;   // each of them: its u less its group's mean u
@@ -41,7 +42,9 @@ struct PixelGroups {
   std::vector<double> mean_u_px;  // each group's mean u
   size_t size() const { return end.size(); }
 };
-PixelGroups GroupByU(const std::vector<EdgeSample>& samples, double span_px);
+PixelGroups GroupByU(const std::vector<EdgeSample>& samples, double span_px,
+                     double interior_lo_px = 0, double interior_hi_px = 0,
+                     double interior_span_px = 0);
 
 // Whether a value is at or beyond the clip levels.
 inline bool Clipped(float v, const ClipLevels& clip) { return v <= clip.low || v >= clip.high; }

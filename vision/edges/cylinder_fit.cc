@@ -125,7 +125,7 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   p[kR] = 0.5 * (right_guess_px - left_guess_px);
   p[kS] = std::max(sigma_guess_px, 0.5);
   // The pixels in groups at about the same u (caliper_samples.h): the model once a group.
-  const PixelGroups groups = GroupByU(samples, CylinderGroupSpanPx(p[kS]));
+  const PixelGroups groups = GroupCylinderPixels(samples, left_guess_px, right_guess_px, p[kS]);
   std::vector<double> w(samples.size(), 1.0), residuals(samples.size());
   const auto residuals_at = [&](const Vec<kN>& q) {
     int k = 0;
@@ -258,6 +258,13 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
 }
 
 }  // namespace
+
+PixelGroups GroupCylinderPixels(const std::vector<EdgeSample>& samples, double left_px,
+                                double right_px, double sigma_px) {
+  const double margin = CylinderInteriorMarginPx(sigma_px);
+  return GroupByU(samples, 0.05 * sigma_px, left_px + margin, right_px - margin,
+                  kInteriorGroupSpanPx);
+}
 
 CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_guess_px,
                            double right_guess_px, double sigma_guess_px,

@@ -1,7 +1,9 @@
 #pragma once
 
+#include <algorithm>
 #include <vector>
 
+#include "vision/edges/caliper_samples.h"
 #include "vision/edges/edge_fit.h"
 
 namespace clogscope::vision {
@@ -51,17 +53,28 @@ struct CylinderFit {
 };
 
 // Fits the model to samples spanning both edges and the background beyond each, started from the
-// two edges (left < right) and a blur; samples at about the same u are taken in groups (GroupByU
-// with CylinderGroupSpanPx of the blur's guess). residuals_out, when given, receives each sample's
+// two edges (left < right) and a blur; samples at about the same u are taken in groups
+// (GroupCylinderPixels about the guesses). residuals_out, when given, receives each sample's
 // residual (model − value) at the fit.
 CylinderFit FitLitCylinder(const std::vector<EdgeSample>& samples, double left_guess_px,
                            double right_guess_px, double sigma_guess_px,
                            CylinderBackground background = CylinderBackground::kEachSide,
                            std::vector<double>* residuals_out = nullptr);
 
-// The span of u a fit of blur sigma_px takes its pixels' groups over (GroupByU): the model's
-// curvature over it is below 1e-4 of the edge's step, and odd about the edge (it moves no edge).
-inline double CylinderGroupSpanPx(double sigma_px) { return 0.05 * sigma_px; }
+// How far inside each silhouette (left_px, right_px, blur sigma_px) a lit cylinder's profile is
+// its shading's alone: the silhouettes' steps have settled to 1e-5 of their height.
+inline double CylinderInteriorMarginPx(double sigma_px) {
+  return std::max(10.0, 3.0 * sigma_px + 4.0);
+}
+
+// A lit cylinder's pixels in groups for its fits (GroupByU): within 0.05 blurs of u about the
+// silhouettes, where the model's curvature over that span is below 1e-4 of the edge's step (and odd
+// about the edge: it moves no edge); within kInteriorGroupSpanPx beyond CylinderInteriorMarginPx,
+// where the shading's curvature over it leaves a group's mean below 0.05 grey levels on an object
+// 100 levels bright and 30 px in radius.
+inline constexpr double kInteriorGroupSpanPx = 2.0;
+PixelGroups GroupCylinderPixels(const std::vector<EdgeSample>& samples, double left_px,
+                                double right_px, double sigma_px);
 
 // A fitted cylinder's contrast at one silhouette (side 0 left, 1 right), as a per-edge fit's
 // (EdgeFit::contrast): the object's part of the model (a, k, l; over the background behind it)

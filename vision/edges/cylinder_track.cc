@@ -176,7 +176,7 @@ bool MakeCylinderTemplate(const std::vector<EdgeSample>& samples, const Cylinder
   out->last_u_px = samples.back().u_px;
   // The full fit's bound (cylinder_fit.cc) about its own start; here about the fitted blur.
   out->max_sigma_px = std::max(3.0 * fit.sigma_px, std::min(8.0, fit.radius_px / 3.0));
-  out->groups = GroupByU(samples, CylinderGroupSpanPx(fit.sigma_px));
+  out->groups = GroupCylinderPixels(samples, fit.left_px, fit.right_px, fit.sigma_px);
   out->pixels = static_cast<int>(samples.size());
   Linearise(fit.u_ref_px, fit.centre_px, fit.radius_px, fit.sigma_px, out);
   std::vector<double> residuals(samples.size());

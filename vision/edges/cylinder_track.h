@@ -19,8 +19,8 @@
 namespace clogscope::vision {
 
 struct CylinderTemplate {
-  // The caliper's pixels in groups at about the same u (GroupByU, over CylinderGroupSpanPx of the
-  // reference fit's blur). One group's mean u − u_ref, shapes and their derivatives
+  // The caliper's pixels in groups at about the same u (GroupCylinderPixels about the reference
+  // fit's silhouettes). One group's mean u − u_ref, shapes and their derivatives
   // d[shape][centre, radius, blur], at the geometry below. (Floats: the shapes are of order 1, the
   // model needs 1e-5 of them.)
   struct Sample {

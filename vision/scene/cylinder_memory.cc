@@ -34,7 +34,7 @@ bool GatherCylinderSamples(const GreyImage& img, const AxisFrame& f, const ClipL
   }
   // Deep inside, the profile only tells the shading's amplitudes, which vary slowly: every fourth
   // sample there does, and the fit costs a third.
-  const double keep = std::max(10.0, 3.0 * sigma_px + 4.0);
+  const double keep = CylinderInteriorMarginPx(sigma_px);
   size_t n = 0;
   for (size_t i = 0; i < samples->size(); ++i) {
     const double u = (*samples)[i].u_px;

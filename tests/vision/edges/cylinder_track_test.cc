@@ -205,8 +205,8 @@ TEST(CylinderTrackTest, PixelsGroupedByColumnAgreeWithTheTruth) {
   ASSERT_TRUE(reference.converged);
   CylinderTemplate t;
   ASSERT_TRUE(MakeCylinderTemplate(ref, reference, &t));
-  // A group per column: a quarter of the pixels (the last row is a pixel short).
-  EXPECT_EQ(t.groups.size(), (ref.size() + 3) / 4);
+  // A group per column about the silhouettes (the last row is a pixel short), fewer inside.
+  EXPECT_LE(t.groups.size(), (ref.size() + 3) / 4);
   const double c = kCentre + 0.15, r = kRadius - 0.1;
   const auto clean = Profile(c, r, 1.0, 1.0, kShear);
   Stats full_l, full_w, track_l, track_w;
