@@ -124,8 +124,10 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   p[kC] = u_ref;
   p[kR] = 0.5 * (right_guess_px - left_guess_px);
   p[kS] = std::max(sigma_guess_px, 0.5);
-  // The pixels in groups at about the same u (caliper_samples.h): the model once a group.
-  const PixelGroups groups = GroupCylinderPixels(samples, left_guess_px, right_guess_px, p[kS]);
+  // The pixels in groups at about the same u (caliper_samples.h): the model once a group. About
+  // the guesses first, then about the first run's fit (a guess may lie a few px off the
+  // silhouette, inside the interior's wide groups).
+  PixelGroups groups = GroupCylinderPixels(samples, left_guess_px, right_guess_px, p[kS]);
   std::vector<double> w(samples.size(), 1.0), residuals(samples.size());
   const auto residuals_at = [&](const Vec<kN>& q) {
     int k = 0;
@@ -207,6 +209,8 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   fitcore::LmResult<kN> lm = fitcore::MinimiseLm<kN>(p, evaluate, bound, small_step);
   out.iterations = lm.iterations;
   if (!lm.converged) return out;
+  groups = GroupCylinderPixels(samples, lm.p[kC] - lm.p[kR], lm.p[kC] + lm.p[kR], lm.p[kS]);
+  normal.Resize(groups.size());
   residuals_at(lm.p);
   const double noise = RobustScale(residuals);
   cauchy_scale = noise;

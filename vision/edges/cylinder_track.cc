@@ -37,7 +37,7 @@ Vec<kN> Parameters(const CylinderFit& fit, const CylinderTemplate& t) {
   return q;
 }
 
-// The template's model at one sample for parameters q, and its Jacobian row j.
+// The template's model at one group's mean u for parameters q, and its Jacobian row j.
 double Model(const CylinderTemplate::Sample& s, const Vec<kN>& q, double* j) {
   const double amp[3] = {q[kA], q[kK], q[kL]};
   const double dg[3] = {q[kDc], q[kDr], q[kDs]};
@@ -56,7 +56,9 @@ double Model(const CylinderTemplate::Sample& s, const Vec<kN>& q, double* j) {
 }
 
 // The system at q over all samples with Cauchy weights at the residuals and scale `noise`, as the
-// full fit's second run; keeps the residuals. Its gradient is the Cauchy loss's; its matrix the
+// full fit's second run; keeps the residuals (each pixel's from its group's model value and the
+// model's slope across u). Its gradient is the Cauchy loss's with each group's Jacobian row for
+// its pixels' (their offsets about the group's mean u sum to zero); its matrix the
 // Gauss–Newton one with those weights (kWeights: what the fit's covariance is taken from), or with
 // the loss's own curvature (kCurvature: Newton's step, which converges quadratically where the
 // weights' fixed point is approached only by a constant ratio a step).
@@ -67,8 +69,9 @@ struct System {
   double wsum = 0, wrss = 0;
 };
 
-// The Cauchy loss's curvature at a sample, (1 − z²)/(1 + z²)², is negative beyond |z| = 1: there
-// it is kept at this share of the sample's weight, so that the matrix stays positive definite (an
+// The Cauchy loss's curvature at a sample, (1 − z²)/(1 + z²)², falls to nothing at |z| = 1 and is
+// negative beyond: from where it is below this share of the sample's weight (|z| ≈ 0.95) it is
+// kept at that share, so that the matrix stays positive definite (an
 // outlier then barely bends the step, as it barely pulls the gradient).
 constexpr double kMinCurvatureShare = 0.05;
 
@@ -79,6 +82,7 @@ System Evaluate(const CylinderTemplate& t, const std::vector<EdgeSample>& sample
   const double cs = kCauchyC * noise, inv_cs2 = 1.0 / (cs * cs);
   double cross[3][3] = {};
   const PixelGroups& groups = t.groups;
+  if (normal->size() != groups.size()) normal->Resize(groups.size());
   int p = 0;
   for (size_t g = 0; g < groups.size(); ++g) {
     double j[kN];
@@ -120,15 +124,18 @@ System Evaluate(const CylinderTemplate& t, const std::vector<EdgeSample>& sample
         h(kDc + m, kA + k) += cross[k][m];
       }
     const Eigen::LDLT<Mat<kN>> newton(h);
-    if (newton.info() == Eigen::Success && newton.isPositive()) out.jtj = h;
+    if (newton.info() == Eigen::Success && newton.vectorD().minCoeff() > 0) out.jtj = h;
   }
   return out;
 }
 
-// The template's shapes at the geometry (centre, radius, blur) at its groups' mean u, kept in t.
-void Linearise(double u_ref_px, double centre_px, double radius_px, double sigma_px,
-               CylinderTemplate* t) {
+// The template's pixels grouped about the geometry (centre, radius, blur) and its shapes there at
+// the groups' mean u, kept in t. (Grouped again wherever the shapes are evaluated: a silhouette
+// that moved into the interior's wide groups would be read off their slope.)
+void Linearise(const std::vector<EdgeSample>& samples, double u_ref_px, double centre_px,
+               double radius_px, double sigma_px, CylinderTemplate* t) {
   const auto& root = fitcore::BlurredSqrt::Get();
+  t->groups = GroupCylinderPixels(samples, centre_px - radius_px, centre_px + radius_px, sigma_px);
   t->centre_px = centre_px;
   t->radius_px = radius_px;
   t->sigma_px = sigma_px;
@@ -176,9 +183,8 @@ bool MakeCylinderTemplate(const std::vector<EdgeSample>& samples, const Cylinder
   out->last_u_px = samples.back().u_px;
   // The full fit's bound (cylinder_fit.cc) about its own start; here about the fitted blur.
   out->max_sigma_px = std::max(3.0 * fit.sigma_px, std::min(8.0, fit.radius_px / 3.0));
-  out->groups = GroupCylinderPixels(samples, fit.left_px, fit.right_px, fit.sigma_px);
   out->pixels = static_cast<int>(samples.size());
-  Linearise(fit.u_ref_px, fit.centre_px, fit.radius_px, fit.sigma_px, out);
+  Linearise(samples, fit.u_ref_px, fit.centre_px, fit.radius_px, fit.sigma_px, out);
   std::vector<double> residuals(samples.size());
   fitcore::NormalSystem<kN> normal(out->samples.size());
   Evaluate(*out, samples, Parameters(fit, *out), fit.noise, Curvature::kWeights, &residuals,
@@ -205,7 +211,7 @@ CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t, const std::vector<Edg
   CylinderTemplate moved;
   Vec<kN> q = Parameters(from, *t);
   std::vector<double> residuals(samples.size());
-  fitcore::NormalSystem<kN> normal(t->samples.size());
+  fitcore::NormalSystem<kN> normal(t->groups.size());
   const auto step = [](const System& s) -> Vec<kN> {
     Mat<kN> a = s.jtj;
     a.diagonal().array() += 1e-12;
@@ -234,9 +240,11 @@ CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t, const std::vector<Edg
   for (int lin = 0;; ++lin) {
     bool converged = false;
     for (int it = 0; it < kMaxIterations && !converged; ++it) {
+      // Newton's steps only within the first order's reach: beyond it the bilinear model's
+      // curvature is the template's, not the object's, and its steps may run away.
+      const bool newton = it > kScaleIteration && !beyond_first_order(q);
       sys = Evaluate(*shapes, samples, q, noise,
-                     it > kScaleIteration ? Curvature::kCurvature : Curvature::kWeights, &residuals,
-                     &normal);
+                     newton ? Curvature::kCurvature : Curvature::kWeights, &residuals, &normal);
       if (it == kScaleIteration) noise = ref.noise * RobustScale(residuals) / t->noise;
       const Vec<kN> d = step(sys);
       q += d;
@@ -254,7 +262,8 @@ CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t, const std::vector<Edg
     // takes dozens).
     if (lin >= opt.max_relinearisations) return CylinderTrackRefusal::kMoved;
     if (shapes == t) moved = *t;
-    Linearise(ref.u_ref_px, shapes->centre_px + q[kDc], shapes->radius_px + q[kDr], sigma, &moved);
+    Linearise(samples, ref.u_ref_px, shapes->centre_px + q[kDc], shapes->radius_px + q[kDr], sigma,
+              &moved);
     shapes = &moved;
     q[kDc] = q[kDr] = q[kDs] = 0;
   }

@@ -2,8 +2,9 @@
 
 // A lit cylinder fitted in full once (cylinder_fit.h), fitted again in later frames of a steady
 // scene as a template: the model's three shapes (box, lit, tilt) and their derivatives by centre,
-// radius and blur are kept at each of the caliper's samples, so that a later frame's fit on the
-// same pixels needs them evaluated again only when the object has moved. The template's model is
+// radius and blur are kept for each group of the caliper's pixels (at about the same u: a group's
+// pixels read from its values by the model's slope), so that a later frame's fit on the same
+// pixels needs them evaluated again only when the object has moved. The template's model is
 // exact in the background and the three amplitudes (a change of lighting is followed), and first
 // order in the geometry about where its shapes were evaluated: when the centre, radius or blur
 // moved further than that holds, the shapes are evaluated again there; it refuses when they moved

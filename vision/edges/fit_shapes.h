@@ -183,6 +183,11 @@ class NormalSystem {
  public:
   // For n residuals.
   explicit NormalSystem(size_t n) : j_(static_cast<Eigen::Index>(n), N), r_(n) {}
+  size_t size() const { return static_cast<size_t>(r_.size()); }
+  void Resize(size_t n) {
+    j_.resize(static_cast<Eigen::Index>(n), N);
+    r_.resize(static_cast<Eigen::Index>(n));
+  }
   void Set(size_t i, const double* j, double r, double w) {
     const double s = std::sqrt(w);
     const auto row = static_cast<Eigen::Index>(i);

@@ -199,6 +199,28 @@ TEST(CylinderTrackTest, PixelsGroupedByColumnAgreeWithTheTruth) {
   std::mt19937 rng(37);
   constexpr double kShear = 0.02;
   const auto clean_ref = Profile(kCentre, kRadius, 1.0, 1.0, kShear);
+  // Noise-free, each pixel's value from its group's by the model's slope: residuals at the
+  // silhouettes of a few thousandths of a grey level (taken at the group's value alone they are
+  // ~1 level there, with the slope's sign turned ~2), and both scales as small.
+  {
+    std::vector<double> residuals;
+    const CylinderFit clean =
+        FitLitCylinder(clean_ref, kCentre - kRadius + 1, kCentre + kRadius - 1, 1.5,
+                       CylinderBackground::kOneLine, &residuals);
+    ASSERT_TRUE(clean.converged);
+    ASSERT_EQ(residuals.size(), clean_ref.size());
+    double worst = 0;
+    for (size_t i = 0; i < clean_ref.size(); ++i) {
+      const double u = clean_ref[i].u_px;
+      if (std::abs(u - clean.left_px) < 3 || std::abs(u - clean.right_px) < 3)
+        worst = std::max(worst, std::abs(residuals[i]));
+    }
+    EXPECT_LT(worst, 0.02);
+    EXPECT_LT(clean.noise, 0.03);
+    CylinderTemplate exact;
+    ASSERT_TRUE(MakeCylinderTemplate(clean_ref, clean, &exact));
+    EXPECT_LT(exact.noise, 0.03);
+  }
   const auto ref = Noisy(clean_ref, kNoise, &rng);
   const CylinderFit reference = FitLitCylinder(ref, kCentre - kRadius + 1, kCentre + kRadius - 1,
                                                1.5, CylinderBackground::kOneLine);
@@ -230,6 +252,44 @@ TEST(CylinderTrackTest, PixelsGroupedByColumnAgreeWithTheTruth) {
   EXPECT_LT(track_w.sd(), 1.2 * full_w.sd());
   std::printf("grouped: full width %+.4f ± %.4f, tracked width %+.4f ± %.4f\n", full_w.mean(),
               full_w.sd(), track_w.mean(), track_w.sd());
+}
+
+// A template followed frame by frame while its object drifts (0.75 px a frame at the left
+// silhouette, the object narrowing, over 9 px of its slab): its pixels are grouped again wherever
+// its shapes are evaluated again (a silhouette read off the interior's wide groups came out
+// 0.02 px narrow, and diverged in 19 of 30 sequences at 14 px), and it takes Newton's steps only
+// within the first order's reach (beyond it, 5 of 30 sequences ran away). Every frame followed,
+// the last one's width within 0.015 px of the truth over 20 sequences (±2.5 σ/√n at σ 0.03).
+TEST(CylinderTrackTest, FollowsADriftAcrossItsSlab) {
+  std::mt19937 rng(41);
+  constexpr double kDriftNoise = 0.5;
+  constexpr int kSequences = 20, kFrames = 12;
+  const auto ref = Noisy(Profile(kCentre, kRadius), kDriftNoise, &rng);
+  const CylinderFit reference = FitLitCylinder(ref, kCentre - kRadius + 1, kCentre + kRadius - 1,
+                                               1.5, CylinderBackground::kOneLine);
+  ASSERT_TRUE(reference.converged);
+  CylinderTemplate start;
+  ASSERT_TRUE(MakeCylinderTemplate(ref, reference, &start));
+  // The left silhouette 0.75 px inward a frame, the right 0.05.
+  std::vector<std::vector<EdgeSample>> clean;
+  double c = kCentre, r = kRadius;
+  for (int frame = 1; frame <= kFrames; ++frame) clean.push_back(Profile(c += 0.4, r -= 0.35));
+  Stats last_w;
+  for (int n = 0; n < kSequences; ++n) {
+    CylinderTemplate t = start;
+    CylinderFit fit = reference;
+    for (int frame = 0; frame < kFrames; ++frame) {
+      CylinderFit next;
+      const auto refusal =
+          TrackLitCylinder(&t, Noisy(clean[frame], kDriftNoise, &rng), {}, &next, &fit);
+      ASSERT_EQ(refusal, CylinderTrackRefusal::kNone)
+          << "sequence " << n << " frame " << frame << ": " << CylinderTrackRefusalName(refusal);
+      fit = next;
+    }
+    last_w.Add(fit.right_px - fit.left_px - 2 * r);
+  }
+  EXPECT_NEAR(last_w.mean(), 0, 0.015);
+  std::printf("drift: last width %+.4f ± %.4f\n", last_w.mean(), last_w.sd());
 }
 
 TEST(CylinderTrackTest, RefusesChangedShadingOrLightButFollowsSmallChanges) {
