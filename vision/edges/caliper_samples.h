@@ -34,7 +34,7 @@ bool GatherEdgeSamples(const GreyImage& img, const AxisFrame& f, double s0, doub
 // starts inside [interior_lo_px, interior_hi_px) (not past its end). On an object nearly along a
 // pixel axis a slab's rows give a group per column, and a fit evaluates its model and Jacobian
 // once a group, at its mean u, and each pixel's value from there by the model's slope across u:
-// what that leaves out is the model's curvature over the span (GroupCylinderPixels).
+// what that leaves out is the model's curvature over the span.
 struct PixelGroups {
   std::vector<int> pixels;        // indices into the samples, group by group
   std::vector<float> offset_px;   // each of them: its u less its group's mean u
@@ -42,6 +42,9 @@ struct PixelGroups {
   std::vector<double> mean_u_px;  // each group's mean u
   size_t size() const { return end.size(); }
 };
+// A fit's groups about an edge of blur σ span this many σ: the model's curvature over the span is
+// below 1e-4 of the step, and odd about the edge (it moves no edge).
+inline constexpr double kGroupSpanBlurs = 0.05;
 PixelGroups GroupByU(const std::vector<EdgeSample>& samples, double span_px,
                      double interior_lo_px = 0, double interior_hi_px = 0,
                      double interior_span_px = 0);

@@ -266,7 +266,7 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
 PixelGroups GroupCylinderPixels(const std::vector<EdgeSample>& samples, double left_px,
                                 double right_px, double sigma_px) {
   const double margin = CylinderInteriorMarginPx(sigma_px);
-  return GroupByU(samples, 0.05 * sigma_px, left_px + margin, right_px - margin,
+  return GroupByU(samples, kGroupSpanBlurs * sigma_px, left_px + margin, right_px - margin,
                   kInteriorGroupSpanPx);
 }
 

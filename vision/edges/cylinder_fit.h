@@ -68,9 +68,8 @@ inline double CylinderInteriorMarginPx(double sigma_px) {
   return std::max(10.0, 3.0 * sigma_px + 4.0);
 }
 
-// A lit cylinder's pixels in groups for its fits (GroupByU): within 0.05 blurs of u about the
-// silhouettes, where the model's curvature over that span is below 1e-4 of the edge's step (and odd
-// about the edge: it moves no edge); within kInteriorGroupSpanPx beyond CylinderInteriorMarginPx,
+// A lit cylinder's pixels in groups for its fits (GroupByU): within kGroupSpanBlurs of u about the
+// silhouettes; within kInteriorGroupSpanPx beyond CylinderInteriorMarginPx,
 // where the shading's curvature over it leaves a group's mean below 0.05 grey levels on an object
 // 100 levels bright and 30 px in radius.
 inline constexpr double kInteriorGroupSpanPx = 2.0;
