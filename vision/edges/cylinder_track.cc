@@ -66,6 +66,9 @@ enum class Curvature { kWeights, kCurvature };
 struct System {
   Mat<kN> jtj;
   Vec<kN> jtr;
+  // kCurvature: the model's own curvature, each amplitude times its shape's first order in the
+  // geometry (Σ w·r·∂²model), which Step adds to jtj.
+  double cross[3][3] = {};
   double wsum = 0, wrss = 0;
 };
 
@@ -80,7 +83,6 @@ System Evaluate(const CylinderTemplate& t, const std::vector<EdgeSample>& sample
                 fitcore::NormalSystem<kN>* normal) {
   System out;
   const double cs = kCauchyC * noise, inv_cs2 = 1.0 / (cs * cs);
-  double cross[3][3] = {};
   const PixelGroups& groups = t.groups;
   if (normal->size() != groups.size()) normal->Resize(groups.size());
   int p = 0;
@@ -107,26 +109,31 @@ System Evaluate(const CylinderTemplate& t, const std::vector<EdgeSample>& sample
       normal->Set(g, j, wr_sum / w_sum, w_sum);
     } else {
       normal->Set(g, j, wr_sum, 1.0, curvature_sum);
-      // The model's own curvature: each amplitude times its shape's first order in the geometry.
       const CylinderTemplate::Sample& s = t.samples[g];
       for (int k = 0; k < 3; ++k)
-        for (int m = 0; m < 3; ++m) cross[k][m] += wr_sum * s.d_shape[k][m];
+        for (int m = 0; m < 3; ++m) out.cross[k][m] += wr_sum * s.d_shape[k][m];
     }
   }
   normal->Get(&out.jtj, &out.jtr);
-  if (curvature == Curvature::kCurvature) {
-    // Where the model's curvature makes the matrix indefinite (far from the minimum, a saddle of
-    // the bilinear model), the loss's curvature alone, which stays positive definite.
-    Mat<kN> h = out.jtj;
-    for (int k = 0; k < 3; ++k)
-      for (int m = 0; m < 3; ++m) {
-        h(kA + k, kDc + m) += cross[k][m];
-        h(kDc + m, kA + k) += cross[k][m];
-      }
-    const Eigen::LDLT<Mat<kN>> newton(h);
-    if (newton.info() == Eigen::Success && newton.vectorD().minCoeff() > 0) out.jtj = h;
-  }
   return out;
+}
+
+// The step that solves the system: with the model's curvature where the matrix stays positive
+// definite with it, else (far from the minimum, a saddle of the bilinear model) with the loss's
+// alone, which does.
+Vec<kN> Step(const System& s) {
+  Mat<kN> a = s.jtj;
+  a.diagonal().array() += 1e-12;
+  Mat<kN> h = a;
+  for (int k = 0; k < 3; ++k)
+    for (int m = 0; m < 3; ++m) {
+      h(kA + k, kDc + m) += s.cross[k][m];
+      h(kDc + m, kA + k) += s.cross[k][m];
+    }
+  const Eigen::LDLT<Mat<kN>> newton(h);
+  if (newton.info() == Eigen::Success && newton.vectorD().minCoeff() > 0)
+    return newton.solve(-s.jtr);
+  return a.ldlt().solve(-s.jtr);
 }
 
 // The template's pixels grouped about the geometry (centre, radius, blur) and its shapes there at
@@ -212,11 +219,6 @@ CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t, const std::vector<Edg
   Vec<kN> q = Parameters(from, *t);
   std::vector<double> residuals(samples.size());
   fitcore::NormalSystem<kN> normal(t->groups.size());
-  const auto step = [](const System& s) -> Vec<kN> {
-    Mat<kN> a = s.jtj;
-    a.diagonal().array() += 1e-12;
-    return a.ldlt().solve(-s.jtr);
-  };
   // Cauchy weights at the scale the full fit would take: the full fit takes its scale once per
   // fit, from the residuals of a first weighted fit, and on real profiles its width moves with
   // that scale (half a px per unit of relative change on Greeff's video: knurl and compression
@@ -246,7 +248,7 @@ CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t, const std::vector<Edg
       sys = Evaluate(*shapes, samples, q, noise,
                      newton ? Curvature::kCurvature : Curvature::kWeights, &residuals, &normal);
       if (it == kScaleIteration) noise = ref.noise * RobustScale(residuals) / t->noise;
-      const Vec<kN> d = step(sys);
+      const Vec<kN> d = Step(sys);
       q += d;
       ++out->iterations;
       // The full fit's tolerance (cylinder_fit.cc).

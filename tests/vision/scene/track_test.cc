@@ -124,26 +124,36 @@ StrandMeasurement MeasureLitFilamentFrame(StrandTracker* tracker, int i, int too
   return m;
 }
 
+// The lit filament's frames 0 … frames − 1 with a gear tooth over its left silhouette in frames
+// tooth_from ≤ i < tooth_until, tracked: fewer calipers used than in the frame before the tooth
+// while fewer_until > i ≥ tooth_from, all of them again from frame back_from on, and at most two
+// searches afresh.
+void ExpectToothCostsCalipers(int frames, int tooth_from, int tooth_until, int fewer_until,
+                              int back_from) {
+  StrandTracker tracker(WholeStretch());
+  int calipers_clean = 0;
+  for (int i = 0; i < frames; ++i) {
+    const StrandMeasurement m = MeasureLitFilamentFrame(&tracker, i, tooth_from, tooth_until);
+    if (::testing::Test::HasFailure()) return;
+    if (i == tooth_from - 1) calipers_clean = m.calipers_used;
+    if (i >= tooth_from && i < fewer_until) {
+      EXPECT_LT(m.calipers_used, calipers_clean) << i;
+    }
+    if (i >= back_from) {
+      EXPECT_EQ(m.calipers_used, calipers_clean) << i;
+    }
+  }
+  EXPECT_LE(tracker.full_detections(), 2);
+}
+
 // A gear tooth over the left silhouette for three frames (a dark block across it at the middle of
 // the stretch): the calipers it spoils fail their full fits and rest (CylinderMemory::kRestFrames)
 // instead of being fitted in full again in every frame; once it has gone they are fitted again
 // and count again. The widths stay the rendered ones throughout.
 TEST(StrandTrackerTest, FilamentCalipersSpoiledForAWhileRestThenReturn) {
-  StrandTracker tracker(WholeStretch());
   constexpr int kFrames = 16, kToothFrom = 3, kToothUntil = 6;
-  int calipers_clean = 0;
-  for (int i = 0; i < kFrames; ++i) {
-    const StrandMeasurement m = MeasureLitFilamentFrame(&tracker, i, kToothFrom, kToothUntil);
-    if (HasFailure()) return;
-    if (i == kToothFrom - 1) calipers_clean = m.calipers_used;
-    if (i >= kToothFrom && i < kToothUntil) {
-      EXPECT_LT(m.calipers_used, calipers_clean) << i;
-    }
-    if (i >= kToothUntil + CylinderMemory::kRestFrames) {
-      EXPECT_EQ(m.calipers_used, calipers_clean) << i;
-    }
-  }
-  EXPECT_LE(tracker.full_detections(), 2);
+  ExpectToothCostsCalipers(kFrames, kToothFrom, kToothUntil, kToothUntil,
+                           kToothUntil + CylinderMemory::kRestFrames);
 }
 
 // A tooth that stays over the silhouette longer than one rest: the calipers it spoils fail their
@@ -151,23 +161,10 @@ TEST(StrandTrackerTest, FilamentCalipersSpoiledForAWhileRestThenReturn) {
 // kMaxRestDoublings), so they come back 8 frames after that second failure, not 4 after the tooth
 // has gone.
 TEST(StrandTrackerTest, FilamentCalipersFailingAgainRestTwiceAsLong) {
-  StrandTracker tracker(WholeStretch());
   constexpr int kToothFrom = 3, kToothUntil = 10;  // first failure 3, again at 3 + 1 + 4 = 8
   constexpr int kBack = 8 + 1 + 2 * CylinderMemory::kRestFrames, kFrames = kBack + 2;
-  int calipers_clean = 0;
-  for (int i = 0; i < kFrames; ++i) {
-    const StrandMeasurement m = MeasureLitFilamentFrame(&tracker, i, kToothFrom, kToothUntil);
-    if (HasFailure()) return;
-    if (i == kToothFrom - 1) calipers_clean = m.calipers_used;
-    // Gone at 10, but resting until 16 (a single rest of 4 would have tried them again at 13).
-    if (i >= kToothFrom && i < kBack) {
-      EXPECT_LT(m.calipers_used, calipers_clean) << i;
-    }
-    if (i >= kBack) {
-      EXPECT_EQ(m.calipers_used, calipers_clean) << i;
-    }
-  }
-  EXPECT_LE(tracker.full_detections(), 2);
+  // Gone at 10, but resting until 16 (a single rest of 4 would have tried them again at 13).
+  ExpectToothCostsCalipers(kFrames, kToothFrom, kToothUntil, kBack, kBack);
 }
 
 TEST(StrandTrackerTest, LosesTheStrandAndFindsItAgain) {
