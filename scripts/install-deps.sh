@@ -31,7 +31,7 @@ packages=(
   jupyter-nbconvert python3-ipykernel  # a test executes examples/measure_folder.ipynb (~30 MB)
 )
 if [ "${1:-}" = "--clang" ]; then
-  packages+=(clang-14 libclang-rt-14-dev)  # the sanitizer build; libFuzzer with ASan/UBSan
+  packages+=(clang-14 libclang-rt-14-dev lld-14)  # the sanitizer build (linked by lld); libFuzzer with ASan/UBSan
 fi
 
 missing=()
