@@ -160,15 +160,28 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   // Weighted least squares with the weights w while cauchy_scale is 0; else the Cauchy loss
   // (c·s)²·log(1 + (r/(c·s))²) at that scale, whose Gauss–Newton system carries the weights
   // 1/(1 + (r/(c·s))²) at the trial's own residuals (iteratively reweighted inside one LM run).
+  // Within one LM run each group's slope stays where the run started: the Jacobian (the model's at
+  // the group's mean u) is then the cost's own, and LM's steps agree with the costs it compares.
+  // (A slope that moved with the trial changed the cost by terms no step foresaw: the first run
+  // converged in 80 % of Greeff's fits instead of 92 %.) Each run starts where the last ended.
   double cauchy_scale = 0;
   fitcore::NormalSystem<kN> normal(groups.size());
+  std::vector<double> slopes;
+  const auto freeze_slopes = [&](const Vec<kN>& q) {
+    slopes.resize(groups.size());
+    for (size_t g = 0; g < groups.size(); ++g) {
+      double j[kN];
+      Model<kBg>(groups.mean_u_px[g], q, u_ref, root, j, &slopes[g]);
+    }
+  };
   const auto evaluate = [&](const Vec<kN>& q, Mat<kN>* jtj, Vec<kN>* jtr) {
     double cost = 0;
     const double cs = kCauchyC * cauchy_scale, inv_cs2 = cs > 0 ? 1.0 / (cs * cs) : 0.0;
     int k = 0;
     for (size_t g = 0; g < groups.size(); ++g) {
-      double j[kN], slope;
-      const double model = Model<kBg>(groups.mean_u_px[g], q, u_ref, root, j, &slope);
+      double j[kN], unused_slope;
+      const double model = Model<kBg>(groups.mean_u_px[g], q, u_ref, root, j, &unused_slope);
+      const double slope = slopes[g];
       double w_sum = 0, wr_sum = 0;
       for (const int end = groups.end[g]; k < end; ++k) {
         const int i = groups.pixels[k];
@@ -206,6 +219,7 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   // down-weighted samples. The scale is taken once: renewed with the weights it shrinks with the
   // down-weighted residuals and the edges never settle (on real footage they drifted 0.1 px per
   // renewal).
+  freeze_slopes(p);
   fitcore::LmResult<kN> lm = fitcore::MinimiseLm<kN>(p, evaluate, bound, small_step);
   out.iterations = lm.iterations;
   if (!lm.converged) return out;
@@ -214,6 +228,7 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   residuals_at(lm.p);
   const double noise = RobustScale(residuals);
   cauchy_scale = noise;
+  freeze_slopes(lm.p);
   lm = fitcore::MinimiseLm<kN>(lm.p, evaluate, bound, small_step);
   out.iterations += lm.iterations;
   if (!lm.converged) return out;
