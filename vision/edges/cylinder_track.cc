@@ -61,7 +61,8 @@ double Model(const CylinderTemplate::Sample& s, const Vec<kN>& q, double* j) {
 // its pixels' (their offsets about the group's mean u sum to zero); its matrix the
 // Gauss–Newton one with those weights (kWeights: what the fit's covariance is taken from), or with
 // the loss's own curvature (kCurvature: Newton's step, which converges quadratically where the
-// weights' fixed point is approached only by a constant ratio a step).
+// weights' fixed point is approached only by a constant ratio a step). With kCurvature, `weighted`
+// (when given) takes the kWeights system's rows besides, for the covariance where the fit ends.
 enum class Curvature { kWeights, kCurvature };
 struct System {
   Mat<kN> jtj;
@@ -80,11 +81,13 @@ constexpr double kMinCurvatureShare = 0.05;
 
 System Evaluate(const CylinderTemplate& t, const std::vector<EdgeSample>& samples, const Vec<kN>& q,
                 double noise, Curvature curvature, std::vector<double>* residuals,
-                fitcore::NormalSystem<kN>* normal) {
+                fitcore::NormalSystem<kN>* normal,
+                fitcore::NormalSystem<kN>* weighted = nullptr) {
   System out;
   const double cs = kCauchyC * noise, inv_cs2 = 1.0 / (cs * cs);
   const PixelGroups& groups = t.groups;
   if (normal->size() != groups.size()) normal->Resize(groups.size());
+  if (weighted && weighted->size() != groups.size()) weighted->Resize(groups.size());
   int p = 0;
   for (size_t g = 0; g < groups.size(); ++g) {
     double j[kN];
@@ -109,6 +112,7 @@ System Evaluate(const CylinderTemplate& t, const std::vector<EdgeSample>& sample
       normal->Set(g, j, wr_sum / w_sum, w_sum);
     } else {
       normal->Set(g, j, wr_sum, 1.0, curvature_sum);
+      if (weighted) weighted->Set(g, j, wr_sum / w_sum, w_sum);
       const CylinderTemplate::Sample& s = t.samples[g];
       for (int k = 0; k < 3; ++k)
         for (int m = 0; m < 3; ++m) out.cross[k][m] += wr_sum * s.d_shape[k][m];
@@ -218,7 +222,7 @@ CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t, const std::vector<Edg
   CylinderTemplate moved;
   Vec<kN> q = Parameters(from, *t);
   std::vector<double> residuals(samples.size());
-  fitcore::NormalSystem<kN> normal(t->groups.size());
+  fitcore::NormalSystem<kN> normal(t->groups.size()), weighted(t->groups.size());
   // Cauchy weights at the scale the full fit would take: the full fit takes its scale once per
   // fit, from the residuals of a first weighted fit, and on real profiles its width moves with
   // that scale (half a px per unit of relative change on Greeff's video: knurl and compression
@@ -235,6 +239,7 @@ CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t, const std::vector<Edg
   constexpr int kMaxIterations = 16, kScaleIteration = 1;
   double noise = from.noise > 0 ? from.noise : ref.noise;
   System sys;
+  bool newton = false;
   const auto beyond_first_order = [&](const Vec<kN>& p) {
     return std::abs(p[kDc]) > opt.max_shift_px || std::abs(p[kDr]) > opt.max_shift_px ||
            std::abs(p[kDs]) > opt.max_blur_change_px;
@@ -244,9 +249,10 @@ CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t, const std::vector<Edg
     for (int it = 0; it < kMaxIterations && !converged; ++it) {
       // Newton's steps only within the first order's reach: beyond it the bilinear model's
       // curvature is the template's, not the object's, and its steps may run away.
-      const bool newton = it > kScaleIteration && !beyond_first_order(q);
+      newton = it > kScaleIteration && !beyond_first_order(q);
       sys = Evaluate(*shapes, samples, q, noise,
-                     newton ? Curvature::kCurvature : Curvature::kWeights, &residuals, &normal);
+                     newton ? Curvature::kCurvature : Curvature::kWeights, &residuals, &normal,
+                     &weighted);
       if (it == kScaleIteration) noise = ref.noise * RobustScale(residuals) / t->noise;
       const Vec<kN> d = Step(sys);
       q += d;
@@ -297,8 +303,9 @@ CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t, const std::vector<Edg
   out->tilt = q[kL];
   out->noise = noise;
   // As the full fit: the weighted residuals where the fit ended, their variance and the
-  // covariance from the weighted normal matrix.
-  sys = Evaluate(*t, samples, q, noise, Curvature::kWeights, &residuals, &normal);
+  // covariance from the weighted normal matrix; those of the last step's start (it moved the
+  // edges by less than 1e-3 px), not evaluated again.
+  if (newton) weighted.Get(&sys.jtj, &sys.jtr);
   for (double r : residuals)
     if (std::abs(r) > 4.0 * noise) ++out->outliers;
   out->rms = std::sqrt(sys.wrss / std::max(sys.wsum, 1.0));
