@@ -4,6 +4,7 @@
 #include <cmath>
 #include <vector>
 
+#include "vision/edges/caliper_samples.h"
 #include "vision/edges/fit_shapes.h"
 
 namespace clogscope::vision {
@@ -134,21 +135,72 @@ struct LineModel {
   }
 };
 
-// Residuals' sum of squares with the Gauss-Newton system J^T J and J^T r at p.
+// A fit's samples in groups at about the same u (GroupByU, within kGroupSpanBlurs of the starting
+// blur): each group's count, mean u and mean value. With equal weights a group's pixels pull the
+// fit as their count at their mean (their offsets about it sum to zero), and the model is evaluated
+// once a group: on an edge nearly along a pixel axis, once a column.
+struct Grouped {
+  PixelGroups groups;
+  std::vector<double> count, mean_value;
+};
+Grouped GroupSamples(const std::vector<EdgeSample>& samples, double sigma_px) {
+  Grouped out;
+  out.groups = GroupByU(samples, kGroupSpanBlurs * sigma_px);
+  const size_t n = out.groups.size();
+  out.count.resize(n);
+  out.mean_value.resize(n);
+  int k = 0;
+  for (size_t g = 0; g < n; ++g) {
+    double sum = 0;
+    const int begin = k;
+    for (const int end = out.groups.end[g]; k < end; ++k) sum += samples[out.groups.pixels[k]].value;
+    out.count[g] = k - begin;
+    out.mean_value[g] = sum / (k - begin);
+  }
+  return out;
+}
+
+// The groups' part of the residuals' sum of squares, Σ count·(model at the mean u − mean value)²,
+// with its Gauss-Newton system J^T J and J^T r at p. What it leaves out, each pixel's residual about
+// its group's, moves with p only through the model's slope across the group; Solve adds it where
+// the fit ends.
 template <typename Model>
-double Evaluate(const std::vector<EdgeSample>& samples, const Vec<Model::kN>& p, double u_ref,
-                const Model& model, Mat<Model::kN>* jtj, Vec<Model::kN>* jtr) {
+double Evaluate(const Grouped& grouped, const Vec<Model::kN>& p, double u_ref, const Model& model,
+                Mat<Model::kN>* jtj, Vec<Model::kN>* jtr) {
   constexpr int N = Model::kN;
   double h[N][N] = {}, g[N] = {};
   double cost = 0;
-  for (const auto& smp : samples) {
+  for (size_t k = 0; k < grouped.count.size(); ++k) {
+    const double u = grouped.groups.mean_u_px[k];
     double value, j[N];
-    model(smp.u_px - u_ref, smp.u_px, p.data(), &value, j);
-    const double r = value - smp.value;
-    cost += r * r;
-    fitcore::Accumulate<N>(j, r, 1.0, h, g);
+    model(u - u_ref, u, p.data(), &value, j);
+    const double r = value - grouped.mean_value[k];
+    cost += grouped.count[k] * r * r;
+    fitcore::Accumulate<N>(j, r, grouped.count[k], h, g);
   }
   fitcore::Symmetric<N>(h, g, jtj, jtr);
+  return cost;
+}
+
+// The pixels' residuals about their groups' at p: Σ (slope·offset − (value − mean value))², the
+// slope the model's across u (its base's slope, less the step's by its position).
+template <typename Model>
+double WithinGroups(const std::vector<EdgeSample>& samples, const Grouped& grouped,
+                    const Vec<Model::kN>& p, double u_ref, const Model& model) {
+  constexpr int N = Model::kN;
+  double cost = 0;
+  int k = 0;
+  for (size_t g = 0; g < grouped.count.size(); ++g) {
+    const double u = grouped.groups.mean_u_px[g];
+    double value, j[N];
+    model(u - u_ref, u, p.data(), &value, j);
+    const double slope = p[kB] - j[kE];
+    for (const int end = grouped.groups.end[g]; k < end; ++k) {
+      const double r = slope * grouped.groups.offset_px[k] -
+                       (samples[grouped.groups.pixels[k]].value - grouped.mean_value[g]);
+      cost += r * r;
+    }
+  }
   return cost;
 }
 
@@ -161,15 +213,21 @@ EdgeFit Solve(const std::vector<EdgeSample>& samples, const Vec<Model::kN>& p0, 
   constexpr int N = Model::kN;
   EdgeFit fit;
   fit.samples = static_cast<int>(samples.size());
-  const auto lm = fitcore::MinimiseLm<N>(
+  const Grouped grouped = GroupSamples(samples, p0[kS]);
+  // The cost LM compares carries the pixels' part about their groups as it is at the start: it
+  // moves with p by the model's curvature over a group's span only, and LM's own steps (the groups'
+  // system) cannot foresee it.
+  const double within_start = WithinGroups(samples, grouped, p0, u_ref, model);
+  auto lm = fitcore::MinimiseLm<N>(
       p0,
       [&](const Vec<N>& p, Mat<N>* jtj, Vec<N>* jtr) {
-        return Evaluate(samples, p, u_ref, model, jtj, jtr);
+        return Evaluate(grouped, p, u_ref, model, jtj, jtr) + within_start;
       },
       [](Vec<N>* p) { (*p)[kS] = std::max((*p)[kS], kMinSigmaPx); },
       // The edge moves by less than 2e-4 px.
       [](const Vec<N>& d) { return std::abs(d[kE]) < 2e-4 && std::abs(d[kS]) < 2e-3; });
   const Vec<N>& p = lm.p;
+  lm.cost += WithinGroups(samples, grouped, p, u_ref, model) - within_start;
   fit.converged = lm.converged;
   fit.iterations = lm.iterations;
   fit.edge_px = p[kE];

@@ -12,13 +12,15 @@ namespace {
 
 using synthetic::PixelMeanOfBlurredStep;
 
-// Samples of a pixel-integrated blurred step at spacing 1/k (k rows sheared by a tilt), with noise.
+// Samples of a pixel-integrated blurred step in 4 rows, each shifted by row_shift_px along u from
+// the last (a tilted edge), with noise.
 std::vector<EdgeSample> Samples(double edge, double sigma, double lo, double hi, double noise,
-                                std::mt19937* rng, double from = -10, double to = 10) {
+                                std::mt19937* rng, double from = -10, double to = 10,
+                                double row_shift_px = 0.29) {
   std::normal_distribution<double> n(0, noise);
   std::vector<EdgeSample> s;
   for (int row = 0; row < 4; ++row) {
-    for (double u = from + 0.29 * row; u <= to; u += 1.0) {
+    for (double u = from + row_shift_px * row; u <= to; u += 1.0) {
       const double v = lo + (hi - lo) * PixelMeanOfBlurredStep(u - edge, sigma, 0.94, 0.342);
       s.push_back({static_cast<float>(u), static_cast<float>(v + (noise > 0 ? n(*rng) : 0.0))});
     }
@@ -153,6 +155,41 @@ TEST(EdgeFitTest, ReportedSigmaMatchesScatter) {
   const double mean = sum / n, sd = std::sqrt(sum2 / n - mean * mean);
   EXPECT_NEAR(mean, 0.25, 4 * sd / std::sqrt(n) + 0.003);
   EXPECT_NEAR(reported / n / sd, 1.0, 0.15);
+}
+
+// An edge nearly along a pixel axis: the rows of a column lie 0.02 px apart in u, and the fit
+// takes them as one group at their mean u. Its edge stays unbiased, its σ matches the scatter, and
+// its rms is the pixels' noise (their residuals about their group's mean counted with the model's
+// slope across it: without them the rms was half the noise).
+TEST(EdgeFitTest, SamplesInColumnsGiveTheEdgeItsSigmaAndTheNoise) {
+  std::mt19937 rng(11);
+  constexpr int kRepeats = 300;
+  constexpr double kNoise = 3.0;
+  double sum = 0, sum2 = 0, reported = 0, rms_over_expected = 0;
+  for (int i = 0; i < kRepeats; ++i) {
+    const auto s = Samples(0.37, 1.2, 40, 200, kNoise, &rng, -10, 10, 0.02);
+    const EdgeFit f = FitBlurredStep(s, 0.0, 1.5, 0.0);
+    ASSERT_TRUE(f.converged);
+    sum += f.edge_px;
+    sum2 += f.edge_px * f.edge_px;
+    reported += f.edge_sigma_px;
+    // n samples, 5 parameters: the residuals' rms is the noise times √((n − 5)/n).
+    const double n = static_cast<double>(s.size());
+    rms_over_expected += f.rms / (kNoise * std::sqrt((n - 5) / n));
+  }
+  const double mean = sum / kRepeats, sd = std::sqrt(sum2 / kRepeats - mean * mean);
+  EXPECT_NEAR(mean, 0.37, 4 * sd / std::sqrt(kRepeats) + 0.003);
+  EXPECT_NEAR(reported / kRepeats / sd, 1.0, 0.15);
+  EXPECT_NEAR(rms_over_expected / kRepeats, 1.0, 0.03);
+  // Without noise the pixels' residuals are the model's small mismatch to the pixel-integrated
+  // profile, near the edge too, where the rows' offsets times the model's slope are 1–2 levels.
+  for (double edge : {-0.3, 0.37}) {
+    const EdgeFit f = FitBlurredStep(Samples(edge, 1.2, 40, 200, 0, &rng, -10, 10, 0.02), 0.0,
+                                     1.5, 0.0);
+    ASSERT_TRUE(f.converged);
+    EXPECT_NEAR(f.edge_px, edge, 0.005);
+    EXPECT_LT(f.rms, 0.1);
+  }
 }
 
 TEST(EdgeFitTest, TooFewSamplesOrNoStepDoNotConverge) {
