@@ -30,6 +30,49 @@ bool SlabBounds(const GreyImage& img, const AxisFrame& f, double s0, double s1, 
   return *x_lo >= 0 && *y_lo >= 0 && *x_hi < img.m.cols && *y_hi < img.m.rows;
 }
 
+// Whether the pixel (x, y) lies in the slab s0 <= s < s1, u0 <= u <= u1.
+inline bool InSlab(const AxisFrame& f, int x, double ry, double s0, double s1, double u0,
+                   double u1) {
+  const double rx = x - f.ox;
+  const double s = rx * f.dx + ry * f.dy, u = rx * f.dy - ry * f.dx;
+  return s >= s0 && s < s1 && u >= u0 && u <= u1;
+}
+
+// The x interval of one line's unknown where a·(x − ox) + c lies in [lo, hi], or all of it.
+void Interval(double a, double c, double ox, double lo, double hi, double* from, double* to) {
+  if (std::abs(a) < 1e-12) {
+    const bool all = c >= lo && c <= hi;
+    *from = all ? -1e30 : 1e30;
+    *to = all ? 1e30 : -1e30;
+    return;
+  }
+  const double p = ox + (lo - c) / a, q = ox + (hi - c) / a;
+  *from = std::min(p, q);
+  *to = std::max(p, q);
+}
+
+// The pixels of row y (within x_lo..x_hi) that lie in the slab, [*first, *last] (empty when
+// *first > *last). Along a row s and u are monotone, even as rounded, so these pixels are one
+// run: its ends are estimated from the lines, then tested as each pixel would be, and the pixels
+// between need no test (every band of every frame passes here).
+void SlabRow(const AxisFrame& f, int y, int x_lo, int x_hi, double s0, double s1, double u0,
+             double u1, int* first, int* last) {
+  const double ry = y - f.oy;
+  double sa, sb, ua, ub;
+  Interval(f.dx, ry * f.dy, f.ox, s0, s1, &sa, &sb);
+  Interval(f.dy, -ry * f.dx, f.ox, u0, u1, &ua, &ub);
+  const double from = std::max(sa, ua), to = std::min(sb, ub);
+  int a = x_lo, b = x_hi;
+  if (from > x_lo) a = from > x_hi ? x_hi + 1 : static_cast<int>(std::ceil(from)) - 1;
+  if (to < x_hi) b = to < x_lo ? x_lo - 1 : static_cast<int>(std::floor(to)) + 1;
+  a = std::max(a, x_lo);
+  b = std::min(b, x_hi);
+  while (a <= b && !InSlab(f, a, ry, s0, s1, u0, u1)) ++a;
+  while (b >= a && !InSlab(f, b, ry, s0, s1, u0, u1)) --b;
+  *first = a;
+  *last = b;
+}
+
 }  // namespace
 
 ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
@@ -45,14 +88,11 @@ ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, d
   // Every band of every frame passes here: the pixel type is fixed per row, and the values are
   // never negative, so rounding is a truncation of v + 0.5.
   const auto count_row = [&](const auto* row, int y) {
-    const double ry = y - f.oy;
-    for (int x = x_lo; x <= x_hi; ++x) {
-      const double rx = x - f.ox;
-      const double s = rx * f.dx + ry * f.dy, u = rx * f.dy - ry * f.dx;
-      if (s < s0 || s >= s1 || u < u0 || u > u1) continue;
+    int first, last;
+    SlabRow(f, y, x_lo, x_hi, s0, s1, u0, u1, &first, &last);
+    for (int x = first; x <= last; ++x)
       ++h[std::min(static_cast<int>(row[x] * scale + 0.5), kBins - 1)];
-      ++n;
-    }
+    n += std::max(0, last - first + 1);
   };
   for (int y = y_lo; y <= y_hi; ++y) {
     if (img.is16)
@@ -100,12 +140,10 @@ bool GatherEdgeSamples(const GreyImage& img, const AxisFrame& f, double s0, doub
   if (!SlabBounds(img, f, s0, s1, u0, u1, &x_lo, &x_hi, &y_lo, &y_hi)) return false;
   for (int y = y_lo; y <= y_hi; ++y) {
     const double ry = y - f.oy;
-    for (int x = x_lo; x <= x_hi; ++x) {
-      const double rx = x - f.ox;
-      const double s = rx * f.dx + ry * f.dy;
-      if (s < s0 || s >= s1) continue;
-      const double u = rx * f.dy - ry * f.dx;
-      if (u < u0 || u > u1) continue;
+    int first, last;
+    SlabRow(f, y, x_lo, x_hi, s0, s1, u0, u1, &first, &last);
+    for (int x = first; x <= last; ++x) {
+      const double u = (x - f.ox) * f.dy - ry * f.dx;
       const float v = img.At(x, y);
       if (saturated && Clipped(v, clip)) ++*saturated;
       out->push_back({static_cast<float>(u), v});
