@@ -24,7 +24,7 @@ using testing::RunResult;
 class FeedstockManifestTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    // One folder per process: ctest runs this suite's tests as parallel processes.
+    // One folder per process: the suite may run as parallel processes (one a case).
     dir_ = testing::FreshDir("clogscope_feedstock_manifest");
     const double widths[] = {400, 390}, filaments[] = {1750, 1760}, feeds[] = {4.5, 4.0};
     for (int i = 0; i < 2; ++i) {

@@ -27,7 +27,7 @@ using testing::RunResult;
 class RunCommandTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    // One folder per process: ctest runs this suite's tests as parallel processes.
+    // One folder per process: the suite may run as parallel processes (one a case).
     dir_ = testing::FreshDir("clogscope_run_e2e");
     const std::string small = " --size 640x360 --tip-x-px 320 ";
     std::string pins = "image,diameter_um\n";

@@ -38,35 +38,40 @@ inline bool InSlab(const AxisFrame& f, int x, double ry, double s0, double s1, d
   return s >= s0 && s < s1 && u >= u0 && u <= u1;
 }
 
-// The x interval of one line's unknown where a·(x − ox) + c lies in [lo, hi], or all of it.
+// The x interval where a·(x − ox) + c lies in [lo, hi], widened by more than the rounding of
+// this estimate and of InSlab's own arithmetic can move its ends (a pixel, or more where a is
+// nearly 0); all of x when a is 0 or nearly (the ends' tests then decide).
 void Interval(double a, double c, double ox, double lo, double hi, double* from, double* to) {
+  constexpr double kEps = std::numeric_limits<double>::epsilon();
   if (std::abs(a) < 1e-12) {
-    const bool all = c >= lo && c <= hi;
-    *from = all ? -1e30 : 1e30;
-    *to = all ? 1e30 : -1e30;
+    *from = -std::numeric_limits<double>::infinity();
+    *to = std::numeric_limits<double>::infinity();
     return;
   }
   const double p = ox + (lo - c) / a, q = ox + (hi - c) / a;
-  *from = std::min(p, q);
-  *to = std::max(p, q);
+  const double slack =
+      1.0 + 16.0 * kEps * (std::abs(p) + std::abs(q) + std::abs(ox) +
+                           (std::abs(lo) + std::abs(hi) + std::abs(c)) / std::abs(a));
+  *from = std::min(p, q) - slack;
+  *to = std::max(p, q) + slack;
 }
 
 // The pixels of row y (within x_lo..x_hi) that lie in the slab, [*first, *last] (empty when
 // *first > *last). Along a row s and u are monotone, even as rounded, so these pixels are one
-// run: its ends are estimated from the lines, then tested as each pixel would be, and the pixels
-// between need no test (every band of every frame passes here).
+// run: it lies within the lines' estimate (widened beyond its rounding), whose ends are walked in
+// to the first and last pixel InSlab takes; the pixels between need no test (every band of every
+// frame passes here).
 void SlabRow(const AxisFrame& f, int y, int x_lo, int x_hi, double s0, double s1, double u0,
              double u1, int* first, int* last) {
   const double ry = y - f.oy;
   double sa, sb, ua, ub;
   Interval(f.dx, ry * f.dy, f.ox, s0, s1, &sa, &sb);
   Interval(f.dy, -ry * f.dx, f.ox, u0, u1, &ua, &ub);
-  const double from = std::max(sa, ua), to = std::min(sb, ub);
-  int a = x_lo, b = x_hi;
-  if (from > x_lo) a = from > x_hi ? x_hi + 1 : static_cast<int>(std::ceil(from)) - 1;
-  if (to < x_hi) b = to < x_lo ? x_lo - 1 : static_cast<int>(std::floor(to)) + 1;
-  a = std::max(a, x_lo);
-  b = std::min(b, x_hi);
+  // Clamped to the row before the conversion to int.
+  const double from = std::clamp(std::max(sa, ua), x_lo - 1.0, x_hi + 1.0);
+  const double to = std::clamp(std::min(sb, ub), x_lo - 1.0, x_hi + 1.0);
+  int a = std::max(x_lo, static_cast<int>(std::floor(from)));
+  int b = std::min(x_hi, static_cast<int>(std::ceil(to)));
   while (a <= b && !InSlab(f, a, ry, s0, s1, u0, u1)) ++a;
   while (b >= a && !InSlab(f, b, ry, s0, s1, u0, u1)) --b;
   *first = a;

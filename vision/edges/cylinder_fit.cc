@@ -163,7 +163,7 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   // Within one LM run each group's slope stays where the run started: the Jacobian (the model's at
   // the group's mean u) is then the cost's own, and LM's steps agree with the costs it compares.
   // (A slope that moved with the trial changed the cost by terms no step foresaw: the first run
-  // converged in 80 % of Greeff's fits instead of 92 %.) Each run starts where the last ended.
+  // converged in 80 % of Greeff's fits; ungrouped, 91 %.) Each run starts where the last ended.
   double cauchy_scale = 0;
   fitcore::NormalSystem<kN> normal(groups.size());
   std::vector<double> slopes;

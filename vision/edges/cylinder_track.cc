@@ -303,8 +303,9 @@ CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t, const std::vector<Edg
   out->tilt = q[kL];
   out->noise = noise;
   // As the full fit: the weighted residuals where the fit ended, their variance and the
-  // covariance from the weighted normal matrix; those of the last step's start (it moved the
-  // edges by less than 1e-3 px), not evaluated again.
+  // covariance from the weighted normal matrix; those of the last step's start (its centre and
+  // radius moved by less than 1e-3 px each), not evaluated again. (A last step on the weights'
+  // own system left that system in sys.)
   if (newton) weighted.Get(&sys.jtj, &sys.jtr);
   for (double r : residuals)
     if (std::abs(r) > 4.0 * noise) ++out->outliers;

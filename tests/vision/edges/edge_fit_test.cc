@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <random>
 
 #include "synthetic/edge_profile.h"
@@ -104,6 +106,16 @@ TEST(EdgeFitTest, StepBeforeInnerStepPutsTheSilhouetteWhereAStripeBesideItPulled
     EXPECT_NEAR(both.sigma_px, blur, 0.02) << inward;
     EXPECT_NEAR(both.contrast, inward * (60.0 - 200.0), 0.5) << inward;
     for (const EdgeSample& smp : s) EXPECT_NEAR(EdgeModelValue(both, smp.u_px), smp.value, 0.2);
+    // The same profile in 4 rows 0.02 px apart (a column a group): the rms stays the model's small
+    // mismatch (u enters through both steps' positions; through the first alone it was 0.3–0.7).
+    std::vector<EdgeSample> rows;
+    for (int row = 0; row < 4; ++row)
+      for (const EdgeSample& smp : NumericallyBlurred(scene, blur, -12 + 0.02 * row, 12))
+        rows.push_back(smp);
+    const EdgeFit in_rows = FitStepBeforeInnerStep(rows, 0.0, 1.5, 0.0, inward * gap);
+    ASSERT_TRUE(in_rows.converged) << inward;
+    EXPECT_NEAR(in_rows.edge_px, edge, 0.01) << inward;
+    EXPECT_LT(in_rows.rms, 0.1) << inward;
   }
 }
 
@@ -190,6 +202,33 @@ TEST(EdgeFitTest, SamplesInColumnsGiveTheEdgeItsSigmaAndTheNoise) {
     EXPECT_NEAR(f.edge_px, edge, 0.005);
     EXPECT_LT(f.rms, 0.1);
   }
+}
+
+// A sharp edge (blur 0.3 px) started from a guess ten times its blur: the groups made for the
+// guess are half the edge's blur wide, and are made again for the blur the fit found.
+TEST(EdgeFitTest, ASharpEdgeFromAWideGuessIsGroupedForItsOwnBlur) {
+  std::mt19937 rng(5);
+  constexpr int kRepeats = 200;
+  std::vector<double> errors;
+  int wild_sigma = 0;
+  for (int i = 0; i < kRepeats; ++i) {
+    const double edge = std::uniform_real_distribution<double>(-0.5, 0.5)(rng);
+    const auto s = Samples(edge, 0.3, 40, 200, 3.0, &rng, -10, 10, 0.02);
+    const EdgeFit f = FitBlurredStep(s, 0.0, 3.0, 0.0);
+    if (!f.converged) continue;
+    errors.push_back(std::abs(f.edge_px - edge));
+    wild_sigma += f.edge_sigma_px > 0.2;
+  }
+  std::cout << errors.size() << " of " << kRepeats << " converged; " << wild_sigma
+            << " with a sigma above 0.2 px\n";
+  ASSERT_GE(errors.size(), 100u);
+  std::sort(errors.begin(), errors.end());
+  std::cout << "95th percentile error " << errors[errors.size() * 95 / 100] << " px\n";
+  // Measured: 199 of 200 converged, 95 % within 0.03 px, no σ above 0.2 px. When the groups
+  // stayed the guess's: 0.043 px, and 20 fits reported a σ above 0.2 px; before the groups (each
+  // pixel on its own, one run): 0.32 px, and 7.
+  EXPECT_LT(errors[errors.size() * 95 / 100], 0.05);
+  EXPECT_EQ(wild_sigma, 0);
 }
 
 TEST(EdgeFitTest, TooFewSamplesOrNoStepDoNotConverge) {
