@@ -16,6 +16,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/videoio.hpp>
 #include <sstream>
+#include <exception>
 #include <string>
 #include <thread>
 #include <tuple>
@@ -712,6 +713,14 @@ int main(int argc, char** argv) {
   if (what == "all" || what == "watch") BenchWatch();
   if (what == "all" || what == "watch-farm") BenchWatchFarm();
   if (what == "all" || what == "adversarial") BenchAdversarial(argc, argv);
-  if (what == "filament") BenchFilament(argv[2]);
+  if (what == "filament") {
+    // A video of one's own: a file that cannot be read is one line and exit 1.
+    try {
+      BenchFilament(argv[2]);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "clogscope_bench filament: error: %s\n", e.what());
+      return 1;
+    }
+  }
   return 0;
 }

@@ -230,8 +230,8 @@ EdgeFit Solve(const std::vector<EdgeSample>& samples, const Vec<Model::kN>& p0, 
   double within_start = 0;
   const auto run = [&](const Vec<N>& from) {
     // The cost LM compares carries the pixels' part about their groups as it is at the start: it
-    // moves with p by the model's curvature over a group's span only, and LM's own steps (the
-    // groups' system) cannot foresee it.
+    // moves with p only through the model's slope across a group, which LM's own steps (the
+    // groups' system) cannot foresee.
     within_start = WithinGroups(samples, grouped, from, u_ref, model);
     return fitcore::MinimiseLm<N>(
         from,
