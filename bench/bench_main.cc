@@ -22,6 +22,7 @@
 #include <tuple>
 #include <vector>
 
+#include "bench/decode_timing.h"
 #include "bench/pi_budget.h"
 #include "common/spawn.h"
 #include "model/lag_fit.h"
@@ -38,6 +39,8 @@
 
 namespace {
 
+using clogscope::bench::DecodeOnlyFps;
+using clogscope::bench::Median;
 using clogscope::bench::PiCells;
 using clogscope::bench::TableHead;
 using clogscope::synthetic::FrameTruth;
@@ -197,16 +200,6 @@ void BenchVideo() {
     while (cap.read(f)) ++n;
     return std::make_pair(n, Seconds(t0, Clock::now()));
   };
-  // Decoding alone with FFmpeg's threads (a thread per core), and as `measure` opens the file
-  // (a core left to measuring).
-  auto decode_only = [&](int threads) {
-    clogscope::vision::VideoDecoder dec(path, threads);
-    clogscope::vision::DecodedFrame f;
-    int n = 0;
-    const auto t0 = Clock::now();
-    while (dec.Read(&f)) ++n;
-    return std::make_pair(n, Seconds(t0, Clock::now()));
-  };
   auto measure = [&]() {
     auto src = clogscope::vision::FrameSource::Open(path);
     StrandMeasureOptions opt;
@@ -235,26 +228,22 @@ void BenchVideo() {
   for (int r = 0; r < kRounds; ++r) {
     const auto c = opencv_decode();
     cv_fps.push_back(c.first / c.second);
-    const auto d = decode_only(0);
-    dec_fps.push_back(d.first / d.second);
-    const auto dm = decode_only(measure_threads);
-    dec_as_measure_fps.push_back(dm.first / dm.second);
+    // Decoding alone with FFmpeg's threads (a thread per core), and as `measure` opens the file
+    // (a core left to measuring).
+    dec_fps.push_back(DecodeOnlyFps(path, 0));
+    dec_as_measure_fps.push_back(DecodeOnlyFps(path, measure_threads));
     double ms = 0;
     std::tie(n, ms, valid, mean, sd) = measure();
     meas_fps.push_back(n / ms);
   }
-  auto median = [](std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v[v.size() / 2];
-  };
-  const double decode_fps = median(dec_fps), measure_fps = median(meas_fps);
-  const double decode_as_measure_fps = median(dec_as_measure_fps);
+  const double decode_fps = Median(dec_fps), measure_fps = Median(meas_fps);
+  const double decode_as_measure_fps = Median(dec_as_measure_fps);
   fmt::print(
       "\n## Video: 250 frames 1280x720 H.264 (OpenCV/libx264, crf 23), 2 cores, median of {}\n\n",
       kRounds);
   fmt::print("{}", TableHead("| pass | frames/s |", "|---|---|"));
-  fmt::print("| decode only, OpenCV VideoCapture (to BGR) | {:.0f} |{}\n", median(cv_fps),
-             PiCells(median(cv_fps)));
+  fmt::print("| decode only, OpenCV VideoCapture (to BGR) | {:.0f} |{}\n", Median(cv_fps),
+             PiCells(Median(cv_fps)));
   fmt::print("| decode only, clogscope reader (luma), FFmpeg's threads | {:.0f} |{}\n", decode_fps,
              PiCells(decode_fps));
   fmt::print(
@@ -268,7 +257,7 @@ void BenchVideo() {
       "{:.2f} "
       "against FFmpeg's threads, {:.2f} against OpenCV's reader; width error on these frames: mean "
       "{:+.4f} px, std {:.4f} px ({} valid of {})\n",
-      measure_fps / decode_as_measure_fps, measure_fps / decode_fps, measure_fps / median(cv_fps),
+      measure_fps / decode_as_measure_fps, measure_fps / decode_fps, measure_fps / Median(cv_fps),
       mean, sd, valid, n);
   // ffmpeg's own decode, start-up subtracted (a 1-frame run measures it).
   auto ffmpeg_secs = [&](std::vector<std::string> frames) {
@@ -362,10 +351,6 @@ void BenchExperiment() {
     std::tie(s1, std::ignore, std::ignore) = run_pipeline(1);
     pipe1.push_back(s1);
   }
-  auto median = [](std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v.empty() ? NAN : v[v.size() / 2];
-  };
   fmt::print(
       "\n## Experiment: six 10 s 1280x720 H.264 steps ({} frames), 50 samples per step, median of "
       "{}\n\n",
@@ -376,11 +361,11 @@ void BenchExperiment() {
   };
   row("decode every frame once: ffmpeg -f null (all six files, its default threads, incl. "
       "start-up)",
-      median(ff));
-  row("decode every frame once: clogscope reader, FFmpeg's threads", median(ours_all));
-  row("decode every frame once: clogscope reader, one thread", median(ours_one));
-  row("measure the experiment: clogscope, 2 steps at a time (--jobs 2)", median(pipe2));
-  row("measure the experiment: clogscope, 1 step at a time (--jobs 1)", median(pipe1));
+      Median(ff));
+  row("decode every frame once: clogscope reader, FFmpeg's threads", Median(ours_all));
+  row("decode every frame once: clogscope reader, one thread", Median(ours_one));
+  row("measure the experiment: clogscope, 2 steps at a time (--jobs 2)", Median(pipe2));
+  row("measure the experiment: clogscope, 1 step at a time (--jobs 1)", Median(pipe1));
   fmt::print("\nframes measured: {} of {}; worst |step mean − rendered diameter|: {:.2f} µm\n",
              examined, frames_total, worst);
 }

@@ -8,13 +8,15 @@
 #include <string>
 #include <vector>
 
+#include "bench/decode_timing.h"
 #include "bench/pi_budget.h"
 #include "pipeline/band.h"
 #include "vision/io/frame_source.h"
-#include "vision/io/video_decoder.h"
 #include "vision/scene/batch.h"
 #include "vision/scene/strand_measure.h"
 
+using clogscope::bench::DecodeOnlyFps;
+using clogscope::bench::Median;
 using clogscope::bench::PiCells;
 using clogscope::bench::TableHead;
 using clogscope::vision::StrandMeasureOptions;
@@ -34,14 +36,7 @@ void BenchFilament(const std::string& path) {
   int n = 0, valid = 0;
   double sum = 0;
   for (int r = 0; r < kRounds; ++r) {
-    {
-      vision::VideoDecoder decoder(path, 1);
-      vision::DecodedFrame frame;
-      int decoded = 0;
-      const auto t0 = Clock::now();
-      while (decoder.Read(&frame)) ++decoded;
-      decode_fps.push_back(decoded / std::chrono::duration<double>(Clock::now() - t0).count());
-    }
+    decode_fps.push_back(DecodeOnlyFps(path, 1));
     auto src = vision::FrameSource::Open(path);
     valid = 0;
     sum = 0;
@@ -53,9 +48,7 @@ void BenchFilament(const std::string& path) {
     });
     fps.push_back(n / std::chrono::duration<double>(Clock::now() - t0).count());
   }
-  std::sort(fps.begin(), fps.end());
-  std::sort(decode_fps.begin(), decode_fps.end());
-  const double measure = fps[kRounds / 2], decode = decode_fps[kRounds / 2];
+  const double measure = Median(fps), decode = Median(decode_fps);
   fmt::print("\n## Filament path on {} (one core, median of {})\n\n{}", path, kRounds,
              TableHead("| pass | frames/s |", "|---|---|"));
   fmt::print("| decode only (clogscope reader, one thread) | {:.0f} |{}\n", decode, PiCells(decode));

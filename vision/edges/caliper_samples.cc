@@ -31,10 +31,8 @@ bool SlabBounds(const GreyImage& img, const AxisFrame& f, double s0, double s1, 
 }
 
 // Whether the pixel (x, y) lies in the slab s0 <= s < s1, u0 <= u <= u1.
-inline bool InSlab(const AxisFrame& f, int x, double ry, double s0, double s1, double u0,
-                   double u1) {
-  const double rx = x - f.ox;
-  const double s = rx * f.dx + ry * f.dy, u = rx * f.dy - ry * f.dx;
+inline bool InSlab(const AxisFrame& f, int x, int y, double s0, double s1, double u0, double u1) {
+  const double s = f.S(x, y), u = f.U(x, y);
   return s >= s0 && s < s1 && u >= u0 && u <= u1;
 }
 
@@ -72,8 +70,8 @@ void SlabRow(const AxisFrame& f, int y, int x_lo, int x_hi, double s0, double s1
   const double to = std::clamp(std::min(sb, ub), x_lo - 1.0, x_hi + 1.0);
   int a = std::max(x_lo, static_cast<int>(std::floor(from)));
   int b = std::min(x_hi, static_cast<int>(std::ceil(to)));
-  while (a <= b && !InSlab(f, a, ry, s0, s1, u0, u1)) ++a;
-  while (b >= a && !InSlab(f, b, ry, s0, s1, u0, u1)) --b;
+  while (a <= b && !InSlab(f, a, y, s0, s1, u0, u1)) ++a;
+  while (b >= a && !InSlab(f, b, y, s0, s1, u0, u1)) --b;
   *first = a;
   *last = b;
 }
@@ -144,11 +142,10 @@ bool GatherEdgeSamples(const GreyImage& img, const AxisFrame& f, double s0, doub
   int x_lo, x_hi, y_lo, y_hi;
   if (!SlabBounds(img, f, s0, s1, u0, u1, &x_lo, &x_hi, &y_lo, &y_hi)) return false;
   for (int y = y_lo; y <= y_hi; ++y) {
-    const double ry = y - f.oy;
     int first, last;
     SlabRow(f, y, x_lo, x_hi, s0, s1, u0, u1, &first, &last);
     for (int x = first; x <= last; ++x) {
-      const double u = (x - f.ox) * f.dy - ry * f.dx;
+      const double u = f.U(x, y);
       const float v = img.At(x, y);
       if (saturated && Clipped(v, clip)) ++*saturated;
       out->push_back({static_cast<float>(u), v});

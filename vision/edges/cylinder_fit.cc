@@ -129,10 +129,14 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   // silhouette, inside the interior's wide groups).
   PixelGroups groups = GroupCylinderPixels(samples, left_guess_px, right_guess_px, p[kS]);
   std::vector<double> w(samples.size(), 1.0), residuals(samples.size());
+  // Each group's slope across u where the residuals were last taken: what an LM run holds (below).
+  std::vector<double> slopes;
   const auto residuals_at = [&](const Vec<kN>& q) {
+    slopes.resize(groups.size());
     int k = 0;
     for (size_t g = 0; g < groups.size(); ++g) {
-      double j[kN], slope;
+      double j[kN];
+      double& slope = slopes[g];
       const double model = Model<kBg>(groups.mean_u_px[g], q, u_ref, root, j, &slope);
       for (const int end = groups.end[g]; k < end; ++k) {
         const int i = groups.pixels[k];
@@ -166,14 +170,6 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   // converged in 80 % of Greeff's fits; ungrouped, 91 %.) Each run starts where the last ended.
   double cauchy_scale = 0;
   fitcore::NormalSystem<kN> normal(groups.size());
-  std::vector<double> slopes;
-  const auto freeze_slopes = [&](const Vec<kN>& q) {
-    slopes.resize(groups.size());
-    for (size_t g = 0; g < groups.size(); ++g) {
-      double j[kN];
-      Model<kBg>(groups.mean_u_px[g], q, u_ref, root, j, &slopes[g]);
-    }
-  };
   const auto evaluate = [&](const Vec<kN>& q, Mat<kN>* jtj, Vec<kN>* jtr) {
     double cost = 0;
     const double cs = kCauchyC * cauchy_scale, inv_cs2 = cs > 0 ? 1.0 / (cs * cs) : 0.0;
@@ -219,7 +215,7 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   // down-weighted samples. The scale is taken once: renewed with the weights it shrinks with the
   // down-weighted residuals and the edges never settle (on real footage they drifted 0.1 px per
   // renewal).
-  freeze_slopes(p);
+  residuals_at(p);  // the slopes the first run holds
   fitcore::LmResult<kN> lm = fitcore::MinimiseLm<kN>(p, evaluate, bound, small_step);
   out.iterations = lm.iterations;
   if (!lm.converged) return out;
@@ -228,7 +224,6 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   residuals_at(lm.p);
   const double noise = RobustScale(residuals);
   cauchy_scale = noise;
-  freeze_slopes(lm.p);
   lm = fitcore::MinimiseLm<kN>(lm.p, evaluate, bound, small_step);
   out.iterations += lm.iterations;
   if (!lm.converged) return out;

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <type_traits>
 #include <vector>
 
 #include "vision/edges/caliper_samples.h"
@@ -33,8 +32,14 @@ void StepColumns(double du, double f, double de, double z, double* j) {
   j[kS] = de * z;
 }
 
+// What every model with one position shares: u enters through the base's slope and through the
+// position (u − e), so the model's slope across u is b less its derivative by e.
+struct OnePosition {
+  static double SlopeAcrossU(const double* p, const double* j) { return p[kB] - j[kE]; }
+};
+
 // The blurred step: 5 parameters.
-struct StepModel {
+struct StepModel : OnePosition {
   static constexpr int kN = 5;
   void operator()(double du, double u, const double* p, double* value, double* j) const {
     const double inv_s = 1.0 / p[kS];
@@ -52,6 +57,8 @@ struct StepModel {
 enum { kC2 = 5, kE2 = 6 };
 struct InnerStepModel {
   static constexpr int kN = 7;
+  // Through both positions.
+  static double SlopeAcrossU(const double* p, const double* j) { return p[kB] - j[kE] - j[kE2]; }
   void operator()(double du, double u, const double* p, double* value, double* j) const {
     const double inv_s = 1.0 / p[kS];
     const double z = (u - p[kE]) * inv_s, z2 = (u - p[kE2]) * inv_s;
@@ -68,7 +75,7 @@ struct InnerStepModel {
 };
 
 // The blurred step with a blurred √d shading ramp on the object side (ι = +1: object at +u).
-struct ShadedStepModel {
+struct ShadedStepModel : OnePosition {
   static constexpr int kN = 6;
   double iota = 1.0;
   const BlurredSqrt* sqrt_table = &BlurredSqrt::Get();
@@ -87,7 +94,7 @@ struct ShadedStepModel {
 
 // The blurred step whose two sides slope differently (a background gradient that stops at the
 // silhouette): the blurred ramp k·s·R(z), R(z) = zΦ(z) + φ(z), adds slope k on the +u side.
-struct TwoSlopeStepModel {
+struct TwoSlopeStepModel : OnePosition {
   static constexpr int kN = 6;
   void operator()(double du, double u, const double* p, double* value, double* j) const {
     const double inv_s = 1.0 / p[kS];
@@ -106,7 +113,7 @@ struct TwoSlopeStepModel {
 // The blurred step through a symmetric PSF somewhat more or less peaked than a Gaussian (a colour
 // camera's luma mixes channels demosaiced at different blurs): the Gram–Charlier term
 // k·H(z), H(z) = φ(z)·(3z − z³), odd about the edge, so the edge stays the step's middle.
-struct PeakedStepModel {
+struct PeakedStepModel : OnePosition {
   static constexpr int kN = 6;
   void operator()(double du, double u, const double* p, double* value, double* j) const {
     const double inv_s = 1.0 / p[kS];
@@ -124,7 +131,7 @@ struct PeakedStepModel {
 };
 
 // A thin line's blurred profile, close to a Gaussian; symmetric, so its centre is unbiased.
-struct LineModel {
+struct LineModel : OnePosition {
   static constexpr int kN = 5;
   void operator()(double du, double u, const double* p, double* value, double* j) const {
     const double inv_s = 1.0 / p[kS];
@@ -183,15 +190,6 @@ double Evaluate(const Grouped& grouped, const Vec<Model::kN>& p, double u_ref, c
   return cost;
 }
 
-// The model's slope across u from its Jacobian row j at p: u enters through the base's slope and
-// through each step's position (u − e), so it is b less the derivatives by the positions.
-template <typename Model>
-double SlopeAcrossU(const double* p, const double* j) {
-  double slope = p[kB] - j[kE];
-  if constexpr (std::is_same_v<Model, InnerStepModel>) slope -= j[kE2];
-  return slope;
-}
-
 // The pixels' residuals about their groups' at p: Σ (slope·offset − (value − mean value))², the
 // slope the model's across u.
 template <typename Model>
@@ -204,7 +202,7 @@ double WithinGroups(const std::vector<EdgeSample>& samples, const Grouped& group
     const double u = grouped.groups.mean_u_px[g];
     double value, j[N];
     model(u - u_ref, u, p.data(), &value, j);
-    const double slope = SlopeAcrossU<Model>(p.data(), j);
+    const double slope = Model::SlopeAcrossU(p.data(), j);
     for (const int end = grouped.groups.end[g]; k < end; ++k) {
       const double r = slope * grouped.groups.offset_px[k] -
                        (samples[grouped.groups.pixels[k]].value - grouped.mean_value[g]);

@@ -8,6 +8,7 @@
 #include <random>
 
 #include "synthetic/edge_profile.h"
+#include "tests/running_stats.h"
 
 namespace clogscope::vision {
 namespace {
@@ -177,21 +178,20 @@ TEST(EdgeFitTest, SamplesInColumnsGiveTheEdgeItsSigmaAndTheNoise) {
   std::mt19937 rng(11);
   constexpr int kRepeats = 300;
   constexpr double kNoise = 3.0;
-  double sum = 0, sum2 = 0, reported = 0, rms_over_expected = 0;
+  clogscope::testing::RunningStats edge;
+  double reported = 0, rms_over_expected = 0;
   for (int i = 0; i < kRepeats; ++i) {
     const auto s = Samples(0.37, 1.2, 40, 200, kNoise, &rng, -10, 10, 0.02);
     const EdgeFit f = FitBlurredStep(s, 0.0, 1.5, 0.0);
     ASSERT_TRUE(f.converged);
-    sum += f.edge_px;
-    sum2 += f.edge_px * f.edge_px;
+    edge.Add(f.edge_px);
     reported += f.edge_sigma_px;
     // n samples, 5 parameters: the residuals' rms is the noise times √((n − 5)/n).
     const double n = static_cast<double>(s.size());
     rms_over_expected += f.rms / (kNoise * std::sqrt((n - 5) / n));
   }
-  const double mean = sum / kRepeats, sd = std::sqrt(sum2 / kRepeats - mean * mean);
-  EXPECT_NEAR(mean, 0.37, 4 * sd / std::sqrt(kRepeats) + 0.003);
-  EXPECT_NEAR(reported / kRepeats / sd, 1.0, 0.15);
+  EXPECT_NEAR(edge.mean(), 0.37, 4 * edge.sd() / std::sqrt(kRepeats) + 0.003);
+  EXPECT_NEAR(reported / kRepeats / edge.sd(), 1.0, 0.15);
   EXPECT_NEAR(rms_over_expected / kRepeats, 1.0, 0.03);
   // Without noise the pixels' residuals are the model's small mismatch to the pixel-integrated
   // profile, near the edge too, where the rows' offsets times the model's slope are 1–2 levels.
