@@ -164,11 +164,6 @@ InspectReport InspectInput(const InspectCommandOptions& o) {
                            : std::string(),
                        m.swell_ratio);
     }
-    if (m.model_sigma_px > 0) {
-      t += fmt::format(
-          "  σ holds {:.3f} px of the edge model's doubt (shading too weak to decide)\n",
-          m.model_sigma_px);
-    }
     if (m.straight_start_px > m.band_start_px || m.straight_end_px < m.band_end_px) {
       t += fmt::format(
           "  the edges are rough (knurl or gear marks) on {} calipers: the width is the straight "
@@ -178,6 +173,15 @@ InspectReport InspectInput(const InspectCommandOptions& o) {
     rep.suggested_roi = SuggestRoi(rep.scene.geometry, roi, img.size());
   } else {
     t += fmt::format("result: {}: {}\n", vision::FrameStatusName(m.status), m.detail);
+  }
+  if (m.gave_width()) {
+    // The σ's parts, largest first, while they matter.
+    std::string parts;
+    for (const vision::DoubtPart& p : vision::DoubtParts(m)) {
+      if (p.sigma_px < 0.001 || p.sigma_px < 0.1 * m.width_sigma_px) break;
+      parts += fmt::format("{}{} {:.3f}", parts.empty() ? "" : ", ", p.what, p.sigma_px);
+    }
+    if (!parts.empty()) t += fmt::format("  σ {:.3f} px: {}\n", m.width_sigma_px, parts);
   }
   // What to give measure (and the manifest) for this camera.
   const std::string polarity = m.valid() && m.polarity != vision::Polarity::kMixed

@@ -6,8 +6,8 @@
 // confident-wrong %, bias and σ by class. Seeds from N (default 1: the slow test's scenes; another
 // N gives scenes no one tuned for); every scene's noise times F (default 1; below 1 shows biases
 // the noise hid). --list prints every frame that was confidently wrong, with its scene;
-// --frames-tsv writes every frame (class, seed, frame, status, width, σ and its model and codec
-// parts, truth, bound σ, scene) for analysis.
+// --frames-tsv writes every frame (class, seed, frame, status, width, σ and its parts, truth,
+// bound σ, scene, reason) for analysis.
 #include <fmt/format.h>
 
 #include <chrono>
@@ -53,16 +53,21 @@ void BenchAdversarial(int argc, char** argv) {
   fmt::print("{}", syn::MatrixTable(r));
   if (!tsv_path.empty()) {
     std::string tsv =
-        "class\tseed\tframe\tstatus\twidth_px\tsigma_px\tmodel_sigma_px\tcodec_sigma_px\ttruth_px\t"
-        "wrong\tbound_sigma_px\tscene\n";
+        "class\tseed\tframe\tstatus\twidth_px\tsigma_px\tmodel_sigma_px\tcodec_sigma_px\t"
+        "spread_px\tshading_px\tcylinder_px\ttip_px\tstructure_px\ttwo_slope_px\tmissing_px\t"
+        "truth_px\twrong\tbound_sigma_px\tscene\tdetail\n";
     for (const auto& f : r.frames) {
-      tsv += fmt::format("{}\t{}\t{}\t{}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{}\t{:.4f}\t{}\n",
-                         syn::TroubleClassName(f.trouble), f.seed, f.frame,
-                         f.status == clogscope::vision::FrameStatus::kValid
-                             ? "valid"
-                             : clogscope::vision::FrameStatusName(f.status),
-                         f.width_px, f.sigma_px, f.model_sigma_px, f.codec_sigma_px, f.truth_px,
-                         f.wrong ? 1 : 0, f.bound_sigma_px, f.scene);
+      const clogscope::vision::WidthDoubtPx& d = f.doubt;
+      tsv += fmt::format(
+          "{}\t{}\t{}\t{}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t"
+          "{:.4f}\t{:.4f}\t{:.4f}\t{}\t{:.4f}\t{}\t{}\n",
+          syn::TroubleClassName(f.trouble), f.seed, f.frame,
+          f.status == clogscope::vision::FrameStatus::kValid
+              ? "valid"
+              : clogscope::vision::FrameStatusName(f.status),
+          f.width_px, f.sigma_px, f.model_sigma_px, f.codec_sigma_px, d.spread, d.shading,
+          d.cylinder, d.tip, d.structure, d.two_slope, d.missing, f.truth_px, f.wrong ? 1 : 0,
+          f.bound_sigma_px, f.scene, f.detail);
     }
     clogscope::WriteFileAtomically(tsv_path, tsv);
   }

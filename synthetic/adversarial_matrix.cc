@@ -98,6 +98,7 @@ MatrixResult RunAdversarialMatrix(const MatrixOptions& o) {
         r.sigma_px = m.width_sigma_px;
         r.model_sigma_px = m.model_sigma_px;
         r.codec_sigma_px = m.codec_sigma_px;
+        r.doubt = m.doubt;
         r.strand = truth.strand;
         r.bound_sigma_px = bound_px;
         r.bound_allows = allows;

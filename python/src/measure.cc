@@ -217,6 +217,15 @@ void BindMeasure(py::module_& m) {
       .def_readonly("codec_sigma_px", &StrandMeasurement::codec_sigma_px,
                     "The codec's part: how far a second pass through the video's x264 moved "
                     "the width (0 for other sources).")
+      .def_property_readonly(
+          "sigma_parts",
+          [](const StrandMeasurement& s) {
+            std::vector<std::pair<std::string, double>> parts;
+            for (const vision::DoubtPart& p : vision::DoubtParts(s))
+              parts.emplace_back(p.what, p.sigma_px);
+            return parts;
+          },
+          "width_sigma_px in its parts, largest first: (what, σ px) pairs.")
       .def_readonly("angle_deg", &StrandMeasurement::angle_deg,
                     "Strand axis from image vertical, + leaning to +x going down.")
       .def_readonly("contrast", &StrandMeasurement::contrast,

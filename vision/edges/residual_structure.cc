@@ -205,6 +205,8 @@ BandEdgeDoubt JudgeBandEdge(const GreyImage& img, const AxisFrame& f, const Clip
       slopes_px = std::abs(here.move_px) * std::sqrt(1 - 1 / here.gain);
     }
   }
+  out.structure_px = shared_px;
+  out.two_slope_px = slopes_px;
   out.doubt_px = std::hypot(shared_px, slopes_px);
   return out;
 }

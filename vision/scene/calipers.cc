@@ -160,9 +160,10 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   };
   // A side's plain step in the window's samples about e0.
   const auto fit_plain = [&](int side, double e0) {
-    return inner_step[side] ? FitStepBeforeInnerStep(samples, e0, sigma_guess, e0,
-                                                     e0 + (side == 0 ? 1 : -1) * inner_edge_px[side])
-                            : FitBlurredStep(samples, e0, sigma_guess, e0);
+    return inner_step[side]
+               ? FitStepBeforeInnerStep(samples, e0, sigma_guess, e0,
+                                        e0 + (side == 0 ? 1 : -1) * inner_edge_px[side])
+               : FitBlurredStep(samples, e0, sigma_guess, e0);
   };
   // Its shaded step, and the step as its side's model stands (shaded once decided so).
   const auto fit_shaded = [&](int side, double e0) {
@@ -257,8 +258,8 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
               if (usable(peaked)) rss_alt = std::min(rss_alt, Rss(peaked));
             }
             evidence = std::isinf(rss_alt) ? 1e9 : std::max(0.0, rss_alt - rss_s) / unit;
-            outward = plain.converged ? (shaded.edge_px - plain.edge_px) * (side == 0 ? -1.0 : 1.0)
-                                      : 1.0;
+            outward =
+                plain.converged ? (shaded.edge_px - plain.edge_px) * (side == 0 ? -1.0 : 1.0) : 1.0;
           }
           if (plain.converged || shaded.converged) {
             shade_evidence[side].push_back(evidence);
@@ -616,21 +617,24 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   double expected_var = 0;
   for (const Caliper& c : m->calipers)
     if (c.inlier) expected_var += c.width_sigma_px * c.width_sigma_px;
-  m->width_sigma_px = std::sqrt(expected_var) / used;
+  WidthDoubtPx& doubt = m->doubt;
+  doubt.spread = std::sqrt(expected_var) / used;
   if (used >= 2) {
     const double var =
         trend_var >= 0 ? trend_var : std::max(0.0, (sum2 - sum * sum / used) / (used - 1));
-    m->width_sigma_px = std::max(m->width_sigma_px, std::sqrt(var / used));
+    doubt.spread = std::max(doubt.spread, std::sqrt(var / used));
   }
   // The model's doubt: a side judged plain would be this much wider if shaded; half of it (both
   // sides together) counts as one σ.
-  m->model_sigma_px = 0.5 * (shading_doubt_px[0] + shading_doubt_px[1]);
+  doubt.shading = 0.5 * (shading_doubt_px[0] + shading_doubt_px[1]);
+  doubt.cylinder = cylinder_doubt_px;
+  doubt.missing = missing_doubt_px;
   {
     // The inlier calipers' own edge models; a strand's calipers refitted as cylinders, the
     // cylinders'. (A filament's cylinders carry only their disagreement with the per-edge fits:
     // their residual structure on Greeff's real filament, knurled and lit, doubled its σ to
     // 0.16 px against a frame-to-frame scatter of 0.08 px.)
-    double structure_doubt_px[2], edge_shift_px[2];
+    double edge_shift_px[2];
     for (int side = 0; side < 2; ++side) {
       std::vector<CaliperEdge> edges;
       for (int k = 0; k < n_cal; ++k) {
@@ -644,7 +648,9 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       const BandEdgeDoubt judged =
           JudgeBandEdge(img, f, clip, edges, -w.u0, w.u1, side == 0 ? -1 : 1);
       edge_shift_px[side] = judged.shift_px;
-      structure_doubt_px[side] = std::hypot(judged.doubt_px, cylinder_structure_px[side]);
+      doubt.structure =
+          std::hypot(doubt.structure, std::hypot(judged.structure_px, cylinder_structure_px[side]));
+      doubt.two_slope = std::hypot(doubt.two_slope, judged.two_slope_px);
     }
     // An edge whose background slopes toward a flat object lies where the two-slope step puts it.
     if (edge_shift_px[0] != 0 || edge_shift_px[1] != 0) {
@@ -657,11 +663,10 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     // inferred from where the outline leaves the nozzle's may be off by a good part of the
     // strand's width.
     const double tip_sigma_px = g.tip_sigma_px >= 0 ? g.tip_sigma_px : kTipSigmaWidths * width0;
-    m->model_sigma_px = std::hypot(
-        std::hypot(m->model_sigma_px + cylinder_doubt_px, std::abs(width_slope) * tip_sigma_px),
-        std::hypot(std::hypot(structure_doubt_px[0], structure_doubt_px[1]), missing_doubt_px));
+    doubt.tip = std::abs(width_slope) * tip_sigma_px;
   }
-  m->width_sigma_px = std::hypot(m->width_sigma_px, m->model_sigma_px);
+  m->model_sigma_px = ModelSigmaPx(doubt);
+  m->width_sigma_px = std::hypot(doubt.spread, m->model_sigma_px);
 
   // The same calipers further down the strand, outside the band: a blob covering one edge over
   // the band makes the band's edges agree with each other but not with the strand. (A filament's

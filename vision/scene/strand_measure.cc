@@ -288,6 +288,28 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
   return m;
 }
 
+double ModelSigmaPx(const WidthDoubtPx& d) {
+  // The shading's and the cylinders' doubts are two readings of one question (where a lit
+  // side's silhouette is), so they add; the others are independent.
+  return std::hypot(std::hypot(d.shading + d.cylinder, d.tip),
+                    std::hypot(std::hypot(d.structure, d.two_slope), d.missing));
+}
+
+std::vector<DoubtPart> DoubtParts(const StrandMeasurement& m) {
+  const WidthDoubtPx& d = m.doubt;
+  std::vector<DoubtPart> parts = {{"the calipers' spread", d.spread},
+                                  {"shading too weak to decide", d.shading},
+                                  {"the lit cylinders against the per-edge fits", d.cylinder},
+                                  {"the tip's place along a changing width", d.tip},
+                                  {"residual structure the calipers share", d.structure},
+                                  {"a background sloping to the edge", d.two_slope},
+                                  {"calipers missing from a changing width", d.missing},
+                                  {"the codec", m.codec_sigma_px}};
+  std::stable_sort(parts.begin(), parts.end(),
+                   [](const DoubtPart& a, const DoubtPart& b) { return a.sigma_px > b.sigma_px; });
+  return parts;
+}
+
 double MaxValidSigmaPx(const StrandMeasureOptions& opt, double width_px) {
   return std::max(opt.max_sigma_px, opt.max_sigma_fraction * width_px);
 }
@@ -296,9 +318,11 @@ void JudgePrecision(const StrandMeasureOptions& opt, StrandMeasurement* m) {
   const double max_sigma_px = MaxValidSigmaPx(opt, m->width_px);
   if (m->valid() && m->width_sigma_px > max_sigma_px) {
     m->status = FrameStatus::kImprecise;
-    m->detail =
-        fmt::format("width {:.2f} ± {:.2f} px: σ above the {:.2f} px a valid width may carry",
-                    m->width_px, m->width_sigma_px, max_sigma_px);
+    const DoubtPart largest = DoubtParts(*m).front();
+    m->detail = fmt::format(
+        "width {:.2f} ± {:.2f} px: σ above the {:.2f} px a valid width may carry (largest part: "
+        "{}, {:.2f} px)",
+        m->width_px, m->width_sigma_px, max_sigma_px, largest.what, largest.sigma_px);
   }
 }
 

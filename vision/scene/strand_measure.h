@@ -51,6 +51,22 @@ inline constexpr double kWholeStretchPx = 1e6;  // band height meaning "as far a
 inline constexpr double kNominalScaleUmPerPx = 3.0;  // the reference camera's, when none is given
 BandPx DefaultBand(MeasureTarget target, double scale_um_per_px);
 
+// What a width's σ is made of: each part a σ of width_px, both edges together. They combine in
+// calipers.cc as spread ⊕ model, model = ((shading + cylinder) ⊕ tip ⊕ structure ⊕ two_slope ⊕
+// missing) ⊕ codec (⊕: root of the sum of squares); the codec's part is
+// StrandMeasurement::codec_sigma_px.
+struct WidthDoubtPx {
+  double spread = 0;     // the calipers' scatter about their mean (or trend), or their fits' own σ
+  double shading = 0;    // a side judged plain would lie this much further out if it were shaded
+  double cylinder = 0;   // the lit cylinders' disagreement with the per-edge fits, beyond the blur
+  double tip = 0;        // the band's start along the axis, where the width changes along it
+  double structure = 0;  // the residual structure the calipers share at each edge
+  double two_slope = 0;  // a background sloping to a flat object: the move it makes, or its σ
+  double missing = 0;    // calipers left out of the mean of a width that changes along the band
+};
+// The model's part of a width's σ, the codec's left out: all parts but the spread.
+double ModelSigmaPx(const WidthDoubtPx& d);
+
 // The result for one frame. Geometry is in full-frame pixel coordinates (ROI offset added).
 struct StrandMeasurement {
   FrameStatus status = FrameStatus::kNoStrand;
@@ -65,6 +81,7 @@ struct StrandMeasurement {
   // evidence (shading, tip), and from the codec (codec_sigma_px).
   double model_sigma_px = 0;
   double codec_sigma_px = 0;  // how far a second pass through the stream's encoder moved the width
+  WidthDoubtPx doubt;         // the other parts of width_sigma_px
   double angle_deg = 0;       // strand axis from image vertical, + leaning to +x going down
   double contrast = 0;        // median edge step, grey levels of the frame's bit depth
   double blur_px = 0;         // median PSF sigma, pixel footprint removed
@@ -138,6 +155,13 @@ SceneOptions SceneOptionsFor(const StrandMeasureOptions& options, double data_ma
 // it becomes kImprecise (JudgePrecision).
 double MaxValidSigmaPx(const StrandMeasureOptions& options, double width_px);
 void JudgePrecision(const StrandMeasureOptions& options, StrandMeasurement* m);
+
+// A measurement's σ in its parts (doubt and codec_sigma_px), largest first, each named for a user.
+struct DoubtPart {
+  const char* what;
+  double sigma_px;
+};
+std::vector<DoubtPart> DoubtParts(const StrandMeasurement& m);
 
 // Marks valid frames whose width is far from the median of the valid frames within ±half_window
 // frames (robust: more than k·1.4826·MAD and more than min_deviation_px away) as kWidthOutlier.

@@ -333,5 +333,42 @@ TEST(StrandMeasureTest, FlagWidthOutliersMarksOnlyTheOutlier) {
   EXPECT_EQ(FlagWidthOutliers(frames), 0);
 }
 
+// The σ's parts: on a plain strand whose only trouble is noise, the calipers' spread predicts the
+// frame-to-frame scatter of the widths (an independent truth: the frames differ only by their
+// noise). The parts make up the σ, and an imprecise width's reason names the largest. (The model's
+// parts are not all 0 here: noise alone gives the two-slope step and the shading some evidence.)
+TEST(StrandMeasureTest, TheSigmasSpreadPartIsTheNoisesScatter) {
+  SceneParams p;
+  p.noise_sigma = 14;
+  constexpr int kFrames = 40;
+  double sum = 0, sum2 = 0, spread2 = 0;
+  int n = 0;
+  for (int i = 0; i < kFrames; ++i) {
+    const StrandMeasurement m = MeasureStrand(RenderFrame(p, i, nullptr), {});
+    ASSERT_TRUE(m.gave_width()) << m.detail;
+    sum += m.width_px, sum2 += m.width_px * m.width_px, ++n;
+    spread2 += m.doubt.spread * m.doubt.spread;
+    const std::vector<DoubtPart> parts = DoubtParts(m);
+    ASSERT_EQ(parts.size(), 8u);
+    double total2 = 0;
+    for (const DoubtPart& part : parts) total2 += part.sigma_px * part.sigma_px;
+    // Shading and the cylinders add before squaring (one question); on a plain strand one is 0.
+    ASSERT_EQ(m.doubt.shading * m.doubt.cylinder, 0.0);
+    EXPECT_NEAR(std::sqrt(total2), m.width_sigma_px, 1e-9);
+  }
+  const double scatter = std::sqrt((sum2 - sum * sum / n) / (n - 1));
+  const double spread = std::sqrt(spread2 / n);
+  // 40 frames: the scatter's own σ is ~11 %.
+  EXPECT_NEAR(spread / scatter, 1.0, 0.3) << "spread " << spread << " scatter " << scatter;
+
+  // An imprecise width says what made it so.
+  StrandMeasureOptions strict;
+  strict.max_sigma_px = 0.001;
+  strict.max_sigma_fraction = 0;
+  const StrandMeasurement m = MeasureStrand(RenderFrame(p, 0, nullptr), strict);
+  ASSERT_EQ(m.status, FrameStatus::kImprecise);
+  EXPECT_NE(m.detail.find(DoubtParts(m).front().what), std::string::npos) << m.detail;
+}
+
 }  // namespace
 }  // namespace clogscope::vision
