@@ -47,9 +47,9 @@ void Interval(double a, double c, double ox, double lo, double hi, double* from,
     return;
   }
   const double p = ox + (lo - c) / a, q = ox + (hi - c) / a;
-  const double slack =
-      1.0 + 16.0 * kEps * (std::abs(p) + std::abs(q) + std::abs(ox) +
-                           (std::abs(lo) + std::abs(hi) + std::abs(c)) / std::abs(a));
+  const double slack = 1.0 + 16.0 * kEps *
+                                 (std::abs(p) + std::abs(q) + std::abs(ox) +
+                                  (std::abs(lo) + std::abs(hi) + std::abs(c)) / std::abs(a));
   *from = std::min(p, q) - slack;
   *to = std::max(p, q) + slack;
 }
@@ -252,7 +252,7 @@ double InnerEdgeDistance(const GreyImage& img, const AxisFrame& f, double s0, do
 }
 
 double RefineEdgeGuess(const GreyImage& img, const AxisFrame& f, double s, double u_guess,
-                       double half, double min_step) {
+                       double half, double min_step, int sign) {
   constexpr double kStep = 0.5;
   const int n = static_cast<int>(2 * half / kStep) + 1;
   std::array<float, 128> v;
@@ -271,6 +271,7 @@ double RefineEdgeGuess(const GreyImage& img, const AxisFrame& f, double s, doubl
   double best = u_guess, best_dist = 1e30;
   for (int i = 0; i + 1 < n; ++i) {
     if ((v[i] < mid) == (v[i + 1] < mid)) continue;
+    if (sign != 0 && (v[i + 1] > v[i]) != (sign > 0)) continue;
     const double u = u_guess - half + (i + (mid - v[i]) / (v[i + 1] - v[i])) * kStep;
     if (std::abs(u - u_guess) < best_dist) {
       best_dist = std::abs(u - u_guess);

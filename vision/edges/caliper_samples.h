@@ -75,8 +75,10 @@ double InnerEdgeDistance(const GreyImage& img, const AxisFrame& f, double s0, do
 
 // Sub-pixel start for an edge fit: along the normal at s, from u_guess - half to u_guess + half in
 // half-pixel steps, the crossing of the local mid-level (between the profile's extremes) nearest to
-// u_guess. Returns u_guess when the profile has no clear step (extremes closer than min_step).
+// u_guess in the edge's direction (sign: +1 rising with u, −1 falling, 0 either). Returns u_guess
+// when the profile has no clear step (extremes closer than min_step) or no such crossing (a
+// brighter stripe beside a dark strand's edge crosses the mid-level, its edge does not).
 double RefineEdgeGuess(const GreyImage& img, const AxisFrame& f, double s, double u_guess,
-                       double half, double min_step);
+                       double half, double min_step, int sign);
 
 }  // namespace clogscope::vision

@@ -105,13 +105,13 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     const double sb = band_s0 + (n_cal - 0.5) * opt.caliper_spacing_px;
     const double half = std::min(10.0, 0.25 * width0);
     const double la =
-        RefineEdgeGuess(img, f, sa, left_guess + slope_guess * sa, half, min_contrast);
+        RefineEdgeGuess(img, f, sa, left_guess + slope_guess * sa, half, min_contrast, g.left_sign);
     const double lb =
-        RefineEdgeGuess(img, f, sb, left_guess + slope_guess * sb, half, min_contrast);
-    const double ra =
-        RefineEdgeGuess(img, f, sa, right_guess + slope_guess * sa, half, min_contrast);
-    const double rb =
-        RefineEdgeGuess(img, f, sb, right_guess + slope_guess * sb, half, min_contrast);
+        RefineEdgeGuess(img, f, sb, left_guess + slope_guess * sb, half, min_contrast, g.left_sign);
+    const double ra = RefineEdgeGuess(img, f, sa, right_guess + slope_guess * sa, half,
+                                      min_contrast, g.right_sign);
+    const double rb = RefineEdgeGuess(img, f, sb, right_guess + slope_guess * sb, half,
+                                      min_contrast, g.right_sign);
     if (sb > sa) slope_guess = 0.5 * ((lb - la) + (rb - ra)) / (sb - sa);
     left_guess = 0.5 * (la + lb) - slope_guess * 0.5 * (sa + sb);
     right_guess = 0.5 * (ra + rb) - slope_guess * 0.5 * (sa + sb);

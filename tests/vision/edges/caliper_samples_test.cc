@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <opencv2/core.hpp>
 #include <vector>
 
 namespace clogscope::vision {
@@ -35,6 +37,35 @@ TEST(GroupByUTest, GroupsPixelsWithinTheirSpanAndTheInteriorsWiderOne) {
   // Without an interior every group is 0.05 px wide: 3.0, 3.5, 4.0 and 4.9 stand alone.
   EXPECT_EQ(GroupByU(kSamples, 0.05).size(), 8u);
   EXPECT_EQ(GroupByU({}, 0.05).size(), 0u);
+}
+
+// A dark strand's right edge with a bright stripe 6 px inside it (a glossy strand's highlight),
+// blurred: along +u the stripe falls to the strand's level and the silhouette rises to the
+// background's. The profile's mid-level lies above the background, so only the stripe's edge
+// crosses it: a start that takes any crossing puts the silhouette on the stripe.
+TEST(RefineEdgeGuessTest, TakesOnlyACrossingInTheEdgesDirection) {
+  constexpr double kStripeEdge = 20, kSilhouette = 26, kBlur = 1.5;
+  const auto render = [&](bool stripe) {
+    cv::Mat img(16, 64, CV_8U);
+    for (int x = 0; x < img.cols; ++x) {
+      const auto step = [&](double at) { return 0.5 * std::erfc(-(x - at) / (kBlur * M_SQRT2)); };
+      const double v = 62 + (stripe ? (204 - 62) * (1 - step(kStripeEdge)) : 0.0) +
+                       (116 - 62) * step(kSilhouette);
+      img.col(x).setTo(std::round(v));
+    }
+    return img;
+  };
+  const AxisFrame f{0, 0, 0, 1};  // u along +x
+  const cv::Mat striped = render(true), plain = render(false);
+  const GreyImage a{striped, false}, b{plain, false};
+  const double guess = 27.0;
+  // Either direction: the stripe's edge (the old start, 6 px inside the silhouette).
+  EXPECT_NEAR(RefineEdgeGuess(a, f, 8, guess, 10, 10, 0), kStripeEdge, 0.6);
+  // The silhouette's direction: no crossing of its own, so the guess stands.
+  EXPECT_EQ(RefineEdgeGuess(a, f, 8, guess, 10, 10, +1), guess);
+  // A plain edge is found in its direction to a fraction of a px, and not against it.
+  EXPECT_NEAR(RefineEdgeGuess(b, f, 8, guess, 10, 10, +1), kSilhouette, 0.1);
+  EXPECT_EQ(RefineEdgeGuess(b, f, 8, guess, 10, 10, -1), guess);
 }
 
 }  // namespace
