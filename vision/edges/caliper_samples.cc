@@ -154,15 +154,49 @@ bool GatherEdgeSamples(const GreyImage& img, const AxisFrame& f, double s0, doub
   return true;
 }
 
+namespace {
+// The indices 0..n−1 in order of the samples' u, ties in their own order (std::stable_sort's
+// result). A slab's samples come a row at a time, each row in order of u: the runs already in
+// order are merged pairwise, which costs n·log(runs) against the sort's n·log(n).
+void SortStablyByU(const std::vector<EdgeSample>& samples, std::vector<int>* order) {
+  const size_t n = samples.size();
+  std::vector<int>& a = *order;
+  a.resize(n);
+  for (size_t i = 0; i < n; ++i) a[i] = static_cast<int>(i);
+  std::vector<size_t> starts;  // where each run begins, and n
+  for (size_t i = 0; i < n; ++i)
+    if (i == 0 || samples[i].u_px < samples[i - 1].u_px) starts.push_back(i);
+  starts.push_back(n);
+  const auto by_u = [&](int x, int y) { return samples[x].u_px < samples[y].u_px; };
+  std::vector<int> b(n);
+  while (starts.size() > 2) {
+    std::vector<size_t> merged;
+    size_t r = 0;
+    for (; r + 2 < starts.size(); r += 2) {
+      // std::merge takes the first range's element on a tie: stable.
+      std::merge(a.begin() + starts[r], a.begin() + starts[r + 1], a.begin() + starts[r + 1],
+                 a.begin() + starts[r + 2], b.begin() + starts[r], by_u);
+      merged.push_back(starts[r]);
+    }
+    if (r + 1 < starts.size()) {  // an odd run out: copied as it is
+      std::copy(a.begin() + starts[r], a.begin() + starts[r + 1], b.begin() + starts[r]);
+      merged.push_back(starts[r]);
+    }
+    merged.push_back(n);
+    a.swap(b);
+    starts.swap(merged);
+  }
+}
+}  // namespace
+
 PixelGroups GroupByU(const std::vector<EdgeSample>& samples, double span_px, double interior_lo_px,
                      double interior_hi_px, double interior_span_px) {
   PixelGroups out;
   const size_t n = samples.size();
-  out.pixels.resize(n);
-  for (size_t i = 0; i < n; ++i) out.pixels[i] = static_cast<int>(i);
-  std::stable_sort(out.pixels.begin(), out.pixels.end(),
-                   [&](int a, int b) { return samples[a].u_px < samples[b].u_px; });
+  SortStablyByU(samples, &out.pixels);
   out.offset_px.resize(n);
+  out.end.reserve(n);
+  out.mean_u_px.reserve(n);
   for (size_t begin = 0; begin < n;) {
     const double first = samples[out.pixels[begin]].u_px;
     const bool inside = first >= interior_lo_px && first < interior_hi_px;

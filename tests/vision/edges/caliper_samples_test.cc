@@ -2,8 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <opencv2/core.hpp>
+#include <random>
 #include <vector>
 
 namespace clogscope::vision {
@@ -37,6 +40,29 @@ TEST(GroupByUTest, GroupsPixelsWithinTheirSpanAndTheInteriorsWiderOne) {
   // Without an interior every group is 0.05 px wide: 3.0, 3.5, 4.0 and 4.9 stand alone.
   EXPECT_EQ(GroupByU(kSamples, 0.05).size(), 8u);
   EXPECT_EQ(GroupByU({}, 0.05).size(), 0u);
+}
+
+// The pixels come in order of u with ties in their own order, as a stable sort puts them:
+// slabs' rows (runs in order of u, ties included), and samples in no order at all.
+TEST(GroupByUTest, OrdersPixelsAsAStableSort) {
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 2000; ++trial) {
+    std::vector<EdgeSample> samples;
+    const int rows = 1 + trial % 9, per_row = 1 + static_cast<int>(rng() % 30);
+    for (int r = 0; r < rows; ++r) {
+      const float shift = static_cast<float>(rng() % 5) * 0.5f;  // rows that tie with others
+      for (int k = 0; k < per_row; ++k) {
+        const float u = trial % 4 == 3 ? static_cast<float>(rng() % 11)  // no order, many ties
+                                       : shift + 0.5f * static_cast<float>(k / 2);
+        samples.push_back({u, static_cast<float>(samples.size())});
+      }
+    }
+    std::vector<int> expected(samples.size());
+    std::iota(expected.begin(), expected.end(), 0);
+    std::stable_sort(expected.begin(), expected.end(),
+                     [&](int a, int b) { return samples[a].u_px < samples[b].u_px; });
+    ASSERT_EQ(GroupByU(samples, 0.05).pixels, expected) << "trial " << trial;
+  }
 }
 
 // A dark strand's right edge with a bright stripe 6 px inside it (a glossy strand's highlight),
