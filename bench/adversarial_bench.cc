@@ -18,6 +18,15 @@
 #include "synthetic/adversarial_matrix.h"
 #include "vision/scene/frame_status.h"
 
+namespace {
+// Text as one TSV field: tabs and line breaks as spaces.
+std::string OneField(std::string text) {
+  for (char& c : text)
+    if (c == '\t' || c == '\n' || c == '\r') c = ' ';
+  return text;
+}
+}  // namespace
+
 void BenchAdversarial(int argc, char** argv) {
   namespace syn = clogscope::synthetic;
   syn::MatrixOptions o;
@@ -57,7 +66,7 @@ void BenchAdversarial(int argc, char** argv) {
         "spread_px\tshading_px\tcylinder_px\ttip_px\tstructure_px\ttwo_slope_px\tmissing_px\t"
         "truth_px\twrong\tbound_sigma_px\tscene\tdetail\n";
     for (const auto& f : r.frames) {
-      const clogscope::vision::WidthDoubtPx& d = f.doubt;
+      const clogscope::vision::WidthDoubt& d = f.doubt;
       tsv += fmt::format(
           "{}\t{}\t{}\t{}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t"
           "{:.4f}\t{:.4f}\t{:.4f}\t{}\t{:.4f}\t{}\t{}\n",
@@ -65,9 +74,9 @@ void BenchAdversarial(int argc, char** argv) {
           f.status == clogscope::vision::FrameStatus::kValid
               ? "valid"
               : clogscope::vision::FrameStatusName(f.status),
-          f.width_px, f.sigma_px, f.model_sigma_px, f.codec_sigma_px, d.spread, d.shading,
-          d.cylinder, d.tip, d.structure, d.two_slope, d.missing, f.truth_px, f.wrong ? 1 : 0,
-          f.bound_sigma_px, f.scene, f.detail);
+          f.width_px, f.sigma_px, f.model_sigma_px, f.codec_sigma_px, d.spread_px, d.shading_px,
+          d.cylinder_px, d.tip_px, d.structure_px, d.two_slope_px, d.missing_px, f.truth_px,
+          f.wrong ? 1 : 0, f.bound_sigma_px, OneField(f.scene), OneField(f.detail));
     }
     clogscope::WriteFileAtomically(tsv_path, tsv);
   }

@@ -39,7 +39,7 @@ struct FrameRecord {
   std::string detail;
   double truth_px = 0, width_px = 0, sigma_px = 0;
   double model_sigma_px = 0, codec_sigma_px = 0;  // the parts of sigma_px (strand_measure.h)
-  vision::WidthDoubtPx doubt;                     // and model_sigma_px's
+  vision::WidthDoubt doubt;                       // and model_sigma_px's
   // The Cramér–Rao bound on the width's σ (adversarial_bound.h), and whether it lets a valid width
   // be measured at all (at most the σ a valid width may carry, MaxValidSigmaPx).
   double bound_sigma_px = 0;

@@ -28,8 +28,7 @@ def test_width_matches_the_rendered_truth(reference):
     assert m.polarity == clogscope.Polarity.bright
     assert len(m.calipers) == m.calipers_total >= m.calipers_used > 0
     assert "width_px=" in repr(m)
-    # The σ in its parts, largest first: together they make it up (shading and the cylinders
-    # add before squaring, and only one of them is set on a strand fitted by per-edge steps).
+    # The σ in its parts, largest first: the root of the sum of their squares makes it up.
     parts = m.sigma_parts
     assert [s for _, s in parts] == sorted((s for _, s in parts), reverse=True)
     assert abs(np.hypot.reduce([s for _, s in parts]) - m.width_sigma_px) < 1e-9

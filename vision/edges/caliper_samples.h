@@ -45,6 +45,7 @@ struct PixelGroups {
 // A fit's groups about an edge of blur σ span this many σ: the model's curvature over the span is
 // below 1e-4 of the step, and odd about the edge (it moves no edge).
 inline constexpr double kGroupSpanBlurs = 0.05;
+// (Samples' u must be finite.)
 PixelGroups GroupByU(const std::vector<EdgeSample>& samples, double span_px,
                      double interior_lo_px = 0, double interior_hi_px = 0,
                      double interior_span_px = 0);

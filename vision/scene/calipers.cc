@@ -617,18 +617,19 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   double expected_var = 0;
   for (const Caliper& c : m->calipers)
     if (c.inlier) expected_var += c.width_sigma_px * c.width_sigma_px;
-  WidthDoubtPx& doubt = m->doubt;
-  doubt.spread = std::sqrt(expected_var) / used;
+  WidthDoubt& doubt = m->doubt;
+  doubt = WidthDoubt{};
+  doubt.spread_px = std::sqrt(expected_var) / used;
   if (used >= 2) {
     const double var =
         trend_var >= 0 ? trend_var : std::max(0.0, (sum2 - sum * sum / used) / (used - 1));
-    doubt.spread = std::max(doubt.spread, std::sqrt(var / used));
+    doubt.spread_px = std::max(doubt.spread_px, std::sqrt(var / used));
   }
   // The model's doubt: a side judged plain would be this much wider if shaded; half of it (both
   // sides together) counts as one σ.
-  doubt.shading = 0.5 * (shading_doubt_px[0] + shading_doubt_px[1]);
-  doubt.cylinder = cylinder_doubt_px;
-  doubt.missing = missing_doubt_px;
+  doubt.shading_px = 0.5 * (shading_doubt_px[0] + shading_doubt_px[1]);
+  doubt.cylinder_px = cylinder_doubt_px;
+  doubt.missing_px = missing_doubt_px;
   {
     // The inlier calipers' own edge models; a strand's calipers refitted as cylinders, the
     // cylinders'. (A filament's cylinders carry only their disagreement with the per-edge fits:
@@ -648,9 +649,9 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       const BandEdgeDoubt judged =
           JudgeBandEdge(img, f, clip, edges, -w.u0, w.u1, side == 0 ? -1 : 1);
       edge_shift_px[side] = judged.shift_px;
-      doubt.structure =
-          std::hypot(doubt.structure, std::hypot(judged.structure_px, cylinder_structure_px[side]));
-      doubt.two_slope = std::hypot(doubt.two_slope, judged.two_slope_px);
+      doubt.structure_px = std::hypot(doubt.structure_px,
+                                      std::hypot(judged.structure_px, cylinder_structure_px[side]));
+      doubt.two_slope_px = std::hypot(doubt.two_slope_px, judged.two_slope_px);
     }
     // An edge whose background slopes toward a flat object lies where the two-slope step puts it.
     if (edge_shift_px[0] != 0 || edge_shift_px[1] != 0) {
@@ -663,10 +664,10 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     // inferred from where the outline leaves the nozzle's may be off by a good part of the
     // strand's width.
     const double tip_sigma_px = g.tip_sigma_px >= 0 ? g.tip_sigma_px : kTipSigmaWidths * width0;
-    doubt.tip = std::abs(width_slope) * tip_sigma_px;
+    doubt.tip_px = std::abs(width_slope) * tip_sigma_px;
   }
   m->model_sigma_px = ModelSigmaPx(doubt);
-  m->width_sigma_px = std::hypot(doubt.spread, m->model_sigma_px);
+  m->width_sigma_px = std::hypot(doubt.spread_px, m->model_sigma_px);
 
   // The same calipers further down the strand, outside the band: a blob covering one edge over
   // the band makes the band's edges agree with each other but not with the strand. (A filament's

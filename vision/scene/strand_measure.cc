@@ -288,22 +288,21 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
   return m;
 }
 
-double ModelSigmaPx(const WidthDoubtPx& d) {
-  // The shading's and the cylinders' doubts are two readings of one question (where a lit
-  // side's silhouette is), so they add; the others are independent.
-  return std::hypot(std::hypot(d.shading + d.cylinder, d.tip),
-                    std::hypot(std::hypot(d.structure, d.two_slope), d.missing));
+double ModelSigmaPx(const WidthDoubt& d) {
+  return std::sqrt(d.shading_px * d.shading_px + d.cylinder_px * d.cylinder_px +
+                   d.tip_px * d.tip_px + d.structure_px * d.structure_px +
+                   d.two_slope_px * d.two_slope_px + d.missing_px * d.missing_px);
 }
 
 std::vector<DoubtPart> DoubtParts(const StrandMeasurement& m) {
-  const WidthDoubtPx& d = m.doubt;
-  std::vector<DoubtPart> parts = {{"the calipers' spread", d.spread},
-                                  {"shading too weak to decide", d.shading},
-                                  {"the lit cylinders against the per-edge fits", d.cylinder},
-                                  {"the tip's place along a changing width", d.tip},
-                                  {"residual structure the calipers share", d.structure},
-                                  {"a background sloping to the edge", d.two_slope},
-                                  {"calipers missing from a changing width", d.missing},
+  const WidthDoubt& d = m.doubt;
+  std::vector<DoubtPart> parts = {{"the calipers' spread", d.spread_px},
+                                  {"shading too weak to decide", d.shading_px},
+                                  {"the lit cylinders against the per-edge fits", d.cylinder_px},
+                                  {"the tip's place along a changing width", d.tip_px},
+                                  {"residual structure the calipers share", d.structure_px},
+                                  {"a background sloping to the edge", d.two_slope_px},
+                                  {"calipers missing from a changing width", d.missing_px},
                                   {"the codec", m.codec_sigma_px}};
   std::stable_sort(parts.begin(), parts.end(),
                    [](const DoubtPart& a, const DoubtPart& b) { return a.sigma_px > b.sigma_px; });
@@ -316,7 +315,8 @@ double MaxValidSigmaPx(const StrandMeasureOptions& opt, double width_px) {
 
 void JudgePrecision(const StrandMeasureOptions& opt, StrandMeasurement* m) {
   const double max_sigma_px = MaxValidSigmaPx(opt, m->width_px);
-  if (m->valid() && m->width_sigma_px > max_sigma_px) {
+  // An imprecise width judged again (the codec's part added) has its reason written anew.
+  if (m->gave_width() && m->width_sigma_px > max_sigma_px) {
     m->status = FrameStatus::kImprecise;
     const DoubtPart largest = DoubtParts(*m).front();
     m->detail = fmt::format(

@@ -51,21 +51,22 @@ inline constexpr double kWholeStretchPx = 1e6;  // band height meaning "as far a
 inline constexpr double kNominalScaleUmPerPx = 3.0;  // the reference camera's, when none is given
 BandPx DefaultBand(MeasureTarget target, double scale_um_per_px);
 
-// What a width's σ is made of: each part a σ of width_px, both edges together. They combine in
-// calipers.cc as spread ⊕ model, model = ((shading + cylinder) ⊕ tip ⊕ structure ⊕ two_slope ⊕
-// missing) ⊕ codec (⊕: root of the sum of squares); the codec's part is
-// StrandMeasurement::codec_sigma_px.
-struct WidthDoubtPx {
-  double spread = 0;     // the calipers' scatter about their mean (or trend), or their fits' own σ
-  double shading = 0;    // a side judged plain would lie this much further out if it were shaded
-  double cylinder = 0;   // the lit cylinders' disagreement with the per-edge fits, beyond the blur
-  double tip = 0;        // the band's start along the axis, where the width changes along it
-  double structure = 0;  // the residual structure the calipers share at each edge
-  double two_slope = 0;  // a background sloping to a flat object: the move it makes, or its σ
-  double missing = 0;    // calipers left out of the mean of a width that changes along the band
+// What a width's σ is made of: each part a σ of width_px, both edges together, independent of the
+// others: width_sigma_px is the root of the sum of their squares and of codec_sigma_px's (added in
+// codec_doubt.cc), model_sigma_px that of all but the spread. (Shading and cylinder answer one
+// question, where a lit side's silhouette lies, for sides judged plain and shaded respectively:
+// at most one of them is set.)
+struct WidthDoubt {
+  double spread_px = 0;     // the calipers' scatter about their mean (or trend), or their fits' σ
+  double shading_px = 0;    // a side judged plain would lie this much further out if shaded
+  double cylinder_px = 0;   // the lit cylinders' disagreement with the per-edge fits, beyond blur
+  double tip_px = 0;        // the band's start along the axis, where the width changes along it
+  double structure_px = 0;  // the residual structure the calipers share at each edge
+  double two_slope_px = 0;  // a background sloping to a flat object: the move it makes, or its σ
+  double missing_px = 0;    // calipers left out of the mean of a width changing along the band
 };
 // The model's part of a width's σ, the codec's left out: all parts but the spread.
-double ModelSigmaPx(const WidthDoubtPx& d);
+double ModelSigmaPx(const WidthDoubt& d);
 
 // The result for one frame. Geometry is in full-frame pixel coordinates (ROI offset added).
 struct StrandMeasurement {
@@ -77,11 +78,11 @@ struct StrandMeasurement {
   double width_px = 0;
   // Standard error of width_px: the calipers' spread, and the model's doubt (model_sigma_px).
   double width_sigma_px = 0;
-  // The part no other frame of the scene would average out: from an edge model chosen on weak
-  // evidence (shading, tip), and from the codec (codec_sigma_px).
+  // The part no other frame of the scene would average out: from the edge model (shading, tip,
+  // structure, a sloping background: doubt) and from the codec (codec_sigma_px).
   double model_sigma_px = 0;
   double codec_sigma_px = 0;  // how far a second pass through the stream's encoder moved the width
-  WidthDoubtPx doubt;         // the other parts of width_sigma_px
+  WidthDoubt doubt;           // the other parts of width_sigma_px
   double angle_deg = 0;       // strand axis from image vertical, + leaning to +x going down
   double contrast = 0;        // median edge step, grey levels of the frame's bit depth
   double blur_px = 0;         // median PSF sigma, pixel footprint removed

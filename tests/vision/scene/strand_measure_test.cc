@@ -1,7 +1,9 @@
 #include "vision/scene/strand_measure.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
@@ -347,13 +349,11 @@ TEST(StrandMeasureTest, TheSigmasSpreadPartIsTheNoisesScatter) {
     const StrandMeasurement m = MeasureStrand(RenderFrame(p, i, nullptr), {});
     ASSERT_TRUE(m.gave_width()) << m.detail;
     sum += m.width_px, sum2 += m.width_px * m.width_px, ++n;
-    spread2 += m.doubt.spread * m.doubt.spread;
+    spread2 += m.doubt.spread_px * m.doubt.spread_px;
     const std::vector<DoubtPart> parts = DoubtParts(m);
     ASSERT_EQ(parts.size(), 8u);
     double total2 = 0;
     for (const DoubtPart& part : parts) total2 += part.sigma_px * part.sigma_px;
-    // Shading and the cylinders add before squaring (one question); on a plain strand one is 0.
-    ASSERT_EQ(m.doubt.shading * m.doubt.cylinder, 0.0);
     EXPECT_NEAR(std::sqrt(total2), m.width_sigma_px, 1e-9);
   }
   const double scatter = std::sqrt((sum2 - sum * sum / n) / (n - 1));
@@ -367,7 +367,13 @@ TEST(StrandMeasureTest, TheSigmasSpreadPartIsTheNoisesScatter) {
   strict.max_sigma_fraction = 0;
   const StrandMeasurement m = MeasureStrand(RenderFrame(p, 0, nullptr), strict);
   ASSERT_EQ(m.status, FrameStatus::kImprecise);
-  EXPECT_NE(m.detail.find(DoubtParts(m).front().what), std::string::npos) << m.detail;
+  const WidthDoubt& d = m.doubt;
+  const double largest_px = std::max({d.spread_px, d.shading_px, d.cylinder_px, d.tip_px,
+                                      d.structure_px, d.two_slope_px, d.missing_px});
+  ASSERT_EQ(DoubtParts(m).front().sigma_px, largest_px);
+  EXPECT_NE(m.detail.find(fmt::format("{}, {:.2f} px", DoubtParts(m).front().what, largest_px)),
+            std::string::npos)
+      << m.detail;
 }
 
 }  // namespace
