@@ -13,12 +13,6 @@ namespace {
 // background's. And one background slope: the move with the window reaching further into the
 // background within 2σ of it or this share of it (a pixel's box is not quite a Gaussian's blur).
 constexpr double kMaxObjectSlopeShare = 0.25, kSameMoveShare = 0.1;
-// A background judged flat: from this many blurs (and a px) beyond the edge, over this reach, its
-// structure's z (BackgroundStructureZ) below this. (On the two adversarial matrices, below 3:
-// 1.8 and 1.7 points more valid widths, 15 more widths beyond 3σ of 1779; below 1: 1.0 and 1.1
-// points, 7 more beyond 3σ, each 1.8–2.9σ off before.)
-constexpr double kFlatBackgroundFromBlurs = 2.5, kFlatBackgroundReachPx = 12.0,
-                 kFlatBackgroundZ = 1.0;
 
 // The band's pooled profile about its calipers' own edges, from below_px before each to above_px
 // after it, in 0.1 px bins (far finer than any blur: the fits then cost what two calipers' do, not
@@ -94,50 +88,6 @@ PooledProfile::TwoSlopeMove PooledProfile::FitTwoSlope(double blur_px) const {
   out.slope_minus_per_px = two.slope_per_px;
   out.slope_plus_per_px = two.slope_per_px + two.slope_change_per_px;
   return out;
-}
-
-// Whether the background beside a band's edge shows structure across the band beyond its noise
-// (a slope, a wave of texture, a spot): the band's mean profile from d0_px to d1_px beyond each
-// caliper's edge toward `side`, in 1 px bins, against one level, as a χ² over its degrees of
-// freedom, z = (χ² − dof)/√(2·dof). The noise is the smaller of the calipers' fit rms and the
-// samples' scatter within a bin (either may hold more than noise: a misfit, texture along the
-// band), so that z errs toward structure. 0 when there is too little to judge.
-double BackgroundStructureZ(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
-                            const std::vector<CaliperEdge>& edges, double d0_px, double d1_px,
-                            int side) {
-  const int bins = static_cast<int>(std::ceil(d1_px - d0_px));
-  std::vector<double> sum(bins, 0.0), sum2(bins, 0.0), count(bins, 0.0), rms;
-  std::vector<EdgeSample> samples;
-  for (const CaliperEdge& c : edges) {
-    const double e = c.fit.edge_px;
-    const double lo = side < 0 ? e - d1_px : e + d0_px, hi = side < 0 ? e - d0_px : e + d1_px;
-    if (!GatherEdgeSamples(img, f, c.s0_px, c.s1_px, lo, hi, clip, &samples)) continue;
-    rms.push_back(c.fit.rms);
-    for (const EdgeSample& smp : samples) {
-      const int b = static_cast<int>(std::abs(smp.u_px - e) - d0_px);
-      if (b < 0 || b >= bins) continue;
-      sum[b] += smp.value, sum2[b] += static_cast<double>(smp.value) * smp.value, count[b] += 1;
-    }
-  }
-  double n = 0, total = 0, within = 0;
-  int occupied = 0;
-  for (int b = 0; b < bins; ++b) {
-    if (count[b] < 2) continue;
-    ++occupied, n += count[b], total += sum[b];
-    within += sum2[b] - sum[b] * sum[b] / count[b];
-  }
-  if (occupied < 3 || rms.empty()) return 0.0;
-  const double noise_var = std::min(Median(rms) * Median(rms), within / (n - occupied));
-  if (!(noise_var > 0)) return 0.0;
-  const double level = total / n;
-  double chi2 = 0;
-  for (int b = 0; b < bins; ++b) {
-    if (count[b] < 2) continue;
-    const double mean = sum[b] / count[b];
-    chi2 += count[b] * (mean - level) * (mean - level) / noise_var;
-  }
-  const double dof = occupied - 1;
-  return (chi2 - dof) / std::sqrt(2 * dof);
 }
 
 }  // namespace
@@ -251,15 +201,8 @@ BandEdgeDoubt JudgeBandEdge(const GreyImage& img, const AxisFrame& f, const Clip
       }
     } else if (here.found && here.gain > 1) {
       // Below the evidence, only the part of the move the gain cannot put down to noise counts
-      // (its square less the noise's share); and none beside a background that is flat within
-      // its noise over a good reach beyond the edge, where the move is the noise's (on the
-      // reference scene it tripled the σ of 7 frames in 12). (An object that slopes toward its
-      // edge is the shading's doubt, or the residual structure's.)
-      const double d0 = kFlatBackgroundFromBlurs * sigma + 1.0;
-      const bool flat = here.gain < kTwoSlopeEvidence &&
-                        BackgroundStructureZ(img, f, clip, edges, d0, d0 + kFlatBackgroundReachPx,
-                                             background_side) < kFlatBackgroundZ;
-      if (!flat) slopes_px = std::abs(here.move_px) * std::sqrt(1 - 1 / here.gain);
+      // (its square less the noise's share).
+      slopes_px = std::abs(here.move_px) * std::sqrt(1 - 1 / here.gain);
     }
   }
   out.structure_px = shared_px;
