@@ -207,7 +207,6 @@ BandEdgeDoubt JudgeBandEdge(const GreyImage& img, const AxisFrame& f, const Clip
   }
   out.structure_px = shared_px;
   out.two_slope_px = slopes_px;
-  out.doubt_px = std::hypot(shared_px, slopes_px);
   return out;
 }
 

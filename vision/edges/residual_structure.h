@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cmath>
 #include <vector>
 
 #include "vision/edges/caliper_samples.h"
@@ -78,10 +79,10 @@ struct CaliperEdge {
 //   is left as doubt; where it is not one slope, the whole move is doubt; below the evidence, the
 //   part of the move the noise cannot explain.
 struct BandEdgeDoubt {
-  double doubt_px = 0;      // one σ: the two below together
-  double structure_px = 0;  // the shared residual structure's
+  double structure_px = 0;  // the shared residual structure's σ
   double two_slope_px = 0;  // the two-slope step's move (or its σ where the edge was moved)
   double shift_px = 0;      // where the edge lies from the calipers' mean, along u
+  double doubt_px() const { return std::hypot(structure_px, two_slope_px); }  // the two as one σ
 };
 // Gain (χ² with one degree of freedom without a slope change) from which the two-slope step is
 // taken: 5σ.

@@ -666,8 +666,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     const double tip_sigma_px = g.tip_sigma_px >= 0 ? g.tip_sigma_px : kTipSigmaWidths * width0;
     doubt.tip_px = std::abs(width_slope) * tip_sigma_px;
   }
-  m->model_sigma_px = ModelSigmaPx(doubt);
-  m->width_sigma_px = std::hypot(doubt.spread_px, m->model_sigma_px);
+  CombineSigmas(m);
 
   // The same calipers further down the strand, outside the band: a blob covering one edge over
   // the band makes the band's edges agree with each other but not with the strand. (A filament's

@@ -117,8 +117,7 @@ void CodecDoubt::Apply(const cv::Mat& frame, const StrandMeasureOptions& options
   }
   if (checks_ == 0) return;
   m->codec_sigma_px = doubt_px();
-  m->model_sigma_px = std::hypot(m->model_sigma_px, m->codec_sigma_px);
-  m->width_sigma_px = std::hypot(m->width_sigma_px, m->codec_sigma_px);
+  CombineSigmas(m);
   JudgePrecision(options, m);
 }
 

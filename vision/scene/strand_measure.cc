@@ -288,10 +288,13 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
   return m;
 }
 
-double ModelSigmaPx(const WidthDoubt& d) {
-  return std::sqrt(d.shading_px * d.shading_px + d.cylinder_px * d.cylinder_px +
-                   d.tip_px * d.tip_px + d.structure_px * d.structure_px +
-                   d.two_slope_px * d.two_slope_px + d.missing_px * d.missing_px);
+void CombineSigmas(StrandMeasurement* m) {
+  const WidthDoubt& d = m->doubt;
+  m->model_sigma_px =
+      std::sqrt(d.shading_px * d.shading_px + d.cylinder_px * d.cylinder_px + d.tip_px * d.tip_px +
+                d.structure_px * d.structure_px + d.two_slope_px * d.two_slope_px +
+                d.missing_px * d.missing_px + m->codec_sigma_px * m->codec_sigma_px);
+  m->width_sigma_px = std::hypot(d.spread_px, m->model_sigma_px);
 }
 
 std::vector<DoubtPart> DoubtParts(const StrandMeasurement& m) {

@@ -52,8 +52,8 @@ inline constexpr double kNominalScaleUmPerPx = 3.0;  // the reference camera's, 
 BandPx DefaultBand(MeasureTarget target, double scale_um_per_px);
 
 // What a width's σ is made of: each part a σ of width_px, both edges together, independent of the
-// others: width_sigma_px is the root of the sum of their squares and of codec_sigma_px's (added in
-// codec_doubt.cc), model_sigma_px that of all but the spread. (Shading and cylinder answer one
+// others: width_sigma_px is the root of the sum of their squares and of codec_sigma_px's,
+// model_sigma_px that of all but the spread (CombineSigmas). (Shading and cylinder answer one
 // question, where a lit side's silhouette lies, for sides judged plain and shaded respectively:
 // at most one of them is set.)
 struct WidthDoubt {
@@ -65,8 +65,6 @@ struct WidthDoubt {
   double two_slope_px = 0;  // a background sloping to a flat object: the move it makes, or its σ
   double missing_px = 0;    // calipers left out of the mean of a width changing along the band
 };
-// The model's part of a width's σ, the codec's left out: all parts but the spread.
-double ModelSigmaPx(const WidthDoubt& d);
 
 // The result for one frame. Geometry is in full-frame pixel coordinates (ROI offset added).
 struct StrandMeasurement {
@@ -156,6 +154,10 @@ SceneOptions SceneOptionsFor(const StrandMeasureOptions& options, double data_ma
 // it becomes kImprecise (JudgePrecision).
 double MaxValidSigmaPx(const StrandMeasureOptions& options, double width_px);
 void JudgePrecision(const StrandMeasureOptions& options, StrandMeasurement* m);
+
+// Sets m's model_sigma_px (all parts of doubt but the spread, and codec_sigma_px) and
+// width_sigma_px (all of them), each the root of the sum of their squares.
+void CombineSigmas(StrandMeasurement* m);
 
 // A measurement's σ in its parts (doubt and codec_sigma_px), largest first, each named for a user.
 struct DoubtPart {

@@ -117,12 +117,12 @@ TEST(JudgeBandEdgeTest, ABackgroundSlopingToAFlatObjectMovesTheEdgeWhereItLies) 
     const BandEdgeDoubt judged = scene.Judge(scene.background_side);
     EXPECT_NEAR(scene.mean_edge_u + judged.shift_px, scene.TruthU(), 0.02)
         << "mirrored " << mirrored << ", plain bias " << bias;
-    EXPECT_LT(judged.doubt_px, 0.3 * std::abs(bias)) << "mirrored " << mirrored;
+    EXPECT_LT(judged.doubt_px(), 0.3 * std::abs(bias)) << "mirrored " << mirrored;
     // Told the background is on the object's side, the premise (a flat object) fails: no move,
     // and the move it would have made counts whole as doubt.
     const BandEdgeDoubt wrong_side = scene.Judge(-scene.background_side);
     EXPECT_EQ(wrong_side.shift_px, 0.0) << "mirrored " << mirrored;
-    EXPECT_GT(wrong_side.doubt_px, 0.8 * std::abs(bias)) << "mirrored " << mirrored;
+    EXPECT_GT(wrong_side.doubt_px(), 0.8 * std::abs(bias)) << "mirrored " << mirrored;
   }
 }
 
@@ -136,7 +136,7 @@ TEST(JudgeBandEdgeTest, ACurvedBackgroundIsNotMovedButDoubted) {
   ASSERT_GT(std::abs(bias), 0.05);
   const BandEdgeDoubt judged = scene.Judge(scene.background_side);
   EXPECT_EQ(judged.shift_px, 0.0) << "bias " << bias;
-  EXPECT_GT(judged.doubt_px, 0.5 * std::abs(bias)) << "bias " << bias;
+  EXPECT_GT(judged.doubt_px(), 0.5 * std::abs(bias)) << "bias " << bias;
 }
 
 TEST(JudgeBandEdgeTest, AFlatBackgroundLeavesTheEdgeInPlace) {
@@ -145,7 +145,7 @@ TEST(JudgeBandEdgeTest, AFlatBackgroundLeavesTheEdgeInPlace) {
   EXPECT_NEAR(scene.mean_edge_u, scene.TruthU(), 0.02);
   const BandEdgeDoubt judged = scene.Judge(scene.background_side);
   EXPECT_EQ(judged.shift_px, 0.0);
-  EXPECT_LT(judged.doubt_px, 0.05);
+  EXPECT_LT(judged.doubt_px(), 0.05);
 }
 
 }  // namespace
