@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
@@ -288,25 +289,35 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
   return m;
 }
 
+namespace {
+// Every part of a width's σ, each named for a user: the spread first, then the model's parts in
+// WidthDoubt's order, then the codec's. The one list the σ is combined from and shown as.
+constexpr size_t kSpreadPart = 0;
+std::array<DoubtPart, 8> AllDoubtParts(const StrandMeasurement& m) {
+  const WidthDoubt& d = m.doubt;
+  return {{{"the calipers' spread", d.spread_px},
+           {"shading too weak to decide", d.shading_px},
+           {"the lit cylinders against the per-edge fits", d.cylinder_px},
+           {"the tip's place along a changing width", d.tip_px},
+           {"residual structure the calipers share", d.structure_px},
+           {"a background sloping to the edge", d.two_slope_px},
+           {"calipers missing from a changing width", d.missing_px},
+           {"the codec", m.codec_sigma_px}}};
+}
+}  // namespace
+
 void CombineSigmas(StrandMeasurement* m) {
-  const WidthDoubt& d = m->doubt;
-  m->model_sigma_px =
-      std::sqrt(d.shading_px * d.shading_px + d.cylinder_px * d.cylinder_px + d.tip_px * d.tip_px +
-                d.structure_px * d.structure_px + d.two_slope_px * d.two_slope_px +
-                d.missing_px * d.missing_px + m->codec_sigma_px * m->codec_sigma_px);
-  m->width_sigma_px = std::hypot(d.spread_px, m->model_sigma_px);
+  const std::array<DoubtPart, 8> parts = AllDoubtParts(*m);
+  double model_sq = 0;
+  for (size_t k = 0; k < parts.size(); ++k)
+    if (k != kSpreadPart) model_sq += parts[k].sigma_px * parts[k].sigma_px;
+  m->model_sigma_px = std::sqrt(model_sq);
+  m->width_sigma_px = std::hypot(parts[kSpreadPart].sigma_px, m->model_sigma_px);
 }
 
 std::vector<DoubtPart> DoubtParts(const StrandMeasurement& m) {
-  const WidthDoubt& d = m.doubt;
-  std::vector<DoubtPart> parts = {{"the calipers' spread", d.spread_px},
-                                  {"shading too weak to decide", d.shading_px},
-                                  {"the lit cylinders against the per-edge fits", d.cylinder_px},
-                                  {"the tip's place along a changing width", d.tip_px},
-                                  {"residual structure the calipers share", d.structure_px},
-                                  {"a background sloping to the edge", d.two_slope_px},
-                                  {"calipers missing from a changing width", d.missing_px},
-                                  {"the codec", m.codec_sigma_px}};
+  const std::array<DoubtPart, 8> all = AllDoubtParts(m);
+  std::vector<DoubtPart> parts(all.begin(), all.end());
   std::stable_sort(parts.begin(), parts.end(),
                    [](const DoubtPart& a, const DoubtPart& b) { return a.sigma_px > b.sigma_px; });
   return parts;
