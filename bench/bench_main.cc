@@ -12,11 +12,11 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <filesystem>
 #include <opencv2/core.hpp>
 #include <opencv2/videoio.hpp>
 #include <sstream>
-#include <exception>
 #include <string>
 #include <thread>
 #include <tuple>
@@ -24,6 +24,7 @@
 
 #include "bench/decode_timing.h"
 #include "bench/pi_budget.h"
+#include "common/robust.h"
 #include "common/spawn.h"
 #include "model/lag_fit.h"
 #include "pipeline/experiment.h"
@@ -39,8 +40,8 @@
 
 namespace {
 
+using clogscope::Median;
 using clogscope::bench::DecodeOnlyFps;
-using clogscope::bench::Median;
 using clogscope::bench::PiCells;
 using clogscope::bench::TableHead;
 using clogscope::synthetic::FrameTruth;

@@ -10,13 +10,14 @@
 
 #include "bench/decode_timing.h"
 #include "bench/pi_budget.h"
+#include "common/robust.h"
 #include "pipeline/band.h"
 #include "vision/io/frame_source.h"
 #include "vision/scene/batch.h"
 #include "vision/scene/strand_measure.h"
 
+using clogscope::Median;
 using clogscope::bench::DecodeOnlyFps;
-using clogscope::bench::Median;
 using clogscope::bench::PiCells;
 using clogscope::bench::TableHead;
 using clogscope::vision::StrandMeasureOptions;
@@ -51,7 +52,8 @@ void BenchFilament(const std::string& path) {
   const double measure = Median(fps), decode = Median(decode_fps);
   fmt::print("\n## Filament path on {} (one core, median of {})\n\n{}", path, kRounds,
              TableHead("| pass | frames/s |", "|---|---|"));
-  fmt::print("| decode only (clogscope reader, one thread) | {:.0f} |{}\n", decode, PiCells(decode));
+  fmt::print("| decode only (clogscope reader, one thread) | {:.0f} |{}\n", decode,
+             PiCells(decode));
   fmt::print("| decode + measure: {} of {} valid, mean width {:.3f} px | {:.0f} |{}\n", valid, n,
              valid ? sum / valid : 0.0, measure, PiCells(measure));
   // On two cores `measure` decodes on a thread of its own: the measuring alone then sets the pace.

@@ -12,6 +12,7 @@
 #include <random>
 #include <stdexcept>
 
+#include "common/angle.h"
 #include "synthetic/adversarial_optics.h"
 #include "synthetic/x264_clip.h"
 
@@ -19,7 +20,6 @@ namespace clogscope::synthetic {
 namespace {
 
 constexpr int kOversample = 3;  // hi-res samples per pixel along each axis
-constexpr double kDegToRad = M_PI / 180.0;
 
 double Clamp01(double v) { return std::clamp(v, 0.0, 1.0); }
 

@@ -25,9 +25,9 @@ constexpr double kStepPx = 0.02;  // finite differences in place and blur
 constexpr double kRoundingVar = 1.0 / 12.0;  // grey levels²: rounding to 8 bit
 
 // Φ on a table: the profiles cost millions of its values.
-class NormalCdf {
+class NormalCdfTable {
  public:
-  NormalCdf() {
+  NormalCdfTable() {
     for (int i = 0; i < kSize; ++i)
       table_[i] = 0.5 * std::erfc(-(kLo + i * kStep) / std::sqrt(2.0));
   }
@@ -53,7 +53,7 @@ struct Shape {
 // What the strand does to the background (A: τ − 1, covering it) and adds to it (B: its own
 // light, per unit gain), blurred and averaged over each pixel, at pixel centres u_i = u0 + i.
 void Layers(const AdversarialScene& p, const Shape& s, int cells, double u0, int pixels,
-            const NormalCdf& phi, std::vector<double>* a, std::vector<double>* b) {
+            const NormalCdfTable& phi, std::vector<double>* a, std::vector<double>* b) {
   const double h = 0.5 * s.width_px, dx = s.width_px / cells;
   const double sigma = std::max(0.05, s.blur_px);
   const double reach = 9.0 * sigma + 1.0;
@@ -89,7 +89,7 @@ void Layers(const AdversarialScene& p, const Shape& s, int cells, double u0, int
 }  // namespace
 
 double WidthBoundSigmaPx(const AdversarialScene& p, double width_px) {
-  static const NormalCdf phi;
+  static const NormalCdfTable phi;
   const double inf = std::numeric_limits<double>::infinity();
   if (!(width_px > 0) || !p.strand) return inf;
   const double blur_px = std::max(0.05, p.blur_sigma_px);

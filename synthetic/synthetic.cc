@@ -12,15 +12,14 @@
 #include <random>
 #include <stdexcept>
 
+#include "common/angle.h"
 #include "common/atomic_file.h"
-#include "synthetic/synthetic_extras.h"
 #include "synthetic/edge_profile.h"
+#include "synthetic/synthetic_extras.h"
 #include "vision/io/video_io.h"
 
 namespace clogscope::synthetic {
 namespace {
-
-constexpr double kDegToRad = M_PI / 180.0;
 
 struct Vec2 {
   double x, y;

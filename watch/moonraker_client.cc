@@ -9,11 +9,6 @@ namespace {
 
 using nlohmann::json;
 
-std::vector<std::string> KeyHeader(const std::string& api_key) {
-  if (api_key.empty()) return {};
-  return {"X-Api-Key: " + api_key};
-}
-
 // The "result" of a 2xx answer, or the reply that says why there is none.
 PrinterReply Result(const HttpResponse& r, const std::string& what, json* result) {
   PrinterReply reply = ReplyOf(r, what);
@@ -39,7 +34,7 @@ PrintState MoonrakerPrintState(const std::string& state) {
 }
 
 MoonrakerClient::MoonrakerClient(std::string base, const std::string& api_key, double timeout_s)
-    : base_(std::move(base)), http_(timeout_s, KeyHeader(api_key)) {}
+    : base_(std::move(base)), http_(timeout_s, ApiKeyHeader(api_key)) {}
 
 PrinterReply MoonrakerClient::QueryState(PrintState* state) {
   const std::string what = "GET /printer/objects/query?print_stats";

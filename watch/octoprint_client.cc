@@ -3,14 +3,6 @@
 #include <nlohmann/json.hpp>
 
 namespace clogscope::watch {
-namespace {
-
-std::vector<std::string> KeyHeader(const std::string& api_key) {
-  if (api_key.empty()) return {};
-  return {"X-Api-Key: " + api_key};
-}
-
-}  // namespace
 
 PrintState OctoPrintState(const std::string& state) {
   // "Resuming" is on its way back to printing: a clog then is worth a pause.
@@ -20,7 +12,7 @@ PrintState OctoPrintState(const std::string& state) {
 }
 
 OctoPrintClient::OctoPrintClient(std::string base, const std::string& api_key, double timeout_s)
-    : base_(std::move(base)), http_(timeout_s, KeyHeader(api_key)) {}
+    : base_(std::move(base)), http_(timeout_s, ApiKeyHeader(api_key)) {}
 
 PrinterReply OctoPrintClient::QueryState(PrintState* state) {
   const std::string what = "GET /api/job";

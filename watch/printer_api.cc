@@ -76,6 +76,11 @@ bool ParsePrinterUrl(const std::string& option, const std::string& url, std::str
   return true;
 }
 
+std::vector<std::string> ApiKeyHeader(const std::string& api_key) {
+  if (api_key.empty()) return {};
+  return {"X-Api-Key: " + api_key};
+}
+
 bool ReadApiKeyFile(const std::string& path, std::string* key, std::string* why) {
   const auto fail = [&](const std::string& problem) {
     *why = fmt::format("--printer-api-key-file {}: {}", path, problem);

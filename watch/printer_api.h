@@ -5,6 +5,7 @@
 // printer does: the outcome is a PrinterReply with its reason.
 
 #include <string>
+#include <vector>
 
 #include "watch/http_client.h"
 #include "watch/pause_policy.h"
@@ -49,5 +50,9 @@ bool ParsePrinterUrl(const std::string& option, const std::string& url, std::str
 // with a line naming the option and the file (never its content) when it cannot be read, is
 // empty, holds more than one line or characters a header value cannot.
 bool ReadApiKeyFile(const std::string& path, std::string* key, std::string* why);
+
+// The request header that carries the key (Moonraker's and OctoPrint's X-Api-Key); none when the
+// key is empty.
+std::vector<std::string> ApiKeyHeader(const std::string& api_key);
 
 }  // namespace clogscope::watch

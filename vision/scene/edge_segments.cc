@@ -6,12 +6,12 @@
 #include <cstring>
 #include <opencv2/imgproc.hpp>
 
+#include "common/angle.h"
 #include "common/robust.h"
 
 namespace clogscope::vision {
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
 constexpr double kStraightTolPx = 1.0;  // a piece deviates less than this from its line
 
 // Links edge points of consecutive sampled rows into chains (same sign, continuing the chain's

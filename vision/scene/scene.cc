@@ -8,6 +8,7 @@
 #include <numeric>
 #include <opencv2/imgproc.hpp>
 
+#include "common/angle.h"
 #include "common/robust.h"
 #include "vision/scene/edge_segments.h"
 #include "vision/scene/tip.h"
@@ -16,7 +17,6 @@ namespace clogscope::vision {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
-constexpr double kDegToRad = M_PI / 180.0;
 constexpr int kMaxCandidates = 40;       // pairs kept after scoring
 constexpr int kMaxFollowed = 6;          // pairs followed along the full-resolution image
 constexpr double kFollowOffsetPx = 3.0;  // edge contrast is read this far either side
