@@ -26,7 +26,9 @@ double Clamp01(double v) { return std::clamp(v, 0.0, 1.0); }
 // The strand's shape along its axis s (px below the tip): half width and the axis's offset.
 struct StrandShape {
   double half_px, swell, swell_len_px, bend_s_px, bend_k;
-  double Half(double s) const { return half_px * (1 + (swell - 1) * std::exp(-s / swell_len_px)); }
+  double Half(double s) const {
+    return swell == 1 ? half_px : half_px * (1 + (swell - 1) * std::exp(-s / swell_len_px));
+  }
   double Centre(double s) const {
     return s > bend_s_px ? bend_k * (s - bend_s_px) * (s - bend_s_px) : 0.0;
   }
@@ -123,28 +125,22 @@ void RenderLayers(const AdversarialScene& p, cv::Mat* tau, cv::Mat* emit) {
 // Blur (depth of field, motion) and pixel averaging of one hi-res layer.
 cv::Mat Optics(const AdversarialScene& p, const cv::Mat& hires) {
   const int F = kOversample;
-  cv::Mat a;
-  cv::GaussianBlur(hires, a, cv::Size(), p.blur_sigma_px * F);
-  if (p.blur_sigma_bottom_px > 0) {
-    // Blur growing down the frame from the tip: two blurs blended row by row.
-    cv::Mat b;
-    cv::GaussianBlur(hires, b, cv::Size(), p.blur_sigma_bottom_px * F);
-    for (int Y = 0; Y < a.rows; ++Y) {
-      const double y = (Y + 0.5) / F - 0.5;
-      const float w = static_cast<float>(
-          Clamp01((y - p.tip_y_px) / std::max(1.0, p.height_px - 1 - p.tip_y_px)));
-      cv::Mat ra = a.row(Y);
-      cv::addWeighted(ra, 1 - w, b.row(Y), w, 0, ra);
-    }
-  }
+  cv::Mat src = hires;
   if (p.motion_blur_px > 0) {
+    // Before the Gaussian (both are convolutions, which commute; only the frame's edges differ).
     const double th = p.tilt_deg * kDegToRad;
-    cv::filter2D(a, a, -1, LineKernel(p.motion_blur_px * F, std::sin(th), std::cos(th)),
+    cv::filter2D(hires, src, -1, LineKernel(p.motion_blur_px * F, std::sin(th), std::cos(th)),
                  cv::Point(-1, -1), 0, cv::BORDER_REPLICATE);
   }
-  cv::Mat out;
-  cv::resize(a, out, cv::Size(p.width_px, p.height_px), 0, 0, cv::INTER_AREA);
-  return out;
+  if (p.blur_sigma_bottom_px <= 0) return BlurAndBin(src, F, p.blur_sigma_px * F);
+  // Blur growing down the frame from the tip: two blurs blended row by row.
+  std::vector<float> bottom(src.rows);
+  for (int Y = 0; Y < src.rows; ++Y) {
+    const double y = (Y + 0.5) / F - 0.5;
+    bottom[Y] =
+        static_cast<float>(Clamp01((y - p.tip_y_px) / std::max(1.0, p.height_px - 1 - p.tip_y_px)));
+  }
+  return BlurAndBin(src, F, p.blur_sigma_px * F, p.blur_sigma_bottom_px * F, bottom);
 }
 
 // The lit background at pixel resolution: level, slope, texture and a lamp's reflection.
@@ -161,12 +157,27 @@ cv::Mat Background(const AdversarialScene& p) {
     waves.push_back({k * std::cos(ang), k * std::sin(ang), 2 * M_PI * uni(rng),
                      p.background_texture / std::sqrt(3.0)});
   }
+  // sin(kx·x + ky·y + φ) = sin(kx·x + φ)·cos(ky·y) + cos(kx·x + φ)·sin(ky·y): the waves from
+  // tables along x and y, not a sine per pixel.
+  const size_t nw = waves.size();
+  std::vector<double> sx(nw * bg.cols), cx(nw * bg.cols), sy(nw * bg.rows), cy(nw * bg.rows);
+  for (size_t i = 0; i < nw; ++i) {
+    for (int x = 0; x < bg.cols; ++x) {
+      sx[i * bg.cols + x] = waves[i].amp * std::sin(waves[i].kx * x + waves[i].ph);
+      cx[i * bg.cols + x] = waves[i].amp * std::cos(waves[i].kx * x + waves[i].ph);
+    }
+    for (int y = 0; y < bg.rows; ++y) {
+      sy[i * bg.rows + y] = std::sin(waves[i].ky * y);
+      cy[i * bg.rows + y] = std::cos(waves[i].ky * y);
+    }
+  }
   for (int y = 0; y < bg.rows; ++y) {
     float* row = bg.ptr<float>(y);
     for (int x = 0; x < bg.cols; ++x) {
       double v =
           p.background_level * (1 + p.background_slope * (x - 0.5 * p.width_px) / p.width_px);
-      for (const auto& w : waves) v += w.amp * std::sin(w.kx * x + w.ky * y + w.ph);
+      for (size_t i = 0; i < nw; ++i)
+        v += sx[i * bg.cols + x] * cy[i * bg.rows + y] + cx[i * bg.cols + x] * sy[i * bg.rows + y];
       if (p.spot_level != 0) {
         const double r2 =
             (x - p.spot_x_px) * (x - p.spot_x_px) + (y - p.spot_y_px) * (y - p.spot_y_px);

@@ -1,5 +1,8 @@
 #pragma once
 
+#include <opencv2/core.hpp>
+#include <vector>
+
 #include "synthetic/adversarial.h"
 
 namespace clogscope::synthetic {
@@ -17,6 +20,15 @@ double LensTransmission(double x, double n, double acceptance_rad, double floor)
 // An opaque strand's own light at x (8-bit grey levels): a lit cylinder, from the ambient share at
 // its rim to its full level on its axis (flat when shading_ambient is 1).
 double StrandEmission(const AdversarialScene& p, double x);
+
+// The camera's blur and pixels on a layer rendered at `oversample` samples per pixel along each
+// axis (CV_32F): a Gaussian of sigma_hi_px (hi-res px), then the mean of each oversample ×
+// oversample block of samples. The numbers of cv::GaussianBlur (its kernel and reflected border)
+// followed by cv::resize with INTER_AREA, computed at the output pixels only: a quarter of the
+// work of blurring every sample. With `bottom_weight` (one per hi-res row, 0..1), hi-res row Y is
+// (1 − w) times that blur plus w times a blur of sigma_bottom_hi_px: blur growing down the frame.
+cv::Mat BlurAndBin(const cv::Mat& hires, int oversample, double sigma_hi_px,
+                   double sigma_bottom_hi_px = 0, const std::vector<float>& bottom_weight = {});
 
 // A colour scene: an orange strand (and nozzle) on a blue background, the light of each
 // multiplied by these per channel (B, G, R).
