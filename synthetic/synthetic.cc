@@ -299,8 +299,9 @@ class DriveGear {
   // Coverage in [0, 1] and the gear's grey level at the pixel.
   double Coverage(double x, double y, double* level) const {
     const double dx = x - p_.gear_centre_x_px, dy = y - p_.gear_centre_y_px;
+    const double reach = p_.gear_radius_px + 5 * sigma_;
+    if (dx * dx + dy * dy > reach * reach) return 0;  // most pixels: no hypot for them
     const double r = std::hypot(dx, dy);
-    if (r > p_.gear_radius_px + 5 * sigma_) return 0;
     const double theta = std::atan2(dy, dx) - angle_;
     const double tooth = 0.5 * (1 + std::tanh(3 * std::cos(p_.gear_teeth * theta)));
     const double edge = p_.gear_radius_px - p_.gear_tooth_depth_px * (1 - tooth);
@@ -365,7 +366,8 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
   const Vec2 centre{0.5 * (p.width_px - 1), 0.5 * (p.height_px - 1)};
 
   // The realistic extras: texture and clutter behind the strand, its shading, clear-strand lines.
-  const render::Texture texture(p.texture_amplitude, p.texture_wavelength_px, p.seed);
+  const render::Texture texture(p.texture_amplitude, p.texture_wavelength_px, p.seed, p.width_px,
+                                p.height_px);
   const std::vector<render::ClutterObject> clutter = render::PlaceClutter(
       p.clutter_discs, p.clutter_gears, p.tip_x_px, p.tip_y_px, -n_strand.y, n_strand.x, w,
       p.nozzle ? p.tip_y_px : 0.0, p.width_px, p.height_px, p.strand_level, p.seed);

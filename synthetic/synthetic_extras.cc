@@ -18,29 +18,45 @@ double CircleArea(double t) {
 
 }  // namespace
 
-Texture::Texture(double amplitude, double wavelength_px, uint64_t seed) {
+Texture::Texture(double amplitude, double wavelength_px, uint64_t seed, int width_px, int height_px)
+    : width_(width_px), height_(height_px) {
   if (amplitude == 0) return;
   std::mt19937_64 rng(seed ^ 0x7e47u);
   std::uniform_real_distribution<double> angle(0, 2 * M_PI), scale(1.0, 4.0);
   constexpr int kWaves = 6;
+  waves_ = kWaves;
+  sx_.resize(kWaves * width_);
+  cx_.resize(kWaves * width_);
+  sy_.resize(kWaves * height_);
+  cy_.resize(kWaves * height_);
   for (int i = 0; i < kWaves; ++i) {
     const double a = angle(rng), lambda = wavelength_px * scale(rng);
     const double k = 2 * M_PI / lambda;
-    waves_.push_back({k * std::cos(a), k * std::sin(a), angle(rng), amplitude / std::sqrt(kWaves)});
+    const double kx = k * std::cos(a), ky = k * std::sin(a), phase = angle(rng);
+    const double weight = amplitude / std::sqrt(kWaves);
+    for (int x = 0; x < width_; ++x) {
+      sx_[i * width_ + x] = weight * std::sin(kx * x + phase);
+      cx_[i * width_ + x] = weight * std::cos(kx * x + phase);
+    }
+    for (int y = 0; y < height_; ++y) {
+      sy_[i * height_ + y] = std::sin(ky * y);
+      cy_[i * height_ + y] = std::cos(ky * y);
+    }
   }
 }
 
-double Texture::At(double x, double y) const {
+double Texture::At(int x, int y) const {
   double v = 0;
-  for (const auto& w : waves_) v += w.weight * std::sin(w.kx * x + w.ky * y + w.phase);
+  for (int i = 0; i < waves_; ++i)
+    v += sx_[i * width_ + x] * cy_[i * height_ + y] + cx_[i * width_ + x] * sy_[i * height_ + y];
   return v;
 }
 
 double ClutterObject::Coverage(double x, double y, double sigma_px) const {
   const double rx = x - cx, ry = y - cy;
-  const double rho = std::hypot(rx, ry);
   const double reach = radius_px + tooth_depth_px + 1.0 + 9.0 * sigma_px;
-  if (rho > reach) return 0.0;
+  if (rx * rx + ry * ry > reach * reach) return 0.0;  // most pixels: no hypot for them
+  const double rho = std::hypot(rx, ry);
   double r = radius_px, slope = 0;  // boundary radius and dr/dφ at this angle
   if (teeth > 0) {
     // Trapezoidal teeth: a clipped sine.

@@ -11,14 +11,15 @@ namespace clogscope::synthetic::render {
 // `wavelength_px`, zero mean, peaking near ±amplitude. The same seed gives the same texture.
 class Texture {
  public:
-  Texture(double amplitude, double wavelength_px, uint64_t seed);
-  double At(double x, double y) const;
+  // Over the pixels of a width_px × height_px frame.
+  Texture(double amplitude, double wavelength_px, uint64_t seed, int width_px, int height_px);
+  double At(int x, int y) const;
 
  private:
-  struct Wave {
-    double kx, ky, phase, weight;
-  };
-  std::vector<Wave> waves_;
+  // Per wave, sin(kx·x + φ) and cos(kx·x + φ) times its weight along x, sin(ky·y) and cos(ky·y)
+  // along y: sin(a + b) from them costs no sine per pixel.
+  int waves_ = 0, width_ = 0, height_ = 0;
+  std::vector<double> sx_, cx_, sy_, cy_;
 };
 
 // An opaque disc, or a gear (a disc with trapezoidal teeth), standing behind the strand.
