@@ -14,6 +14,7 @@
 
 #include "common/angle.h"
 #include "synthetic/adversarial_optics.h"
+#include "synthetic/synthetic_extras.h"
 #include "synthetic/x264_clip.h"
 
 namespace clogscope::synthetic {
@@ -148,36 +149,19 @@ cv::Mat Background(const AdversarialScene& p) {
   cv::Mat bg(p.height_px, p.width_px, CV_32F);
   std::mt19937_64 rng(p.seed * 31 + 7);
   std::uniform_real_distribution<double> uni(0, 1);
-  struct Wave {
-    double kx, ky, ph, amp;
-  };
-  std::vector<Wave> waves;
+  std::vector<render::PlaneWaves::Wave> waves;
   for (int i = 0; i < 6; ++i) {
     const double ang = 2 * M_PI * uni(rng), k = 2 * M_PI / (60 + 300 * uni(rng));
     waves.push_back({k * std::cos(ang), k * std::sin(ang), 2 * M_PI * uni(rng),
                      p.background_texture / std::sqrt(3.0)});
   }
-  // sin(kx·x + ky·y + φ) = sin(kx·x + φ)·cos(ky·y) + cos(kx·x + φ)·sin(ky·y): the waves from
-  // tables along x and y, not a sine per pixel.
-  const size_t nw = waves.size();
-  std::vector<double> sx(nw * bg.cols), cx(nw * bg.cols), sy(nw * bg.rows), cy(nw * bg.rows);
-  for (size_t i = 0; i < nw; ++i) {
-    for (int x = 0; x < bg.cols; ++x) {
-      sx[i * bg.cols + x] = waves[i].amp * std::sin(waves[i].kx * x + waves[i].ph);
-      cx[i * bg.cols + x] = waves[i].amp * std::cos(waves[i].kx * x + waves[i].ph);
-    }
-    for (int y = 0; y < bg.rows; ++y) {
-      sy[i * bg.rows + y] = std::sin(waves[i].ky * y);
-      cy[i * bg.rows + y] = std::cos(waves[i].ky * y);
-    }
-  }
+  const render::PlaneWaves texture(waves, p.width_px, p.height_px);
   for (int y = 0; y < bg.rows; ++y) {
     float* row = bg.ptr<float>(y);
     for (int x = 0; x < bg.cols; ++x) {
       double v =
-          p.background_level * (1 + p.background_slope * (x - 0.5 * p.width_px) / p.width_px);
-      for (size_t i = 0; i < nw; ++i)
-        v += sx[i * bg.cols + x] * cy[i * bg.rows + y] + cx[i * bg.cols + x] * sy[i * bg.rows + y];
+          p.background_level * (1 + p.background_slope * (x - 0.5 * p.width_px) / p.width_px) +
+          texture.At(x, y);
       if (p.spot_level != 0) {
         const double r2 =
             (x - p.spot_x_px) * (x - p.spot_x_px) + (y - p.spot_y_px) * (y - p.spot_y_px);

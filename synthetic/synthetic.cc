@@ -366,8 +366,8 @@ cv::Mat RenderFrame(const SceneParams& p, int frame_index, FrameTruth* truth_out
   const Vec2 centre{0.5 * (p.width_px - 1), 0.5 * (p.height_px - 1)};
 
   // The realistic extras: texture and clutter behind the strand, its shading, clear-strand lines.
-  const render::Texture texture(p.texture_amplitude, p.texture_wavelength_px, p.seed, p.width_px,
-                                p.height_px);
+  const render::PlaneWaves texture = render::Texture(p.texture_amplitude, p.texture_wavelength_px,
+                                                     p.seed, p.width_px, p.height_px);
   const std::vector<render::ClutterObject> clutter = render::PlaceClutter(
       p.clutter_discs, p.clutter_gears, p.tip_x_px, p.tip_y_px, -n_strand.y, n_strand.x, w,
       p.nozzle ? p.tip_y_px : 0.0, p.width_px, p.height_px, p.strand_level, p.seed);

@@ -18,38 +18,47 @@ double CircleArea(double t) {
 
 }  // namespace
 
-Texture::Texture(double amplitude, double wavelength_px, uint64_t seed, int width_px, int height_px)
-    : width_(width_px), height_(height_px) {
-  if (amplitude == 0) return;
-  std::mt19937_64 rng(seed ^ 0x7e47u);
-  std::uniform_real_distribution<double> angle(0, 2 * M_PI), scale(1.0, 4.0);
-  constexpr int kWaves = 6;
-  waves_ = kWaves;
-  sx_.resize(kWaves * width_);
-  cx_.resize(kWaves * width_);
-  sy_.resize(kWaves * height_);
-  cy_.resize(kWaves * height_);
-  for (int i = 0; i < kWaves; ++i) {
-    const double a = angle(rng), lambda = wavelength_px * scale(rng);
-    const double k = 2 * M_PI / lambda;
-    const double kx = k * std::cos(a), ky = k * std::sin(a), phase = angle(rng);
-    const double weight = amplitude / std::sqrt(kWaves);
+PlaneWaves::PlaneWaves(const std::vector<Wave>& waves, int width_px, int height_px)
+    : waves_(static_cast<int>(waves.size())), width_(width_px), height_(height_px) {
+  sx_.resize(waves.size() * width_);
+  cx_.resize(waves.size() * width_);
+  sy_.resize(waves.size() * height_);
+  cy_.resize(waves.size() * height_);
+  for (int i = 0; i < waves_; ++i) {
+    const Wave& w = waves[i];
     for (int x = 0; x < width_; ++x) {
-      sx_[i * width_ + x] = weight * std::sin(kx * x + phase);
-      cx_[i * width_ + x] = weight * std::cos(kx * x + phase);
+      sx_[i * width_ + x] = w.amplitude * std::sin(w.kx * x + w.phase);
+      cx_[i * width_ + x] = w.amplitude * std::cos(w.kx * x + w.phase);
     }
     for (int y = 0; y < height_; ++y) {
-      sy_[i * height_ + y] = std::sin(ky * y);
-      cy_[i * height_ + y] = std::cos(ky * y);
+      sy_[i * height_ + y] = std::sin(w.ky * y);
+      cy_[i * height_ + y] = std::cos(w.ky * y);
     }
   }
 }
 
-double Texture::At(int x, int y) const {
+double PlaneWaves::At(int x, int y) const {
   double v = 0;
   for (int i = 0; i < waves_; ++i)
     v += sx_[i * width_ + x] * cy_[i * height_ + y] + cx_[i * width_ + x] * sy_[i * height_ + y];
   return v;
+}
+
+PlaneWaves Texture(double amplitude, double wavelength_px, uint64_t seed, int width_px,
+                   int height_px) {
+  std::vector<PlaneWaves::Wave> waves;
+  if (amplitude != 0) {
+    std::mt19937_64 rng(seed ^ 0x7e47u);
+    std::uniform_real_distribution<double> angle(0, 2 * M_PI), scale(1.0, 4.0);
+    constexpr int kWaves = 6;
+    for (int i = 0; i < kWaves; ++i) {
+      const double a = angle(rng), lambda = wavelength_px * scale(rng);
+      const double k = 2 * M_PI / lambda;
+      waves.push_back(
+          {k * std::cos(a), k * std::sin(a), angle(rng), amplitude / std::sqrt(kWaves)});
+    }
+  }
+  return PlaneWaves(waves, width_px, height_px);
 }
 
 double ClutterObject::Coverage(double x, double y, double sigma_px) const {

@@ -7,20 +7,26 @@ namespace clogscope::synthetic::render {
 
 // Pieces of a realistic scene for the renderer (synthetic.cc). Levels are 8-bit grey levels.
 
-// Low-frequency background texture: a fixed sum of plane waves with wavelengths from 1 to 4 times
-// `wavelength_px`, zero mean, peaking near ±amplitude. The same seed gives the same texture.
-class Texture {
+// A sum of plane waves Σ a·sin(kx·x + ky·y + φ) at the pixels of a width_px × height_px frame.
+class PlaneWaves {
  public:
-  // Over the pixels of a width_px × height_px frame.
-  Texture(double amplitude, double wavelength_px, uint64_t seed, int width_px, int height_px);
+  struct Wave {
+    double kx, ky, phase, amplitude;  // per px, per px, rad, grey levels
+  };
+  PlaneWaves(const std::vector<Wave>& waves, int width_px, int height_px);
   double At(int x, int y) const;
 
  private:
-  // Per wave, sin(kx·x + φ) and cos(kx·x + φ) times its weight along x, sin(ky·y) and cos(ky·y)
-  // along y: sin(a + b) from them costs no sine per pixel.
+  // Per wave, a·sin(kx·x + φ) and a·cos(kx·x + φ) along x, sin(ky·y) and cos(ky·y) along y:
+  // sin(a + b) from them costs no sine per pixel.
   int waves_ = 0, width_ = 0, height_ = 0;
   std::vector<double> sx_, cx_, sy_, cy_;
 };
+
+// Low-frequency background texture: six plane waves with wavelengths from 1 to 4 times
+// `wavelength_px`, zero mean, peaking near ±amplitude. The same seed gives the same texture.
+PlaneWaves Texture(double amplitude, double wavelength_px, uint64_t seed, int width_px,
+                   int height_px);
 
 // An opaque disc, or a gear (a disc with trapezoidal teeth), standing behind the strand.
 struct ClutterObject {
