@@ -15,9 +15,9 @@
 #include "synthetic/synthetic.h"
 #include "watch/live_watch.h"
 
+namespace clogscope::bench {
 namespace {
 
-using namespace clogscope;
 using Clock = std::chrono::steady_clock;
 
 enum class Shows { kSteady, kNarrowed, kOccluded, kBlob };
@@ -93,8 +93,11 @@ Outcome Watch(std::function<const cv::Mat&(int64_t)> frame, int64_t frames, bool
 }
 
 }  // namespace
+}  // namespace clogscope::bench
 
 void BenchWatch() {
+  using namespace clogscope;
+  using namespace clogscope::bench;
   synthetic::SceneParams s;  // the reference camera: 1280×720, 3 µm/px, a 400 µm strand
   s.width_jitter_um = 2.0;
   const auto t0 = Clock::now();

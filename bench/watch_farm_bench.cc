@@ -21,9 +21,9 @@
 #include "apps/watch_farm.h"
 #include "synthetic/synthetic.h"
 
+namespace clogscope::bench {
 namespace {
 
-using namespace clogscope;
 using Clock = std::chrono::steady_clock;
 namespace fs = std::filesystem;
 
@@ -69,8 +69,11 @@ FarmRun RunFarm(const std::string& clip, int cameras, bool paced) {
 }
 
 }  // namespace
+}  // namespace clogscope::bench
 
 void BenchWatchFarm() {
+  using namespace clogscope;
+  using namespace clogscope::bench;
   spdlog::set_level(spdlog::level::warn);  // the farm's start and end lines, per camera
   cpu_set_t cpus;
   CPU_ZERO(&cpus);

@@ -5,12 +5,14 @@
 # The sources are compiled as unity builds (CMake's UNITY_BUILD: batches of up to
 # CLOGSCOPE_UNITY_BATCH files, each batch one translation unit): most of a file's compile time is
 # the headers it shares with its neighbours (nlohmann/json, CLI11, spdlog, OpenCV, Eigen) and the
-# templates they instantiate, paid once per batch instead of once per file. apps/ compiled in 42 s
-# as one unit where its 17 files took 212 s, pipeline/ in 51 s where 14 took 102 s. A file's own
-# names stay its own: helpers in an unnamed namespace that two files of a batch both define are a
-# compile error, so that a clash cannot pass unseen. OWN_UNITS keeps one translation unit per
-# source: the measurement's libraries (vision/), whose speed is benchmarked per file's code
-# generation and whose longest files are their own Eigen fits, which a batch would not shorten.
+# templates they instantiate, paid once per batch instead of once per file. In Release apps/
+# compiled in 54 CPU-s where its 17 files took 212, pipeline/ in 56 where its 14 took 102. Within a
+# batch, a helper in an unnamed namespace that two files define alike is a compile error (four
+# turned up and each got one home); an overload of the same name or a using-directive at file
+# scope is not, and reaches the files after it: name helpers for what they do and keep
+# using-directives inside functions. OWN_UNITS keeps one translation unit per source: the
+# measurement's libraries (vision/), whose speed is benchmarked per file's code generation and
+# whose longest files are their own Eigen fits, which a batch would not shorten.
 set(CLOGSCOPE_UNITY_BATCH 8)
 function(clogscope_library name)
   cmake_parse_arguments(ARG "OWN_UNITS" "" "SOURCES;PUBLIC;PRIVATE" ${ARGN})
