@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "apps/cli_util.h"
+#include "common/angle.h"
 #include "common/path_check.h"
 #include "pipeline/band.h"
 #include "vision/io/frame_source.h"
@@ -139,7 +140,7 @@ InspectReport InspectInput(const InspectCommandOptions& o) {
     t += fmt::format(
         "  #{:<2} width {:7.1f} px  length {:5.0f} px  tilt {:+5.1f}°  {:6} SNR {:4.0f}  "
         "score {:5.0f}  {}\n",
-        i + 1, c.width_px, c.length_px, std::atan2(c.axis.dx, c.axis.dy) * 180 / M_PI,
+        i + 1, c.width_px, c.length_px, std::atan2(c.axis.dx, c.axis.dy) * kRadToDeg,
         vision::PolarityName(c.polarity), c.snr, c.score,
         c.verdict == vision::PairVerdict::kNotExamined ? "not examined" : c.why);
   }

@@ -4,7 +4,9 @@
 
 namespace clogscope {
 
-// Degrees to radians (options and scenes give angles in degrees; the maths takes radians).
+// Degrees to radians and back (options, scenes and tables give angles in degrees; the maths takes
+// radians).
 inline constexpr double kDegToRad = M_PI / 180.0;
+inline constexpr double kRadToDeg = 180.0 / M_PI;
 
 }  // namespace clogscope

@@ -29,12 +29,6 @@ std::vector<double> GaussianTaps(double sigma_px) {
   return {g.begin<double>(), g.end<double>()};
 }
 
-// Index i of n samples reflected about the first and last (OpenCV's BORDER_REFLECT_101).
-int Reflect101(int i, int n) {
-  while (i < 0 || i >= n) i = i < 0 ? -i : 2 * (n - 1) - i;
-  return i;
-}
-
 // Down the columns: `in` blurred by the Gaussian, each blurred hi-res row times its weight
 // (`weights`, empty for 1s), then each F rows averaged and added to `out`. Output row y is
 // Σ_t k_y[t]·(input row F·y + t − r): the blur's taps convolved with the F-row mean, so only the
@@ -59,7 +53,8 @@ void AddBinnedRows(const cv::Mat& in, const std::vector<double>& taps, int F,
       const int x1 = std::min(in.cols, x0 + kStrip);
       for (int y = range.start; y < range.end; ++y) {
         const float* ky = &k[static_cast<size_t>(nk) * (y - range.start)];
-        for (int t = 0; t < nk; ++t) rows[t] = in.ptr<float>(Reflect101(F * y + t - r, n));
+        for (int t = 0; t < nk; ++t)
+          rows[t] = in.ptr<float>(cv::borderInterpolate(F * y + t - r, n, cv::BORDER_REFLECT_101));
         float* o = out->ptr<float>(y);
         // 16 outputs summed in registers over every tap, then added to the row once (gcc does
         // not keep such a block in vector registers by itself).

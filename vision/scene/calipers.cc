@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 
+#include "common/angle.h"
 #include "common/robust.h"
 #include "vision/edges/caliper_samples.h"
 #include "vision/edges/cylinder_fit.h"
@@ -22,7 +23,6 @@
 namespace clogscope::vision {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / M_PI;
 // A side is shaded only when its edge also moves out by more than this under the shading model.
 constexpr double kMinShadingShiftPx = 0.1;
 constexpr int kReferenceCalipers = 5;  // outside the band, for the occlusion check

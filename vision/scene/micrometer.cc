@@ -8,6 +8,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "common/angle.h"
 #include "common/robust.h"
 #include "vision/edges/edge_fit.h"
 #include "vision/io/data_range.h"
@@ -15,7 +16,6 @@
 namespace clogscope::vision {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / M_PI;
 constexpr int kStripRows = 12;
 
 // The centre row of strip j (rows [j·kStripRows, (j + 1)·kStripRows)).

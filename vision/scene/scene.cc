@@ -16,7 +16,6 @@
 namespace clogscope::vision {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / M_PI;
 constexpr int kMaxCandidates = 40;       // pairs kept after scoring
 constexpr int kMaxFollowed = 6;          // pairs followed along the full-resolution image
 constexpr double kFollowOffsetPx = 3.0;  // edge contrast is read this far either side

@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
+#include "common/angle.h"
 #include "common/robust.h"
 #include "vision/scene/calipers.h"
 #include "vision/scene/scene.h"
@@ -236,7 +237,7 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
   m.tip_x_px = g.axis.ox + roi.x;
   m.tip_y_px = g.axis.oy + roi.y;
   if (opt.target == MeasureTarget::kStrand) m.tip_sigma_px = g.tip_sigma_px;
-  m.angle_deg = std::atan2(g.axis.dx, g.axis.dy) * 180.0 / M_PI;
+  m.angle_deg = std::atan2(g.axis.dx, g.axis.dy) * kRadToDeg;
 
   // The band: from the tip (strand) or the top of the stretch (filament), stopping short of where
   // the pair ends (a bed, an obstacle, the frame) by more than the edge windows reach.
