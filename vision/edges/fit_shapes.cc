@@ -18,7 +18,7 @@ BlurredSqrt::BlurredSqrt() {
     const double z = kZMin + i * kH;
     // φ(z − v²) matters for |z − v²| < 9: v from √max(0, z − 9) to √(z + 9).
     const double lo = std::sqrt(std::max(0.0, z - 9.0)), hi = std::sqrt(std::max(0.0, z + 9.0));
-    constexpr int kSteps = 400;
+    constexpr int kSteps = 100;
     const double h = (hi - lo) / kSteps;
     double sg = 0, sd = 0, sd2 = 0;
     for (int k = 0; k <= kSteps; ++k) {
