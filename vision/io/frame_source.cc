@@ -19,15 +19,24 @@ namespace {
 
 class ImageListSource : public FrameSource {
  public:
-  ImageListSource(std::string path, std::vector<std::string> files)
-      : FrameSource(std::move(path), SourceKind::kImages), files_(std::move(files)) {}
+  // first: the first file already decoded (Open() decodes a single image to check it), or empty.
+  ImageListSource(std::string path, std::vector<std::string> files, cv::Mat first = cv::Mat())
+      : FrameSource(std::move(path), SourceKind::kImages),
+        files_(std::move(files)),
+        first_(std::move(first)) {}
   FrameRead Read(InputFrame* frame, std::string* /*why*/) override {
     if (next_ >= files_.size()) return FrameRead::kEnd;
     frame->source = files_[next_];
     frame->index = static_cast<int64_t>(next_);
     frame->time_s = -1;
     frame->error.clear();
-    frame->image = ReadImage(files_[next_], &frame->error);
+    // A decoded first image is used once, not decoded again (a 720p colour PNG costs as much
+    // as measuring it).
+    if (next_ == 0 && !first_.empty()) {
+      frame->image = std::move(first_);
+    } else {
+      frame->image = ReadImage(files_[next_], &frame->error);
+    }
     ++next_;
     return FrameRead::kFrame;
   }
@@ -39,6 +48,7 @@ class ImageListSource : public FrameSource {
 
  private:
   std::vector<std::string> files_;
+  cv::Mat first_;
   size_t next_ = 0;
 };
 
@@ -122,8 +132,9 @@ std::vector<std::string> ImagesOf(const std::string& dir) {
   return files;
 }
 
-std::unique_ptr<FrameSource> OneImage(const std::string& path) {
-  return std::make_unique<ImageListSource>(path, std::vector<std::string>{path});
+std::unique_ptr<FrameSource> OneImage(const std::string& path, cv::Mat decoded) {
+  return std::make_unique<ImageListSource>(path, std::vector<std::string>{path},
+                                           std::move(decoded));
 }
 
 std::unique_ptr<FrameSource> VideoWithAFrame(const std::string& path) {
@@ -165,12 +176,14 @@ std::unique_ptr<FrameSource> FrameSource::Open(const std::string& path) {
   if (IsVideoPath(path)) return VideoWithAFrame(path);
   if (IsImagePath(path)) {
     std::string error;
-    if (ReadImage(path, &error).empty()) throw std::invalid_argument(path + ": " + error);
-    return OneImage(path);
+    cv::Mat image = ReadImage(path, &error);
+    if (image.empty()) throw std::invalid_argument(path + ": " + error);
+    return OneImage(path, std::move(image));
   }
   // Unknown extension: an image if it decodes as one, else a video.
   std::string error;
-  if (!ReadImage(path, &error).empty()) return OneImage(path);
+  if (cv::Mat image = ReadImage(path, &error); !image.empty())
+    return OneImage(path, std::move(image));
   try {
     return VideoWithAFrame(path);
   } catch (const std::invalid_argument&) {
