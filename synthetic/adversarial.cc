@@ -470,11 +470,13 @@ std::string Describe(const AdversarialScene& p) {
   }
   return fmt::format(
       "{} seed {}: {}x{} {} {:.2f} µm/px, {:.0f} µm ({:.1f} px), tilt {:+.1f}°, blur {:.1f}, noise "
-      "{:.1f}, bg {:.0f} (slope {:+.2f}, texture {:.1f}) strand {:.0f} ambient {:.2f} nozzle {:.0f}{}",
+      "{:.1f}, bg {:.0f} (slope {:+.2f}, texture {:.1f}) strand {:.0f} ambient {:.2f} nozzle "
+      "{:.0f}{}",
       TroubleClassName(p.trouble), p.seed, p.width_px, p.height_px,
       p.codec == Codec::kJpeg ? fmt::format("jpeg q{}", p.jpeg_quality) : CodecName(p.codec),
       p.scale_um_per_px, p.width_um, p.width_um / p.scale_um_per_px, p.tilt_deg, p.blur_sigma_px,
-      p.noise_sigma, p.background_level, p.background_slope, p.background_texture, p.strand_level, p.shading_ambient, p.nozzle_level, extra);
+      p.noise_sigma, p.background_level, p.background_slope, p.background_texture, p.strand_level,
+      p.shading_ambient, p.nozzle_level, extra);
 }
 
 }  // namespace clogscope::synthetic
