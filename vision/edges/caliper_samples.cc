@@ -228,14 +228,24 @@ ClippedCount CountClippedNear(const std::vector<EdgeSample>& samples, const Clip
 }
 
 double InnerEdgeDistance(const GreyImage& img, const AxisFrame& f, double s0, double s1,
-                         double edge_u, int inward, double max_depth_px, double min_step) {
+                         double edge_u, int inward, double max_depth_px, double min_step,
+                         double* beyond_px, double beyond_depth_px) {
   constexpr double kStepPx = 0.5, kBehindPx = 4.0, kStepReachPx = 3.0;
   constexpr int kRows = 12;
-  const int n = static_cast<int>((max_depth_px + kBehindPx) / kStepPx) + 1;
+  const int n_first = static_cast<int>((max_depth_px + kBehindPx) / kStepPx) + 1;
   constexpr double kNone = std::numeric_limits<double>::infinity();
-  if (n < 8 || n > 4096) return kNone;
-  // The median over rows: a blob over part of the band is not an edge along the object.
-  std::vector<double> profile(n, 0.0), column;
+  if (beyond_px) *beyond_px = kNone;
+  if (n_first < 8 || n_first > 4096) return kNone;
+  // A stripe's far side is sought as deep as beyond_depth_px, where the image allows.
+  int n =
+      beyond_px
+          ? std::max(n_first,
+                     std::min(4096, static_cast<int>((beyond_depth_px + kBehindPx) / kStepPx) + 1))
+          : n_first;
+  // The median over rows: a blob over part of the band is not an edge along the object. And the
+  // rows' spread about it, which at a place along the profile is noise (and texture), not the
+  // object's structure across it.
+  std::vector<double> profile(n, 0.0), spread, column;
   for (int i = 0; i < n; ++i) {
     const double u = edge_u + inward * (i * kStepPx - kBehindPx);
     column.clear();
@@ -244,43 +254,72 @@ double InnerEdgeDistance(const GreyImage& img, const AxisFrame& f, double s0, do
       const double x = f.ImageX(s, u), y = f.ImageY(s, u);
       if (img.InsideForBilinear(x, y)) column.push_back(img.Bilinear(x, y));
     }
-    if (column.size() < kRows / 2) return kNone;
+    if (column.size() < kRows / 2) {
+      if (i < n_first) return kNone;
+      n = i;
+      break;
+    }
     std::nth_element(column.begin(), column.begin() + column.size() / 2, column.end());
     profile[i] = column[column.size() / 2];
+    if (i < n_first) {
+      for (double& v : column) v = std::abs(v - profile[i]);
+      std::nth_element(column.begin(), column.begin() + column.size() / 2, column.end());
+      spread.push_back(column[column.size() / 2]);
+    }
   }
+  profile.resize(n);
   // The gradient along the inward direction, over 1 px, signed like the silhouette's: an inner
   // edge turns back (a bright stripe or core in a dark strand, a lens's core after its rim). A lit
   // strand's shading ramp, brightening inward like its silhouette, never does.
   const int edge_i = static_cast<int>(kBehindPx / kStepPx);
   const double sign =
-      profile[std::min(n - 1, edge_i + 6)] >= profile[std::max(0, edge_i - 6)] ? 1.0 : -1.0;
+      profile[std::min(n_first - 1, edge_i + 6)] >= profile[std::max(0, edge_i - 6)] ? 1.0 : -1.0;
   std::vector<double> along(n, 0.0);
   for (int i = 1; i + 1 < n; ++i) along[i] = sign * (profile[i + 1] - profile[i - 1]);
   // The edge's own peak near the edge; then an opposite peak, an edge in its own right: at least
   // a quarter of the silhouette's gradient and a step of min_step across it.
   const int reach = static_cast<int>(kStepReachPx / kStepPx);
   // The profile's own noise (medians of noisy rows): an inner edge stands well above it.
-  // Differences 1 px apart, their median: the few across real edges do not move it.
+  // Differences 1 px apart, their median: the few across real edges do not move it. But inside
+  // a narrow object most of them may cross a stripe's blurred sides: the rows' spread about the
+  // median at each place (its median, as the σ of a median of the rows) bounds it from there.
   std::vector<double> diffs;
-  for (int i = edge_i + reach; i + 2 < n; ++i)
+  for (int i = edge_i + reach; i + 2 < n_first; ++i)
     diffs.push_back(std::abs(profile[i + 2] - profile[i]));
   double noise = 0;
   if (diffs.size() >= 5) {
     std::nth_element(diffs.begin(), diffs.begin() + diffs.size() / 2, diffs.end());
     noise = kMadToSigma * diffs[diffs.size() / 2] / std::sqrt(2.0);
+    if (spread.size() >= 5) {
+      std::nth_element(spread.begin(), spread.begin() + spread.size() / 2, spread.end());
+      // A median of kRows values: 1.25σ/√kRows.
+      noise = std::min(noise, kMadToSigma * spread[spread.size() / 2] * 1.25 / std::sqrt(kRows));
+    }
   }
   min_step = std::max(min_step, 8.0 * noise);
   int peak = edge_i;
-  for (int i = std::max(1, edge_i - 6); i <= std::min(n - 2, edge_i + 6); ++i)
+  for (int i = std::max(1, edge_i - 6); i <= std::min(n_first - 2, edge_i + 6); ++i)
     if (along[i] > along[peak]) peak = i;
   // Past the silhouette's own step (the ±3 px the step is read over).
-  for (int i = peak + reach + 1; i + 1 < n; ++i) {
+  for (int i = peak + reach + 1; i + 1 < n_first; ++i) {
     // The gradient turned back: a peak of −along.
     const bool local_max = -along[i] > 0 && along[i] <= along[i - 1] && along[i] <= along[i + 1];
     if (!local_max || -along[i] < 0.25 * along[peak]) continue;
     const double step =
         std::abs(profile[std::min(n - 1, i + reach)] - profile[std::max(0, i - reach)]);
-    if (step >= min_step) return (i - edge_i) * kStepPx;
+    if (step < min_step) continue;
+    // And the edge after it, turning back to the silhouette's sign.
+    for (int k = i + 1; beyond_px && k + 1 < n; ++k) {
+      const bool back = along[k] > 0 && along[k] >= along[k - 1] && along[k] >= along[k + 1];
+      if (!back || along[k] < 0.25 * along[peak]) continue;
+      const double step_back =
+          std::abs(profile[std::min(n - 1, k + reach)] - profile[std::max(0, k - reach)]);
+      if (step_back >= min_step) {
+        *beyond_px = (k - edge_i) * kStepPx;
+        break;
+      }
+    }
+    return (i - edge_i) * kStepPx;
   }
   return kNone;
 }

@@ -70,9 +70,13 @@ inline double ClipZoneHalfWidthPx(double sigma_px) { return 2.0 * sigma_px + 1.0
 // the axis averaged over the band s0..s1: past the edge's own gradient peak the gradient falls,
 // then turns back at ≥ 25 % of the edge's gradient with a step of at least min_step across it, in
 // the median over the band's rows (a blob over part of the band does not count). Looks as deep as
-// max_depth_px; returns infinity when nothing is there.
+// max_depth_px; returns infinity when nothing is there. beyond_px (when given): how far the edge
+// after it lies, where the gradient turns back to the silhouette's sign by the same rule (a
+// stripe's far side), as deep as beyond_depth_px (or max_depth_px) where the image allows;
+// infinity when none.
 double InnerEdgeDistance(const GreyImage& img, const AxisFrame& f, double s0, double s1,
-                         double edge_u, int inward, double max_depth_px, double min_step);
+                         double edge_u, int inward, double max_depth_px, double min_step,
+                         double* beyond_px = nullptr, double beyond_depth_px = 0);
 
 // Sub-pixel start for an edge fit: along the normal at s, from u_guess - half to u_guess + half in
 // half-pixel steps, the crossing of the local mid-level (between the profile's extremes) nearest to

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "vision/edges/caliper_samples.h"
@@ -71,6 +72,32 @@ struct InnerStepModel {
     j[kS] += de2 * z2;
     j[kC2] = f2;
     j[kE2] = de2;
+  }
+};
+
+// The blurred step and a stripe inside the object of the same blur, both its sides: 8
+// parameters, the stripe's amplitude, near side and far side after the first five. The stripe's
+// term c2·(Φ(z2) − Φ(z3)) is the inner step's with its far side taken off again.
+enum { kE3 = 7 };
+struct InnerStripeModel {
+  static constexpr int kN = 8;
+  static double SlopeAcrossU(const double* p, const double* j) {
+    return p[kB] - j[kE] - j[kE2] - j[kE3];
+  }
+  void operator()(double du, double u, const double* p, double* value, double* j) const {
+    const double inv_s = 1.0 / p[kS];
+    const double z = (u - p[kE]) * inv_s, z2 = (u - p[kE2]) * inv_s, z3 = (u - p[kE3]) * inv_s;
+    double f, df, f2, df2, f3, df3;
+    StepShape(z, &f, &df);
+    StepShape(z2, &f2, &df2);
+    StepShape(z3, &f3, &df3);
+    *value = p[kA] + p[kB] * du + p[kC] * f + p[kC2] * (f2 - f3);
+    const double de = -p[kC] * df * inv_s, de2 = -p[kC2] * df2 * inv_s, de3 = p[kC2] * df3 * inv_s;
+    StepColumns(du, f, de, z, j);
+    j[kS] += de2 * z2 + de3 * z3;
+    j[kC2] = f2 - f3;
+    j[kE2] = de2;
+    j[kE3] = de3;
   }
 };
 
@@ -161,7 +188,8 @@ Grouped GroupSamples(const std::vector<EdgeSample>& samples, double sigma_px) {
   for (size_t g = 0; g < n; ++g) {
     double sum = 0;
     const int begin = k;
-    for (const int end = out.groups.end[g]; k < end; ++k) sum += samples[out.groups.pixels[k]].value;
+    for (const int end = out.groups.end[g]; k < end; ++k)
+      sum += samples[out.groups.pixels[k]].value;
     out.count[g] = k - begin;
     out.mean_value[g] = sum / (k - begin);
   }
@@ -169,9 +197,9 @@ Grouped GroupSamples(const std::vector<EdgeSample>& samples, double sigma_px) {
 }
 
 // The groups' part of the residuals' sum of squares, Σ count·(model at the mean u − mean value)²,
-// with its Gauss-Newton system J^T J and J^T r at p. What it leaves out, each pixel's residual about
-// its group's, moves with p only through the model's slope across the group; Solve adds it where
-// the fit ends.
+// with its Gauss-Newton system J^T J and J^T r at p. What it leaves out, each pixel's residual
+// about its group's, moves with p only through the model's slope across the group; Solve adds it
+// where the fit ends.
 template <typename Model>
 double Evaluate(const Grouped& grouped, const Vec<Model::kN>& p, double u_ref, const Model& model,
                 Mat<Model::kN>* jtj, Vec<Model::kN>* jtr) {
@@ -322,43 +350,74 @@ EdgeFit FitBlurredStep(const std::vector<EdgeSample>& samples, double edge_guess
 }
 
 EdgeFit FitStepBeforeInnerStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
-                               double sigma_guess_px, double u_ref, double inner_guess_px) {
+                               double sigma_guess_px, double u_ref, double inner_guess_px,
+                               double far_guess_px) {
   EdgeFit fit;
   fit.samples = static_cast<int>(samples.size());
-  if (samples.size() < 12) return fit;
-  // The three levels from −u to +u: before the first step, between the two, after the second.
-  const double first = std::min(edge_guess_px, inner_guess_px);
-  const double second = std::max(edge_guess_px, inner_guess_px);
+  const bool stripe = std::isfinite(far_guess_px);
+  if (samples.size() < (stripe ? 14u : 12u)) return fit;
+  // The levels between the steps, from −u to +u, each away from the steps' blur: before the
+  // first step, between it and the next, ... . A level squeezed between two steps has only the
+  // sample nearest its middle, if no other.
+  std::vector<double> at = {edge_guess_px, inner_guess_px};
+  if (stripe) at.push_back(far_guess_px);
+  std::sort(at.begin(), at.end());
+  const size_t levels = at.size() + 1;
   const double guard = 1.5 * sigma_guess_px + 0.5;
-  double sum[3] = {0, 0, 0};
-  int n[3] = {0, 0, 0};
-  double nearest = 1e30, middle_value = 0;
+  std::vector<double> sum(levels, 0.0), nearest(levels, 1e30), middle_value(levels, 0.0);
+  std::vector<int> n(levels, 0);
   for (const auto& smp : samples) {
-    const int region = smp.u_px < first - guard ? 0 : smp.u_px > second + guard ? 2 : 1;
-    if (region == 1 && (smp.u_px < first + guard || smp.u_px > second - guard)) {
-      // Between the steps but within their blur: only the nearest to the middle, if no other.
-      const double d = std::abs(smp.u_px - 0.5 * (first + second));
-      if (d < nearest) nearest = d, middle_value = smp.value;
+    const size_t region =
+        static_cast<size_t>(std::upper_bound(at.begin(), at.end(), smp.u_px) - at.begin());
+    const bool outer = region == 0 || region == levels - 1;
+    const double lo_edge = region > 0 ? at[region - 1] : -1e30;
+    const double hi_edge = region < at.size() ? at[region] : 1e30;
+    if (smp.u_px < lo_edge + guard || smp.u_px > hi_edge - guard) {
+      if (!outer) {
+        const double d = std::abs(smp.u_px - 0.5 * (lo_edge + hi_edge));
+        if (d < nearest[region]) nearest[region] = d, middle_value[region] = smp.value;
+      }
       continue;
     }
     sum[region] += smp.value;
     ++n[region];
   }
-  if (n[0] == 0 || n[2] == 0) return fit;
-  const double lo = sum[0] / n[0], hi = sum[2] / n[2];
-  const double mid = n[1] > 0 ? sum[1] / n[1] : middle_value;
+  if (n[0] == 0 || n[levels - 1] == 0) return fit;
+  std::vector<double> level(levels);
+  for (size_t r = 0; r < levels; ++r) level[r] = n[r] > 0 ? sum[r] / n[r] : middle_value[r];
+  // The inner steps lie toward −u of the silhouette (the object on the −u side) or toward +u.
   const bool inner_first = inner_guess_px < edge_guess_px;
-  Vec<InnerStepModel::kN> p;
-  p << lo, 0.0, inner_first ? hi - mid : mid - lo, edge_guess_px, std::max(sigma_guess_px, 0.5),
-      inner_first ? mid - lo : hi - mid, inner_guess_px;
-  Vec<InnerStepModel::kN> solved;
-  fit = Solve(samples, p, u_ref, InnerStepModel(), &solved);
+  // The silhouette's step and the first inner step's, each across its own place; a stripe's far
+  // side takes the inner step off again.
+  const size_t edge_at = inner_first ? levels - 2 : 0;
+  const size_t inner_at = inner_first ? levels - 3 : 1;
+  const double c = level[edge_at + 1] - level[edge_at];
+  const double c2 = level[inner_at + 1] - level[inner_at];
   fit.u_ref = u_ref;
-  fit.inner_step = solved[kC2];
-  fit.inner_edge_px = solved[kE2];
+  const double s0 = std::max(sigma_guess_px, 0.5);
+  double far_px = 0;
+  if (stripe) {
+    // Toward −u the stripe's far side comes first: c2·(Φ(z2) − Φ(z3)) is −c2 on the stripe.
+    Vec<InnerStripeModel::kN> p, solved;
+    p << level[0], 0.0, c, edge_guess_px, s0, inner_first ? -c2 : c2, inner_guess_px, far_guess_px;
+    fit = Solve(samples, p, u_ref, InnerStripeModel(), &solved);
+    fit.inner_step = solved[kC2];
+    fit.inner_edge_px = solved[kE2];
+    far_px = solved[kE3];
+  } else {
+    Vec<InnerStepModel::kN> p, solved;
+    p << level[0], 0.0, c, edge_guess_px, s0, c2, inner_guess_px;
+    fit = Solve(samples, p, u_ref, InnerStepModel(), &solved);
+    fit.inner_step = solved[kC2];
+    fit.inner_edge_px = solved[kE2];
+  }
+  fit.u_ref = u_ref;
+  fit.inner_far_px = stripe ? far_px : std::numeric_limits<double>::infinity();
   fit.contrast = fit.step;
-  const double apart = (fit.inner_edge_px - fit.edge_px) * (inner_first ? -1.0 : 1.0);
+  const double inward = inner_first ? -1.0 : 1.0;
+  const double apart = (fit.inner_edge_px - fit.edge_px) * inward;
   if (!(apart >= fit.sigma_px)) fit.converged = false;
+  if (stripe && !((far_px - fit.inner_edge_px) * inward > 0)) fit.converged = false;
   return fit;
 }
 
@@ -406,6 +465,10 @@ double EdgeModelValue(const EdgeFit& fit, double u_px) {
     double f2, df2;
     StepShape((u_px - fit.inner_edge_px) / fit.sigma_px, &f2, &df2);
     value += fit.inner_step * f2;
+    if (std::isfinite(fit.inner_far_px)) {
+      StepShape((u_px - fit.inner_far_px) / fit.sigma_px, &f2, &df2);
+      value -= fit.inner_step * f2;
+    }
   }
   return value;
 }

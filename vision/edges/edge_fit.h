@@ -1,5 +1,6 @@
 #pragma once
 
+#include <limits>
 #include <vector>
 
 namespace clogscope::vision {
@@ -30,8 +31,10 @@ struct EdgeFit {
   double slope_change_per_px = 0;  // FitTwoSlopeStep: slope at +u minus slope at −u
   double u_ref = 0;                // where the linear term is anchored
   int object_side = 0;             // FitShadedStep: the object's side (±1); 0 for the plain step
-  // FitStepBeforeInnerStep: the second step inside the object (0 without one) and where it lies.
+  // FitStepBeforeInnerStep: the second step inside the object (0 without one) and where it lies;
+  // where a stripe's far side takes it off again (infinity: the step stays to the window's end).
   double inner_step = 0, inner_edge_px = 0;
+  double inner_far_px = std::numeric_limits<double>::infinity();
 };
 
 // The blurred step whose sides slope differently (a background gradient or texture on one side of
@@ -66,9 +69,13 @@ EdgeFit FitBlurredStep(const std::vector<EdgeSample>& samples, double edge_guess
 // window to stop short of it (the window then reaches onto the stripe):
 //   value(u) = base + slope·(u − u_ref) + step·Φ(z) + inner_step·Φ((u − inner_edge_px)/sigma_px).
 // edge_px is the silhouette's step. Not converged unless the two steps lie apart by at least the
-// blur, the inner one on inner_guess_px's side of the silhouette.
+// blur, the inner one on inner_guess_px's side of the silhouette. With a finite far_guess_px, the
+// window reaches past a narrow stripe's far side too, and the stripe is a box of the same blur:
+//   … + inner_step·(Φ((u − inner_edge_px)/sigma_px) − Φ((u − inner_far_px)/sigma_px)),
+// its far side beyond its near side.
 EdgeFit FitStepBeforeInnerStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
-                               double sigma_guess_px, double u_ref, double inner_guess_px);
+                               double sigma_guess_px, double u_ref, double inner_guess_px,
+                               double far_guess_px = std::numeric_limits<double>::infinity());
 
 // The blurred step with a lit cylinder's shading on the object side:
 //   value(u) = base + slope·(u − u_ref) + step·Φ(z) + shading·G(ι·z),  z = (u − edge_px)/sigma_px,

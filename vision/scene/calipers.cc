@@ -121,13 +121,15 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   // edge windows: how deep inside each side's window may reach.
   // (A filament's band is its whole stretch, its median profile blurred by gear and knurl marks:
   // not looked at.)
-  double inner_edge_px[2] = {std::numeric_limits<double>::infinity(),
-                             std::numeric_limits<double>::infinity()};
+  // And where such an edge's stripe ends (its far side), when that is as deep.
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  double inner_edge_px[2] = {kNone, kNone}, inner_far_px[2] = {kNone, kNone};
   for (int side = 0; side < 2 && !filament; ++side) {
     const double mid = 0.5 * (band_s0 + band_s1);
     const double e = (side == 0 ? left_guess : right_guess) + slope_guess * mid;
     inner_edge_px[side] = InnerEdgeDistance(img, f, band_s0, band_s1, e, side == 0 ? 1 : -1,
-                                            std::min(0.45 * width0, 40.0), min_contrast);
+                                            std::min(0.45 * width0, 40.0), min_contrast,
+                                            &inner_far_px[side], std::min(0.9 * width0, 60.0));
   }
   // How far inside a side's window may reach and stop short of an edge inside the object by the
   // blur (sigma_guess as it stands).
@@ -140,12 +142,17 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   // with the stripe's step (FitStepBeforeInnerStep). Only inside a silhouette darker than its
   // background, whose edge is a plain step: a lit strand's shading by its rim is no second step.
   // Decided once, at the first guess of the blur, so that windows and models agree in every pass.
-  bool inner_step[2] = {false, false};
+  // A stripe so narrow that such a window would reach its far side's blur too: the window takes
+  // in the whole stripe, a box of the same blur.
+  bool inner_step[2] = {false, false}, inner_stripe[2] = {false, false};
   for (int side = 0; side < 2; ++side) {
     inner_step[side] = g.polarity == Polarity::kDarkOnBright &&
                        std::isfinite(inner_edge_px[side]) &&
                        short_of_inner_edge(side) < 2.0 * sigma_guess + 1.0;
     if (inner_step[side]) shade[side] = 0;
+    inner_stripe[side] = inner_step[side] && std::isfinite(inner_far_px[side]) &&
+                         inner_far_px[side] - 2.5 * sigma_guess - 1.0 <
+                             inner_edge_px[side] + 2.5 * sigma_guess + 2.0;
   }
   // One side's edge window about e0: `outer` px into the background, `inner` into the object
   // but short of an edge inside it, or onto its far side (inner_step).
@@ -153,17 +160,20 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     double u0, u1;
   };
   const auto window = [&](int side, double e0, double outer, double inner) {
-    const double in = inner_step[side]
-                          ? std::min(0.5 * width0, inner_edge_px[side] + 2.5 * sigma_guess + 2.0)
-                          : std::min(inner, std::max(3.0, short_of_inner_edge(side)));
+    // (Past a stripe's far side it may reach beyond the middle, short of the other silhouette.)
+    const double past = inner_stripe[side] ? inner_far_px[side] : inner_edge_px[side];
+    const double most = inner_stripe[side] ? width0 - 2.5 * sigma_guess - 2.0 : 0.5 * width0;
+    const double in = inner_step[side] ? std::min(most, past + 2.5 * sigma_guess + 2.0)
+                                       : std::min(inner, std::max(3.0, short_of_inner_edge(side)));
     return side == 0 ? Window{e0 - outer, e0 + in} : Window{e0 - in, e0 + outer};
   };
   // A side's plain step in the window's samples about e0.
   const auto fit_plain = [&](int side, double e0) {
-    return inner_step[side]
-               ? FitStepBeforeInnerStep(samples, e0, sigma_guess, e0,
-                                        e0 + (side == 0 ? 1 : -1) * inner_edge_px[side])
-               : FitBlurredStep(samples, e0, sigma_guess, e0);
+    const double inward = side == 0 ? 1.0 : -1.0;
+    return inner_step[side] ? FitStepBeforeInnerStep(
+                                  samples, e0, sigma_guess, e0, e0 + inward * inner_edge_px[side],
+                                  inner_stripe[side] ? e0 + inward * inner_far_px[side] : kNone)
+                            : FitBlurredStep(samples, e0, sigma_guess, e0);
   };
   // Its shaded step, and the step as its side's model stands (shaded once decided so).
   const auto fit_shaded = [&](int side, double e0) {

@@ -54,7 +54,8 @@ TEST(EdgeFitTest, RecoversEdgeWithoutNoise) {
 // A scene's profile (grey level at t px) blurred by numerical convolution with a Gaussian, sampled
 // every 0.25 px over [from, to].
 template <typename Scene>
-std::vector<EdgeSample> NumericallyBlurred(const Scene& scene, double blur, double from, double to) {
+std::vector<EdgeSample> NumericallyBlurred(const Scene& scene, double blur, double from,
+                                           double to) {
   std::vector<EdgeSample> s;
   for (double u = from; u <= to; u += 0.25) {
     double sum = 0, weight = 0;
@@ -87,9 +88,9 @@ TEST(EdgeFitTest, TwoSlopeStepFindsAnEdgeWhoseBackgroundSlopesOnOneSide) {
 }
 
 // A dark silhouette (60 on a background of 200) with a bright stripe (170) 4 px inside it, all
-// blurred by numerical convolution: a window onto the stripe pulls the plain step inward by far more
-// than its noise would; with the stripe's step in the model the silhouette is where it lies, on
-// either side of the object.
+// blurred by numerical convolution: a window onto the stripe pulls the plain step inward by far
+// more than its noise would; with the stripe's step in the model the silhouette is where it lies,
+// on either side of the object.
 TEST(EdgeFitTest, StepBeforeInnerStepPutsTheSilhouetteWhereAStripeBesideItPulledThePlainStep) {
   const double edge = 0.3, blur = 1.6, gap = 4.0;
   for (const int inward : {+1, -1}) {
@@ -117,6 +118,34 @@ TEST(EdgeFitTest, StepBeforeInnerStepPutsTheSilhouetteWhereAStripeBesideItPulled
     ASSERT_TRUE(in_rows.converged) << inward;
     EXPECT_NEAR(in_rows.edge_px, edge, 0.01) << inward;
     EXPECT_LT(in_rows.rms, 0.1) << inward;
+  }
+}
+
+// The same silhouette with a narrow stripe (5 px, brighter than the background) whose far side
+// lies within the window: a step that stays to the window's end describes the stripe's far side
+// as neither, and the silhouette moves; the stripe as a box of the same blur puts the silhouette
+// and both the stripe's sides where they lie, on either side of the object.
+TEST(EdgeFitTest, StepBeforeInnerStripeTakesTheStripesFarSideIntoTheModel) {
+  const double edge = 0.3, blur = 2.0, gap = 5.0, stripe = 5.0;
+  for (const int inward : {+1, -1}) {
+    const auto scene = [&](double t) {
+      const double d = (t - edge) * inward;  // into the object
+      return d < 0 ? 180.0 : d < gap ? 130.0 : d < gap + stripe ? 250.0 : 130.0;
+    };
+    // 10 px into the background, 17 px into the object.
+    const std::vector<EdgeSample> window = inward > 0 ? NumericallyBlurred(scene, blur, -10, 17)
+                                                      : NumericallyBlurred(scene, blur, -17, 10);
+    const EdgeFit step = FitStepBeforeInnerStep(window, 0.0, 1.5, 0.0, inward * gap);
+    const EdgeFit box =
+        FitStepBeforeInnerStep(window, 0.0, 1.5, 0.0, inward * gap, inward * (gap + stripe));
+    ASSERT_TRUE(box.converged) << inward;
+    EXPECT_FALSE(step.converged && std::abs(step.edge_px - edge) < 0.1) << inward;
+    EXPECT_NEAR(box.edge_px, edge, 0.01) << inward;
+    EXPECT_NEAR(box.inner_edge_px, edge + inward * gap, 0.02) << inward;
+    EXPECT_NEAR(box.inner_far_px, edge + inward * (gap + stripe), 0.02) << inward;
+    EXPECT_NEAR(box.sigma_px, blur, 0.02) << inward;
+    for (const EdgeSample& smp : window)
+      EXPECT_NEAR(EdgeModelValue(box, smp.u_px), smp.value, 0.2) << inward;
   }
 }
 
@@ -196,8 +225,8 @@ TEST(EdgeFitTest, SamplesInColumnsGiveTheEdgeItsSigmaAndTheNoise) {
   // Without noise the pixels' residuals are the model's small mismatch to the pixel-integrated
   // profile, near the edge too, where the rows' offsets times the model's slope are 1–2 levels.
   for (double edge : {-0.3, 0.37}) {
-    const EdgeFit f = FitBlurredStep(Samples(edge, 1.2, 40, 200, 0, &rng, -10, 10, 0.02), 0.0,
-                                     1.5, 0.0);
+    const EdgeFit f =
+        FitBlurredStep(Samples(edge, 1.2, 40, 200, 0, &rng, -10, 10, 0.02), 0.0, 1.5, 0.0);
     ASSERT_TRUE(f.converged);
     EXPECT_NEAR(f.edge_px, edge, 0.005);
     EXPECT_LT(f.rms, 0.1);
