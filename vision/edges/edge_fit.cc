@@ -393,13 +393,13 @@ EdgeFit FitStepBeforeInnerStep(const std::vector<EdgeSample>& samples, double ed
   const size_t inner_at = inner_first ? levels - 3 : 1;
   const double c = level[edge_at + 1] - level[edge_at];
   const double c2 = level[inner_at + 1] - level[inner_at];
-  fit.u_ref = u_ref;
   const double s0 = std::max(sigma_guess_px, 0.5);
   double far_px = 0;
   if (stripe) {
-    // Toward −u the stripe's far side comes first: c2·(Φ(z2) − Φ(z3)) is −c2 on the stripe.
+    // Toward −u the stripe's far side comes first: c2·(Φ(z2) − Φ(z3)) is −c2 on the stripe, and
+    // c2 there is the object's level less the stripe's.
     Vec<InnerStripeModel::kN> p, solved;
-    p << level[0], 0.0, c, edge_guess_px, s0, inner_first ? -c2 : c2, inner_guess_px, far_guess_px;
+    p << level[0], 0.0, c, edge_guess_px, s0, c2, inner_guess_px, far_guess_px;
     fit = Solve(samples, p, u_ref, InnerStripeModel(), &solved);
     fit.inner_step = solved[kC2];
     fit.inner_edge_px = solved[kE2];

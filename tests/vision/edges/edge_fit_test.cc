@@ -143,6 +143,8 @@ TEST(EdgeFitTest, StepBeforeInnerStripeTakesTheStripesFarSideIntoTheModel) {
     EXPECT_NEAR(box.edge_px, edge, 0.01) << inward;
     EXPECT_NEAR(box.inner_edge_px, edge + inward * gap, 0.02) << inward;
     EXPECT_NEAR(box.inner_far_px, edge + inward * (gap + stripe), 0.02) << inward;
+    // Signed as the inner step's: the level after it (toward +u) less the one before.
+    EXPECT_NEAR(box.inner_step, inward * (250.0 - 130.0), 1.0) << inward;
     EXPECT_NEAR(box.sigma_px, blur, 0.02) << inward;
     for (const EdgeSample& smp : window)
       EXPECT_NEAR(EdgeModelValue(box, smp.u_px), smp.value, 0.2) << inward;
