@@ -232,53 +232,64 @@ double InnerEdgeDistance(const GreyImage& img, const AxisFrame& f, double s0, do
                          double* beyond_px, double beyond_depth_px) {
   constexpr double kStepPx = 0.5, kBehindPx = 4.0, kStepReachPx = 3.0;
   constexpr int kRows = 12;
+  const int reach = static_cast<int>(kStepReachPx / kStepPx);
   const int n_first = static_cast<int>((max_depth_px + kBehindPx) / kStepPx) + 1;
   constexpr double kNone = std::numeric_limits<double>::infinity();
   if (beyond_px) *beyond_px = kNone;
   if (n_first < 8 || n_first > 4096) return kNone;
   // A stripe's far side is sought as deep as beyond_depth_px, where the image allows.
-  int n =
+  const int n_deep =
       beyond_px
           ? std::max(n_first,
                      std::min(4096, static_cast<int>((beyond_depth_px + kBehindPx) / kStepPx) + 1))
           : n_first;
-  // The median over rows: a blob over part of the band is not an edge along the object. And the
-  // rows' spread about it, which at a place along the profile is noise (and texture), not the
-  // object's structure across it.
-  std::vector<double> profile(n, 0.0), spread, column;
-  for (int i = 0; i < n; ++i) {
-    const double u = edge_u + inward * (i * kStepPx - kBehindPx);
-    column.clear();
-    for (int r = 0; r < kRows; ++r) {
-      const double s = s0 + (s1 - s0) * (r + 0.5) / kRows;
-      const double x = f.ImageX(s, u), y = f.ImageY(s, u);
-      if (img.InsideForBilinear(x, y)) column.push_back(img.Bilinear(x, y));
-    }
-    if (column.size() < kRows / 2) {
-      if (i < n_first) return kNone;
-      n = i;
-      break;
-    }
-    std::nth_element(column.begin(), column.begin() + column.size() / 2, column.end());
-    profile[i] = column[column.size() / 2];
-    if (i < n_first) {
-      for (double& v : column) v = std::abs(v - profile[i]);
+  // The median over rows: a blob over part of the band is not an edge along the object. And,
+  // within max_depth_px, the rows' spread about it, which at a place along the profile is noise
+  // (and texture), not the object's structure across it. Sampled as far as `until`, or until the
+  // rows leave the image (the profile ends there).
+  std::vector<double> profile, spread, column;
+  bool ended = false;
+  const auto extend = [&](int until) {
+    for (int i = static_cast<int>(profile.size()); i < until && !ended; ++i) {
+      const double u = edge_u + inward * (i * kStepPx - kBehindPx);
+      column.clear();
+      for (int r = 0; r < kRows; ++r) {
+        const double s = s0 + (s1 - s0) * (r + 0.5) / kRows;
+        const double x = f.ImageX(s, u), y = f.ImageY(s, u);
+        if (img.InsideForBilinear(x, y)) column.push_back(img.Bilinear(x, y));
+      }
+      if (column.size() < kRows / 2) {
+        ended = true;
+        break;
+      }
       std::nth_element(column.begin(), column.begin() + column.size() / 2, column.end());
-      spread.push_back(column[column.size() / 2]);
+      profile.push_back(column[column.size() / 2]);
+      if (i < n_first) {
+        for (double& v : column) v = std::abs(v - profile[i]);
+        std::nth_element(column.begin(), column.begin() + column.size() / 2, column.end());
+        spread.push_back(column[column.size() / 2]);
+      }
     }
-  }
-  profile.resize(n);
+  };
+  extend(n_first);
+  if (ended) return kNone;
+  // The first edge's test reads up to `reach` samples past its depth; the rest of a deep profile
+  // only once there is an inner edge whose far side to seek.
+  extend(std::min(n_deep, n_first + reach + 1));
   // The gradient along the inward direction, over 1 px, signed like the silhouette's: an inner
   // edge turns back (a bright stripe or core in a dark strand, a lens's core after its rim). A lit
   // strand's shading ramp, brightening inward like its silhouette, never does.
   const int edge_i = static_cast<int>(kBehindPx / kStepPx);
   const double sign =
       profile[std::min(n_first - 1, edge_i + 6)] >= profile[std::max(0, edge_i - 6)] ? 1.0 : -1.0;
-  std::vector<double> along(n, 0.0);
-  for (int i = 1; i + 1 < n; ++i) along[i] = sign * (profile[i + 1] - profile[i - 1]);
-  // The edge's own peak near the edge; then an opposite peak, an edge in its own right: at least
-  // a quarter of the silhouette's gradient and a step of min_step across it.
-  const int reach = static_cast<int>(kStepReachPx / kStepPx);
+  std::vector<double> along;
+  const auto gradients = [&]() {  // along[i] for the profile as it stands, 0 at its ends
+    const int n = static_cast<int>(profile.size());
+    const int from = std::max(1, static_cast<int>(along.size()) - 1);
+    along.resize(n, 0.0);
+    for (int i = from; i + 1 < n; ++i) along[i] = sign * (profile[i + 1] - profile[i - 1]);
+  };
+  gradients();
   // The profile's own noise (medians of noisy rows): an inner edge stands well above it.
   // Differences 1 px apart, their median: the few across real edges do not move it. But inside
   // a narrow object most of them may cross a stripe's blurred sides: the rows' spread about the
@@ -297,26 +308,32 @@ double InnerEdgeDistance(const GreyImage& img, const AxisFrame& f, double s0, do
     }
   }
   min_step = std::max(min_step, 8.0 * noise);
+  // The edge's own peak near the edge; then an edge in its own right past it: a peak of
+  // turn·along (turn −1: the gradient turned back; +1: back to the silhouette's sign) of at
+  // least a quarter of the silhouette's gradient, with a step of min_step across it.
   int peak = edge_i;
   for (int i = std::max(1, edge_i - 6); i <= std::min(n_first - 2, edge_i + 6); ++i)
     if (along[i] > along[peak]) peak = i;
+  const auto edge_at = [&](int i, double turn) {
+    const int n = static_cast<int>(profile.size());
+    const double a = turn * along[i];
+    if (!(a > 0 && a >= turn * along[i - 1] && a >= turn * along[i + 1]) || a < 0.25 * along[peak])
+      return false;
+    return std::abs(profile[std::min(n - 1, i + reach)] - profile[std::max(0, i - reach)]) >=
+           min_step;
+  };
   // Past the silhouette's own step (the ±3 px the step is read over).
   for (int i = peak + reach + 1; i + 1 < n_first; ++i) {
-    // The gradient turned back: a peak of −along.
-    const bool local_max = -along[i] > 0 && along[i] <= along[i - 1] && along[i] <= along[i + 1];
-    if (!local_max || -along[i] < 0.25 * along[peak]) continue;
-    const double step =
-        std::abs(profile[std::min(n - 1, i + reach)] - profile[std::max(0, i - reach)]);
-    if (step < min_step) continue;
-    // And the edge after it, turning back to the silhouette's sign.
-    for (int k = i + 1; beyond_px && k + 1 < n; ++k) {
-      const bool back = along[k] > 0 && along[k] >= along[k - 1] && along[k] >= along[k + 1];
-      if (!back || along[k] < 0.25 * along[peak]) continue;
-      const double step_back =
-          std::abs(profile[std::min(n - 1, k + reach)] - profile[std::max(0, k - reach)]);
-      if (step_back >= min_step) {
-        *beyond_px = (k - edge_i) * kStepPx;
-        break;
+    if (!edge_at(i, -1.0)) continue;
+    if (beyond_px) {
+      // And the edge after it, turning back to the silhouette's sign.
+      extend(n_deep);
+      gradients();
+      for (int k = i + 1; k + 1 < static_cast<int>(profile.size()); ++k) {
+        if (edge_at(k, 1.0)) {
+          *beyond_px = (k - edge_i) * kStepPx;
+          break;
+        }
       }
     }
     return (i - edge_i) * kStepPx;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 #include <vector>
 
 #include "vision/edges/caliper_samples.h"
@@ -394,30 +395,31 @@ EdgeFit FitStepBeforeInnerStep(const std::vector<EdgeSample>& samples, double ed
   const double c = level[edge_at + 1] - level[edge_at];
   const double c2 = level[inner_at + 1] - level[inner_at];
   const double s0 = std::max(sigma_guess_px, 0.5);
-  double far_px = 0;
+  // Either model's fit, and the inner step's amplitude and place from its solution.
+  const auto solve = [&](const auto& model, const auto& p) {
+    std::decay_t<decltype(p)> solved;
+    fit = Solve(samples, p, u_ref, model, &solved);
+    fit.inner_step = solved[kC2];
+    fit.inner_edge_px = solved[kE2];
+    return solved;
+  };
   if (stripe) {
     // Toward −u the stripe's far side comes first: c2·(Φ(z2) − Φ(z3)) is −c2 on the stripe, and
     // c2 there is the object's level less the stripe's.
-    Vec<InnerStripeModel::kN> p, solved;
+    Vec<InnerStripeModel::kN> p;
     p << level[0], 0.0, c, edge_guess_px, s0, c2, inner_guess_px, far_guess_px;
-    fit = Solve(samples, p, u_ref, InnerStripeModel(), &solved);
-    fit.inner_step = solved[kC2];
-    fit.inner_edge_px = solved[kE2];
-    far_px = solved[kE3];
+    fit.inner_far_px = solve(InnerStripeModel(), p)[kE3];
   } else {
-    Vec<InnerStepModel::kN> p, solved;
+    Vec<InnerStepModel::kN> p;
     p << level[0], 0.0, c, edge_guess_px, s0, c2, inner_guess_px;
-    fit = Solve(samples, p, u_ref, InnerStepModel(), &solved);
-    fit.inner_step = solved[kC2];
-    fit.inner_edge_px = solved[kE2];
+    solve(InnerStepModel(), p);
   }
   fit.u_ref = u_ref;
-  fit.inner_far_px = stripe ? far_px : std::numeric_limits<double>::infinity();
   fit.contrast = fit.step;
   const double inward = inner_first ? -1.0 : 1.0;
   const double apart = (fit.inner_edge_px - fit.edge_px) * inward;
   if (!(apart >= fit.sigma_px)) fit.converged = false;
-  if (stripe && !((far_px - fit.inner_edge_px) * inward > 0)) fit.converged = false;
+  if (stripe && !((fit.inner_far_px - fit.inner_edge_px) * inward > 0)) fit.converged = false;
   return fit;
 }
 
