@@ -35,8 +35,7 @@ bool CheckTableAndExtruderPaths(const std::string& diameters, const std::string&
 }
 
 void SetUpLogging(const std::string& level) {
-  // To the tool's own copy of stderr: library text diverted around a decoder never takes a
-  // message of the tool's with it (common/library_text.h).
+  // To the tool's message stream (common/library_text.h).
   using Sink = spdlog::sinks::ansicolor_sink<spdlog::details::console_mutex>;
   auto logger = std::make_shared<spdlog::logger>(
       "clogscope", std::make_shared<Sink>(ToolStderr(), spdlog::color_mode::automatic));

@@ -15,7 +15,6 @@
 #include <exception>
 #include <filesystem>
 #include <opencv2/core.hpp>
-#include <opencv2/videoio.hpp>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -191,16 +190,6 @@ void BenchVideo() {
   p.sway_deg = 0.3;
   const auto truth = clogscope::synthetic::RenderSequence(p, 250, 25.0, path, "");
 
-  // Decoding alone, two ways: OpenCV's reader (decode + conversion to BGR) and clogscope's own
-  // libavcodec reader (decode, luma plane kept), which `measure` uses.
-  auto opencv_decode = [&]() {
-    cv::VideoCapture cap(path, cv::CAP_FFMPEG);
-    cv::Mat f;
-    int n = 0;
-    const auto t0 = Clock::now();
-    while (cap.read(f)) ++n;
-    return std::make_pair(n, Seconds(t0, Clock::now()));
-  };
   auto measure = [&]() {
     auto src = clogscope::vision::FrameSource::Open(path);
     StrandMeasureOptions opt;
@@ -223,12 +212,10 @@ void BenchVideo() {
   // Alternate the passes and take medians: single passes of 250 frames vary by ±30 % here.
   constexpr int kRounds = 5;
   const int measure_threads = clogscope::vision::DecoderThreadsBesideMeasuring();
-  std::vector<double> cv_fps, dec_fps, dec_as_measure_fps, meas_fps;
+  std::vector<double> dec_fps, dec_as_measure_fps, meas_fps;
   int n = 0, valid = 0;
   double mean = 0, sd = 0;
   for (int r = 0; r < kRounds; ++r) {
-    const auto c = opencv_decode();
-    cv_fps.push_back(c.first / c.second);
     // Decoding alone with FFmpeg's threads (a thread per core), and as `measure` opens the file
     // (a core left to measuring).
     dec_fps.push_back(DecodeOnlyFps(path, 0));
@@ -239,12 +226,9 @@ void BenchVideo() {
   }
   const double decode_fps = Median(dec_fps), measure_fps = Median(meas_fps);
   const double decode_as_measure_fps = Median(dec_as_measure_fps);
-  fmt::print(
-      "\n## Video: 250 frames 1280x720 H.264 (OpenCV/libx264, crf 23), 2 cores, median of {}\n\n",
-      kRounds);
+  fmt::print("\n## Video: 250 frames 1280x720 H.264 (libx264, crf 23), 2 cores, median of {}\n\n",
+             kRounds);
   fmt::print("{}", TableHead("| pass | frames/s |", "|---|---|"));
-  fmt::print("| decode only, OpenCV VideoCapture (to BGR) | {:.0f} |{}\n", Median(cv_fps),
-             PiCells(Median(cv_fps)));
   fmt::print("| decode only, clogscope reader (luma), FFmpeg's threads | {:.0f} |{}\n", decode_fps,
              PiCells(decode_fps));
   fmt::print(
@@ -255,11 +239,10 @@ void BenchVideo() {
              PiCells(measure_fps));
   fmt::print(
       "\nmeasure / decode-only throughput: **{:.2f}** with the reader as `measure` opens it, "
-      "{:.2f} "
-      "against FFmpeg's threads, {:.2f} against OpenCV's reader; width error on these frames: mean "
-      "{:+.4f} px, std {:.4f} px ({} valid of {})\n",
-      measure_fps / decode_as_measure_fps, measure_fps / decode_fps, measure_fps / Median(cv_fps),
-      mean, sd, valid, n);
+      "{:.2f} against FFmpeg's threads; width error on these frames: mean {:+.4f} px, std {:.4f} "
+      "px "
+      "({} valid of {})\n",
+      measure_fps / decode_as_measure_fps, measure_fps / decode_fps, mean, sd, valid, n);
   // ffmpeg's own decode, start-up subtracted (a 1-frame run measures it).
   auto ffmpeg_secs = [&](std::vector<std::string> frames) {
     std::vector<std::string> argv = {"ffmpeg", "-nostdin", "-v", "error", "-i", path};
@@ -532,7 +515,7 @@ void BenchSlip() {
   }
 }
 
-// One codec of the feed-speed bench: RenderSequence's own encoders (OpenCV's FFmpeg backend at its
+// One codec of the feed-speed bench: RenderSequence's own encoders (VideoFileWriter at its
 // fixed settings) or, with ffmpeg_args, the ffmpeg CLI on a lossless render (a camera's settings).
 struct SpeedCodec {
   std::string name, extension, ffmpeg_args;
@@ -585,9 +568,9 @@ void BenchFeedSpeedCodec(int first_seed) {
   const fs::path dir = fs::temp_directory_path() / "clogscope_bench" / "speed_codec";
   fs::create_directories(dir);
   const std::vector<SpeedCodec> codecs = {
-      {"MJPEG (RenderSequence: FFmpeg mjpeg, OpenCV's settings)", ".avi", ""},
+      {"MJPEG (RenderSequence: FFmpeg mjpeg, quantiser 3)", ".avi", ""},
       {"MJPEG -q:v 8 (ffmpeg)", ".avi", "-c:v mjpeg -q:v 8"},
-      {"H.264 crf 23 (RenderSequence: libx264, OpenCV's settings)", ".mp4", ""},
+      {"H.264 crf 23 (RenderSequence: libx264)", ".mp4", ""},
       {"MPEG-4 part 2 -q:v 5 (ffmpeg)", ".avi", "-c:v mpeg4 -q:v 5"},
   };
   const std::vector<double> speeds = {0.3, 0.8, 2, 5, 15};

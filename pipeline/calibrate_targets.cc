@@ -4,7 +4,6 @@
 
 #include <cmath>
 #include <filesystem>
-#include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 
 #include "calib/line_lattice.h"

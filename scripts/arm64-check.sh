@@ -51,7 +51,7 @@ target_packages=(
   libc6-dev libstdc++-12-dev libgcc-12-dev
   libopencv-dev libceres-dev libeigen3-dev libgtest-dev libcli11-dev libspdlog-dev libfmt-dev
   nlohmann-json3-dev libyaml-cpp-dev libavformat-dev libavcodec-dev libavutil-dev libswscale-dev
-  libmicrohttpd-dev libcurl4-openssl-dev libmosquitto-dev
+  libmicrohttpd-dev libcurl4-openssl-dev libmosquitto-dev libpng-dev libjpeg-dev libv4l-dev
 )
 stamp="$sysroot/.clogscope-sysroot"
 want="bookworm arm64 ${target_packages[*]}"

@@ -6,7 +6,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake pkg-config
-  libopencv-dev          # frames, video I/O (FFmpeg backend), drawing
+  libopencv-dev          # frames and image processing (core, imgproc: only these are linked), drawing
   libceres-dev           # calibration and predictor fits (pulls Eigen)
   libeigen3-dev          # small linear algebra in the edge fitter and the model
   libgtest-dev           # unit tests
@@ -14,8 +14,10 @@ packages=(
   libspdlog-dev libfmt-dev  # logging and formatting
   nlohmann-json3-dev     # JSON ground truth and tables
   libyaml-cpp-dev        # manifests and parameter files with line numbers in errors
-  libavformat-dev libavcodec-dev libavutil-dev libswscale-dev  # video decoding straight to luma
-  ffmpeg                 # codec libraries for OpenCV's FFmpeg backend; ffmpeg CLI for decode benchmarks
+  libavformat-dev libavcodec-dev libavutil-dev libswscale-dev  # video in (straight to luma) and out; TIFF, BMP and PGM/PPM images
+  libpng-dev libjpeg-dev # PNG and JPEG images: errors returned, not printed; the JPEG bytes OpenCV wrote (same library and settings)
+  libv4l-dev             # V4L2 cameras (`watch /dev/video0`): libv4l2 turns any camera format into YUV, whose luma is measured
+  ffmpeg                 # the ffmpeg CLI: camera-like streams and encodes in tests, decode benchmarks
   gnuplot-nox            # plots (optional at run time)
   libmicrohttpd-dev      # `watch --http`: a server made to face a network (epoll, per-client limits); cpp-httplib 0.11 held a thread per slow client
   libmosquitto-dev       # `watch --mqtt`: the Eclipse Mosquitto client library (own network thread, last will, reconnect back-off)

@@ -6,9 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <opencv2/core/utility.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <opencv2/videoio.hpp>
 #include <random>
 #include <stdexcept>
 
@@ -16,6 +14,8 @@
 #include "synthetic/adversarial_optics.h"
 #include "synthetic/synthetic_extras.h"
 #include "synthetic/x264_clip.h"
+#include "vision/io/image_codec.h"
+#include "vision/io/video_decoder.h"
 
 namespace clogscope::synthetic {
 namespace {
@@ -391,9 +391,9 @@ std::vector<cv::Mat> RenderAdversarial(const AdversarialScene& p, int frames,
     cv::Mat img = Quantise(radiance, p.noise_sigma, rng);
     if (p.colour) img = BayerRoundTrip(img);
     if (p.codec == Codec::kJpeg) {
-      std::vector<uint8_t> buf;
-      cv::imencode(".jpg", img, buf, {cv::IMWRITE_JPEG_QUALITY, p.jpeg_quality});
-      img = cv::imdecode(buf, p.colour ? cv::IMREAD_COLOR : cv::IMREAD_GRAYSCALE);
+      std::string why;
+      img = vision::DecodeImage(vision::EncodeImage(".jpg", img, p.jpeg_quality), &why);
+      if (img.empty()) throw std::runtime_error("JPEG round trip: " + why);
     }
     out.push_back(img);
   }
@@ -403,14 +403,19 @@ std::vector<cv::Mat> RenderAdversarial(const AdversarialScene& p, int frames,
         fs::path(temp_dir) / fmt::format("adversarial_{}_{}", p.seed, static_cast<int>(p.trouble));
     const std::string path = EncodeX264Clip(out, dir, "round_trip.mp4", 25);
     if (encoder) *encoder = vision::ReadX264Settings(path);
-    cv::VideoCapture cap(path, cv::CAP_FFMPEG);
+    // Read back in BGR, as OpenCV's reader gave the frames this matrix was built on (grey from
+    // BGR: limited-range luma stretched to full range and clipped), not as `measure` reads a
+    // video (its decoder's luma plane, unstretched).
+    vision::VideoDecoderOptions colour;
+    colour.bgr = true;
+    vision::VideoDecoder decoder(path, colour);
     for (cv::Mat& f : out) {
-      cv::Mat decoded;
-      if (!cap.read(decoded)) throw std::runtime_error(path + ": H.264 round trip lost a frame");
-      if (!p.colour) cv::cvtColor(decoded, decoded, cv::COLOR_BGR2GRAY);
-      f = decoded;
+      vision::DecodedFrame decoded;
+      if (!decoder.Read(&decoded) || decoded.bgr.empty())
+        throw std::runtime_error(path + ": H.264 round trip lost a frame");
+      f = decoded.bgr;
+      if (!p.colour) cv::cvtColor(f, f, cv::COLOR_BGR2GRAY);
     }
-    cap.release();
     std::error_code ec;
     fs::remove_all(dir, ec);
   }

@@ -7,8 +7,6 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <opencv2/core/utility.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/videoio.hpp>
 #include <random>
 #include <stdexcept>
 
@@ -17,6 +15,7 @@
 #include "synthetic/edge_profile.h"
 #include "synthetic/synthetic_extras.h"
 #include "vision/io/video_io.h"
+#include "vision/io/video_writer.h"
 
 namespace clogscope::synthetic {
 namespace {

@@ -172,7 +172,7 @@ cv::Mat RenderFrame(const SceneParams& params, int frame_index, FrameTruth* trut
 FrameTruth FrameTruthFor(const SceneParams& params, int frame_index);
 
 // Writes `frame_count` frames: to a directory of PNGs (frame_000000.png …) when `out_path` has no
-// video extension, or to a video: .avi (MJPEG) or .mp4 (H.264, OpenCV's FFmpeg backend). Writes the
+// video extension, or to a video: .avi (MJPEG) or .mp4 (H.264) through VideoFileWriter. Writes the
 // truth as JSON to `truth_path` (atomically). Throws std::invalid_argument on bad paths/params.
 std::vector<FrameTruth> RenderSequence(const SceneParams& params, int frame_count, double fps,
                                        const std::string& out_path, const std::string& truth_path);

@@ -2,10 +2,10 @@
 
 #include <fmt/format.h>
 
-#include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 
 #include "common/spawn.h"
+#include "vision/io/video_io.h"
 
 namespace clogscope::synthetic {
 
@@ -13,7 +13,7 @@ std::string EncodeX264Clip(const std::vector<cv::Mat>& frames, const std::filesy
                            const std::string& name, int fps) {
   std::filesystem::create_directories(dir);
   for (size_t i = 0; i < frames.size(); ++i)
-    cv::imwrite((dir / fmt::format("{:03d}.png", i)).string(), frames[i]);
+    vision::WriteImageAtomically((dir / fmt::format("{:03d}.png", i)).string(), frames[i]);
   const std::string path = (dir / name).string();
   SpawnOptions encode;
   encode.argv = {"ffmpeg",

@@ -1,7 +1,6 @@
 #include "watch/frame_jpeg.h"
 
-#include <opencv2/imgcodecs.hpp>
-
+#include "vision/io/image_codec.h"
 #include "vision/overlay/overlay.h"
 
 namespace clogscope::watch {
@@ -10,11 +9,12 @@ std::vector<unsigned char> OverlayJpeg(const WatchSnapshot& s,
                                        const std::optional<calib::ScaleCalibration>& conversion) {
   std::vector<unsigned char> jpeg;
   if (s.frame.empty()) return jpeg;
-  cv::imencode(
+  const std::string bytes = vision::EncodeImage(
       ".jpg",
       vision::DrawOverlay(s.frame, s.measurement, conversion ? conversion->scale_um_per_px : 0.0,
                           conversion ? conversion->edge_bias_px : 0.0),
-      jpeg, {cv::IMWRITE_JPEG_QUALITY, 85});
+      85);
+  jpeg.assign(bytes.begin(), bytes.end());
   return jpeg;
 }
 

@@ -7,12 +7,12 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "calib/calibration_file.h"
 #include "common/atomic_file.h"
 #include "common/csv.h"
 #include "tests/apps/cli_test_util.h"
+#include "vision/io/video_io.h"
 
 namespace clogscope::apps {
 namespace {
@@ -111,13 +111,14 @@ TEST(CalibrateCommandTest, StageMicrometerWithNumeralsAndDust) {
   }
   // Two micrometers of 10 and 12 µm pitch side by side: refused in one line naming the file.
   ASSERT_EQ(RunCli(stage + "--pitch-um 12 --out " + (d / "stage12").string(), d).exit_code, 0);
-  const cv::Mat a = cv::imread((d / "stage8" / "frame_000000.png").string(), cv::IMREAD_UNCHANGED);
-  const cv::Mat b = cv::imread((d / "stage12" / "frame_000000.png").string(), cv::IMREAD_UNCHANGED);
-  ASSERT_FALSE(a.empty() || b.empty());
+  std::string why;
+  const cv::Mat a = vision::ReadImage((d / "stage8" / "frame_000000.png").string(), &why);
+  const cv::Mat b = vision::ReadImage((d / "stage12" / "frame_000000.png").string(), &why);
+  ASSERT_FALSE(a.empty() || b.empty()) << why;
   cv::Mat mixed = a.clone();
   b.colRange(640, 1280).copyTo(mixed.colRange(640, 1280));
   const std::string mixed_path = (d / "mixed.png").string();
-  ASSERT_TRUE(cv::imwrite(mixed_path, mixed));
+  vision::WriteImageAtomically(mixed_path, mixed);
   const RunResult r = RunCli(
       "calibrate --micrometer " + mixed_path + " --pitch-um 10 --out " + (d / "m.yaml").string(),
       d);

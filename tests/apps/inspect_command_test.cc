@@ -4,11 +4,11 @@
 
 #include <filesystem>
 #include <fstream>
-#include <opencv2/imgcodecs.hpp>
 
 #include "pipeline/band.h"
 #include "synthetic/synthetic.h"
 #include "tests/apps/cli_test_util.h"
+#include "vision/io/video_io.h"
 #include "vision/scene/strand_measure.h"
 
 namespace clogscope::apps {
@@ -18,7 +18,7 @@ namespace fs = std::filesystem;
 
 std::string Render(const fs::path& dir, const std::string& name, const synthetic::SceneParams& p) {
   const std::string path = (dir / name).string();
-  cv::imwrite(path, synthetic::RenderFrame(p, 0, nullptr));
+  vision::WriteImageAtomically(path, synthetic::RenderFrame(p, 0, nullptr));
   return path;
 }
 
@@ -61,8 +61,9 @@ TEST(InspectCommandTest, ExplainsTheFrameAndSuggestsOptions) {
   // The suggested ROI holds the tip and the band.
   EXPECT_TRUE(r.suggested_roi.contains(cv::Point(640, 245))) << r.text;
   EXPECT_TRUE(r.suggested_roi.contains(cv::Point(640, 300))) << r.text;
-  const cv::Mat png = cv::imread(o.out_png);
-  EXPECT_EQ(png.cols, 1280);
+  std::string why;
+  const cv::Mat png = vision::ReadImage(o.out_png, &why);
+  EXPECT_EQ(png.cols, 1280) << why;
 
   // No tip in view: the filament target is suggested.
   p = synthetic::SceneParams();
@@ -81,7 +82,8 @@ TEST(InspectCommandTest, ExplainsTheFrameAndSuggestsOptions) {
   vision::StrandMeasureOptions mo;
   mo.target = vision::MeasureTarget::kFilament;
   pipeline::ApplyBandPx({}, std::nullopt, &mo);  // measure's band without a scale (pipeline/band.h)
-  const vision::StrandMeasurement direct = vision::MeasureStrand(cv::imread(o.input), mo);
+  const vision::StrandMeasurement direct =
+      vision::MeasureStrand(vision::ReadImage(o.input, &why), mo);
   EXPECT_EQ(fa.measurement.calipers_total, direct.calipers_total);
   EXPECT_DOUBLE_EQ(fa.measurement.width_px, direct.width_px);
   EXPECT_GT(fa.measurement.calipers_total, 100);  // 720 px of stretch, not the strand's 50 px band

@@ -14,13 +14,14 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
 #include "common/atomic_file.h"
 #include "common/csv.h"
 #include "pipeline/measure_inputs.h"
 #include "tests/apps/cli_test_util.h"
+#include "vision/io/image_codec.h"
+#include "vision/io/video_io.h"
 
 namespace clogscope::apps {
 namespace {
@@ -297,7 +298,7 @@ void ExpectOnlyToolLines(const std::string& err) {
   }
 }
 
-// Damaged images (libpng, libjpeg and OpenCV print their complaints) and files that would block
+// Damaged images (libpng and libjpeg complain) and files that would block
 // (a FIFO): the decoder's reason inside the tool's one line, nothing else on the terminal.
 TEST(MeasureCommandTest, DamagedImagesAndFifosGiveTheToolsOwnLine) {
   const fs::path d = FreshDir("damaged");
@@ -316,10 +317,10 @@ TEST(MeasureCommandTest, DamagedImagesAndFifosGiveTheToolsOwnLine) {
   ExpectOnlyToolLines(r.err);
 
   // A JPEG cut short decodes with grey where data is missing: refused, not measured.
-  std::vector<uchar> jpg;
-  ASSERT_TRUE(cv::imencode(".jpg", cv::imread((d / "f" / "frame_000000.png").string()), jpg));
-  WriteFileAtomically((d / "cut.jpg").string(),
-                      std::string(jpg.begin(), jpg.begin() + jpg.size() * 6 / 10));
+  std::string why;
+  const std::string jpg =
+      vision::EncodeImage(".jpg", vision::ReadImage((d / "f" / "frame_000000.png").string(), &why));
+  WriteFileAtomically((d / "cut.jpg").string(), jpg.substr(0, jpg.size() * 6 / 10));
   r = RunCli("measure " + (d / "cut.jpg").string() + x_csv, d);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("cut.jpg: damaged image (Premature end of JPEG file)"), std::string::npos)

@@ -15,7 +15,6 @@
 #include <functional>
 #include <iostream>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <regex>
 
@@ -28,6 +27,7 @@
 #include "tests/apps/external_process.h"
 #include "tests/apps/http_test_client.h"
 #include "tests/apps/watch_test_util.h"
+#include "vision/io/video_io.h"
 
 namespace clogscope::apps {
 namespace {
@@ -195,8 +195,11 @@ TEST_F(WatchPageTest, TheBrowserDrawsTheRenderedDiameterItsBaselineAndTheLevel) 
     // To look at it: CLOGSCOPE_PAGE_SCREENSHOT=PATH keeps a copy.
     if (const char* keep = std::getenv("CLOGSCOPE_PAGE_SCREENSHOT"))
       fs::copy_file(png, keep, fs::copy_options::overwrite_existing);
-    const cv::Mat shot = cv::imread(png.string(), cv::IMREAD_COLOR);
-    ASSERT_FALSE(shot.empty()) << "no screenshot";
+    std::string why;
+    cv::Mat shot = vision::ReadImage(png.string(), &why);
+    ASSERT_FALSE(shot.empty()) << "no screenshot: " << why;
+    if (shot.channels() == 4) cv::cvtColor(shot, shot, cv::COLOR_BGRA2BGR);
+    ASSERT_EQ(shot.channels(), 3);
     std::cout << "screenshot " << shot.cols << "×" << shot.rows << ", " << fs::file_size(png)
               << " bytes\n";
     const auto near = [](const cv::Vec3b& a, const cv::Vec3b& b) {

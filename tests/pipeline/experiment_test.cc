@@ -8,12 +8,12 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "common/atomic_file.h"
 #include "common/csv.h"
 #include "synthetic/synthetic.h"
 #include "tests/scratch_dir.h"
+#include "vision/io/video_io.h"
 
 namespace clogscope::pipeline {
 namespace {
@@ -173,7 +173,7 @@ TEST_F(ExperimentTest, OneStepsErrorDoesNotStopTheRun) {
   // A 16x16 image: the options' ROI lies outside it, which throws inside the worker.
   const fs::path tiny = dir_ / "tiny";
   fs::create_directories(tiny);
-  cv::imwrite((tiny / "a.png").string(), cv::Mat(16, 16, CV_8UC1, cv::Scalar(90)));
+  vision::WriteImageAtomically((tiny / "a.png").string(), cv::Mat(16, 16, CV_8UC1, cv::Scalar(90)));
   m.steps.push_back({3, 200, "", tiny.string(), 0, -1, 0, 0, ""});
   ExperimentOptions o = Options(5);
   o.strand.roi = cv::Rect(0, 0, 600, 300);
@@ -199,7 +199,8 @@ TEST_F(ExperimentTest, AStepOfImagesIsSampledByIndex) {
   for (int k = 0; k < 10; ++k) {
     char name[32];
     std::snprintf(name, sizeof(name), "img_%02d.png", k);
-    cv::imwrite((images / name).string(), synthetic::RenderFrame(SmallScene(400, 7), k, nullptr));
+    vision::WriteImageAtomically((images / name).string(),
+                                 synthetic::RenderFrame(SmallScene(400, 7), k, nullptr));
   }
   StepSpec s;
   s.step = 1;

@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <vector>
+
+#include "vision/io/image_codec.h"
 
 namespace clogscope::watch {
 namespace {
@@ -34,8 +36,11 @@ TEST(OverlayJpegCacheTest, DrawsEachPublishedFrameOnce) {
   EXPECT_NE(second, first);
   // And it is the new frame's picture: its grey level, decoded (the median: the overlay writes
   // its reason over part of it).
-  const cv::Mat decoded = cv::imdecode(*second, cv::IMREAD_GRAYSCALE);
-  ASSERT_FALSE(decoded.empty());
+  std::string why;
+  cv::Mat decoded = vision::DecodeImage(
+      std::string_view(reinterpret_cast<const char*>(second->data()), second->size()), &why);
+  ASSERT_FALSE(decoded.empty()) << why;
+  if (decoded.channels() == 3) cv::cvtColor(decoded, decoded, cv::COLOR_BGR2GRAY);
   std::vector<unsigned char> levels(decoded.begin<unsigned char>(), decoded.end<unsigned char>());
   std::nth_element(levels.begin(), levels.begin() + levels.size() / 2, levels.end());
   EXPECT_NEAR(levels[levels.size() / 2], 200, 2);

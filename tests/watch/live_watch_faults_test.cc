@@ -8,13 +8,13 @@
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <random>
 #include <set>
 
 #include "pipeline/experiment.h"
 #include "synthetic/synthetic.h"
 #include "tests/scratch_dir.h"
+#include "vision/io/image_codec.h"
 #include "watch/live_watch.h"
 
 namespace clogscope::watch {
@@ -33,10 +33,7 @@ std::vector<std::string> StrandJpegs(int count, int width_px, int height_px) {
   std::vector<std::string> out;
   for (int i = 0; i < count; ++i) {
     synthetic::FrameTruth truth;
-    std::vector<uchar> jpeg;
-    cv::imencode(".jpg", synthetic::RenderFrame(s, i, &truth), jpeg,
-                 {cv::IMWRITE_JPEG_QUALITY, 90});
-    out.emplace_back(jpeg.begin(), jpeg.end());
+    out.push_back(vision::EncodeImage(".jpg", synthetic::RenderFrame(s, i, &truth), 90));
   }
   return out;
 }

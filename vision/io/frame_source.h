@@ -6,7 +6,7 @@
 //   run (feedstock)    FrameSource::OpenVideo, seeking to each pair of frames.
 //   watch              OpenLiveSource (live_source.h): a camera, a stream, a video, a folder a
 //                      camera writes into.
-// Only vision/io opens a video (VideoDecoder, OpenCV's V4L2 capture) or lists a folder.
+// Only vision/io opens a video (VideoDecoder, V4L2 through libv4l2) or lists a folder.
 
 #include <chrono>
 #include <cstdint>
@@ -26,7 +26,7 @@ inline constexpr double kSeekAheadS = 2.0;
 enum class SourceKind {
   kImages,  // an image file, or a folder's images sorted by name (read once)
   kVideo,   // a video file
-  kDevice,  // a V4L2 camera: /dev/videoN (OpenCV's V4L2 backend)
+  kDevice,  // a V4L2 camera: /dev/videoN (libv4l2)
   kStream,  // a URL FFmpeg reads: http://…/?action=stream (MJPEG), rtsp://, tcp://, udp://
   kFolder,  // a folder a camera writes images into: new files are taken as they appear
 };

@@ -5,8 +5,6 @@
 #include <algorithm>
 #include <filesystem>
 #include <map>
-#include <opencv2/imgproc.hpp>
-#include <opencv2/videoio.hpp>
 #include <optional>
 #include <stdexcept>
 #include <thread>
@@ -15,6 +13,7 @@
 #include "common/path_check.h"
 #include "vision/io/image_folder.h"
 #include "vision/io/source_name.h"
+#include "vision/io/v4l2_camera.h"
 #include "vision/io/video_decoder.h"
 #include "vision/io/video_io.h"
 
@@ -125,34 +124,33 @@ class DecodedSource : public FrameSource {
   int64_t index_ = 0;
 };
 
-// A V4L2 camera through OpenCV (FFmpeg's v4l2 input would need libavdevice).
+// A V4L2 camera, its frames' luma (V4l2Camera).
 class DeviceSource : public FrameSource {
  public:
   DeviceSource(const std::string& source, const std::atomic<bool>* stop)
       : FrameSource(source, SourceKind::kDevice), stop_(stop), opened_(Clock::now()) {
     std::error_code ec;
     if (!fs::exists(source, ec)) throw std::invalid_argument(source + ": no such device");
-    if (!capture_.open(source, cv::CAP_V4L2) || !capture_.isOpened())
-      throw std::invalid_argument(source + ": cannot open as a V4L2 camera");
-    if (!capture_.read(first_) || first_.empty())
-      throw std::invalid_argument(source + ": opened, but the camera delivered no frame");
+    camera_ = std::make_unique<V4l2Camera>(source);
+    std::string why;
+    const V4l2Camera::Grab g = camera_->Read(&first_, kFrameWaitS, stop_, &why);
+    if (g == V4l2Camera::Grab::kStopped)
+      throw std::invalid_argument(source + ": stopped while opening");
+    if (g != V4l2Camera::Grab::kFrame) throw std::invalid_argument(source + ": opened, but " + why);
   }
 
   FrameRead Read(InputFrame* out, std::string* why) override {
-    if (Stopped(stop_)) return FrameRead::kStopped;
     cv::Mat frame;
     if (!first_.empty()) {
       frame = first_;
       first_.release();
-    } else if (!capture_.read(frame) || frame.empty()) {
-      if (why) *why = "the camera stopped delivering frames";
-      return FrameRead::kDropped;
+    } else {
+      const V4l2Camera::Grab g = camera_->Read(&frame, kFrameWaitS, stop_, why);
+      if (g == V4l2Camera::Grab::kStopped) return FrameRead::kStopped;
+      if (g == V4l2Camera::Grab::kFailed) return FrameRead::kDropped;
     }
     out->arrival = Clock::now();
-    if (frame.channels() == 3)
-      cv::cvtColor(frame, out->image, cv::COLOR_BGR2GRAY);
-    else
-      out->image = frame;
+    out->image = frame;
     out->error.clear();
     out->time_s = SecondsSince(opened_);
     out->index = index_++;
@@ -163,9 +161,11 @@ class DeviceSource : public FrameSource {
   bool live() const override { return true; }
 
  private:
+  // A camera that sends nothing this long has stopped (OpenCV's V4L2 capture waited as long).
+  static constexpr double kFrameWaitS = 10;
   const std::atomic<bool>* stop_;
   Clock::time_point opened_;
-  cv::VideoCapture capture_;
+  std::unique_ptr<V4l2Camera> camera_;
   cv::Mat first_;
   int64_t index_ = 0;
 };

@@ -1,8 +1,6 @@
 #pragma once
 
-#include <memory>
 #include <opencv2/core.hpp>
-#include <opencv2/videoio.hpp>
 #include <string>
 
 namespace clogscope::vision {
@@ -31,23 +29,6 @@ cv::Mat ReadImage(const std::string& path, std::string* error);
 
 // True for the file extensions `measure` reads as video.
 bool IsVideoPath(const std::string& path);
-
-// Writes a video through OpenCV's FFmpeg backend under a temporary name and renames it on Commit().
-// H.264 goes through libx264 at OpenCV's fixed quality (crf 23; OpenCV 4.6 offers no crf setting).
-class VideoFileWriter {
- public:
-  // Throws std::invalid_argument naming the path when the encoder cannot be opened.
-  VideoFileWriter(const std::string& path, VideoKind kind, double fps, cv::Size size);
-  ~VideoFileWriter();
-  void Write(const cv::Mat& frame);
-  void Commit();
-
- private:
-  std::string path_;
-  std::string temp_path_;
-  cv::VideoWriter writer_;
-  bool committed_ = false;
-};
 
 // Encodes by extension (PNG, TIFF, …) and writes under a temporary name, then renames.
 void WriteImageAtomically(const std::string& path, const cv::Mat& image);

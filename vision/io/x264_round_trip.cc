@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "vision/io/av_error.h"
+#include "vision/io/av_handles.h"
 
 extern "C" {
 #include <libavcodec/avcodec.h>
@@ -27,27 +28,14 @@ constexpr double kX264DefaultCrf = 23.0;
 constexpr int kSteadyRunFrames = 8;
 constexpr int kNeutralChroma = 128;
 
-struct ContextFree {
-  void operator()(AVCodecContext* c) const { avcodec_free_context(&c); }
-};
-struct FrameFree {
-  void operator()(AVFrame* f) const { av_frame_free(&f); }
-};
-struct PacketFree {
-  void operator()(AVPacket* p) const { av_packet_free(&p); }
-};
-using Context = std::unique_ptr<AVCodecContext, ContextFree>;
-using Frame = std::unique_ptr<AVFrame, FrameFree>;
-using Packet = std::unique_ptr<AVPacket, PacketFree>;
-
 [[noreturn]] void Fail(const char* what, int err) {
   throw std::runtime_error(fmt::format("x264 round trip: {}: {}", what, AvError(err)));
 }
 
-Context OpenEncoder(const X264Settings& s, int width, int height) {
+AvCodecContextPtr OpenEncoder(const X264Settings& s, int width, int height) {
   const AVCodec* codec = avcodec_find_encoder_by_name("libx264");
   if (!codec) throw std::runtime_error("x264 round trip: FFmpeg has no libx264 encoder");
-  Context c(avcodec_alloc_context3(codec));
+  AvCodecContextPtr c(avcodec_alloc_context3(codec));
   c->width = width;
   c->height = height;
   c->pix_fmt = AV_PIX_FMT_YUV420P;
@@ -64,10 +52,10 @@ Context OpenEncoder(const X264Settings& s, int width, int height) {
   return c;
 }
 
-Context OpenDecoder() {
+AvCodecContextPtr OpenDecoder() {
   const AVCodec* codec = avcodec_find_decoder(AV_CODEC_ID_H264);
   if (!codec) throw std::runtime_error("x264 round trip: FFmpeg has no H.264 decoder");
-  Context c(avcodec_alloc_context3(codec));
+  AvCodecContextPtr c(avcodec_alloc_context3(codec));
   c->thread_count = 1;
   if (const int err = avcodec_open2(c.get(), codec, nullptr); err < 0)
     Fail("opening the H.264 decoder", err);
@@ -108,8 +96,8 @@ cv::Mat X264RoundTrip::Apply(const cv::Mat& image) {
   }
   const uint8_t* planes[3] = {yuv.ptr(), yuv.ptr(h), yuv.ptr(h) + (w / 2) * (h / 2)};
 
-  Context enc = OpenEncoder(settings_, w, h);
-  Frame in(av_frame_alloc());
+  AvCodecContextPtr enc = OpenEncoder(settings_, w, h);
+  AvFramePtr in(av_frame_alloc());
   in->format = AV_PIX_FMT_YUV420P;
   in->width = w;
   in->height = h;
@@ -119,7 +107,7 @@ cv::Mat X264RoundTrip::Apply(const cv::Mat& image) {
               p == 0 ? h : h / 2);
   // The image as a steady scene's run of frames (each a reference to the same pixels), then the
   // end of the stream.
-  std::vector<Frame> run;
+  std::vector<AvFramePtr> run;
   std::vector<AVFrame*> sends;
   for (int i = 0; i < kSteadyRunFrames; ++i) {
     run.emplace_back(av_frame_clone(in.get()));
@@ -129,9 +117,9 @@ cv::Mat X264RoundTrip::Apply(const cv::Mat& image) {
   }
   sends.push_back(nullptr);
 
-  Context dec = OpenDecoder();
-  Frame out(av_frame_alloc()), later(av_frame_alloc());
-  Packet packet(av_packet_alloc());
+  AvCodecContextPtr dec = OpenDecoder();
+  AvFramePtr out(av_frame_alloc()), later(av_frame_alloc());
+  AvPacketPtr packet(av_packet_alloc());
   bool decoded = false;
   // The run's first frame is kept; the decoder gives back the others too, and must.
   auto drain_decoder = [&] {

@@ -4,12 +4,13 @@
 
 #include <filesystem>
 #include <fstream>
-#include <opencv2/imgcodecs.hpp>
 
 #include "common/atomic_file.h"
 #include "synthetic/synthetic.h"
 #include "tests/scratch_dir.h"
+#include "vision/io/video_decoder.h"
 #include "vision/io/video_io.h"
+#include "vision/io/video_writer.h"
 #include "vision/scene/batch.h"
 
 namespace clogscope::vision {
@@ -80,7 +81,7 @@ TEST(FrameSourceTest, BadPathsNameThePathAndTheProblem) {
   const fs::path loop = dir / "loop";
   fs::create_directories(loop);
   fs::create_symlink(loop / "self.png", loop / "self.png");
-  cv::imwrite((loop / "good.png").string(), RenderFrame(SmallScene(), 0, nullptr));
+  WriteImageAtomically((loop / "good.png").string(), RenderFrame(SmallScene(), 0, nullptr));
   EXPECT_NO_THROW(FrameSource::Open(loop.string()));
   EXPECT_NE(MessageOf((loop / "self.png").string()).find("symbolic links"), std::string::npos);
   // Writing a video into a folder that does not exist names the folder, not the encoder.
@@ -104,7 +105,8 @@ TEST(FrameSourceTest, DirectoryIsSortedAndBadImagesAreReportedNotFatal) {
   const fs::path dir = FreshDir("dir");
   const SceneParams p = SmallScene();
   for (int i : {2, 0, 1}) {
-    cv::imwrite((dir / ("f" + std::to_string(i) + ".png")).string(), RenderFrame(p, i, nullptr));
+    WriteImageAtomically((dir / ("f" + std::to_string(i) + ".png")).string(),
+                         RenderFrame(p, i, nullptr));
   }
   WriteFileAtomically((dir / "f1b.png").string(), "garbage");
   auto src = FrameSource::Open(dir.string());
@@ -124,10 +126,10 @@ TEST(FrameSourceTest, SixteenBitAndColourImagesAreRead) {
   const fs::path dir = FreshDir("depth");
   SceneParams p = SmallScene();
   p.bit_depth = 16;
-  cv::imwrite((dir / "deep.png").string(), RenderFrame(p, 0, nullptr));
+  WriteImageAtomically((dir / "deep.png").string(), RenderFrame(p, 0, nullptr));
   p.bit_depth = 8;
   p.colour = true;
-  cv::imwrite((dir / "colour.png").string(), RenderFrame(p, 0, nullptr));
+  WriteImageAtomically((dir / "colour.png").string(), RenderFrame(p, 0, nullptr));
   InputFrame f;
   auto deep = FrameSource::Open((dir / "deep.png").string());
   ASSERT_TRUE(deep->Next(&f));
@@ -135,6 +137,59 @@ TEST(FrameSourceTest, SixteenBitAndColourImagesAreRead) {
   auto colour = FrameSource::Open((dir / "colour.png").string());
   ASSERT_TRUE(colour->Next(&f));
   EXPECT_EQ(f.image.type(), CV_8UC3);
+}
+
+// The writer's files read back as written: every frame, the rate, the size and the levels, by
+// BT.601's luma of the colour written (full range in Motion JPEG, 16-235 in H.264, which the
+// reader gives as stored).
+TEST(VideoFileWriterTest, WhatIsWrittenReadsBackFrameForFrame) {
+  const fs::path dir = FreshDir("writer");
+  struct Case {
+    const char* name;
+    double fps;
+    bool full_range;
+  };
+  for (const Case& c :
+       {Case{"v.avi", 25, true}, Case{"v.mp4", 29.97, false}, Case{"v.mkv", 10, false}}) {
+    const std::string path = (dir / c.name).string();
+    std::vector<double> luma;
+    {
+      VideoFileWriter w(path, VideoKindForPath(path), c.fps, {96, 64});
+      for (int i = 0; i < 12; ++i) {
+        // Grey frames of rising level, and every third one colour (blue-heavy).
+        const double level = 30 + 15 * i;
+        if (i % 3 == 2) {
+          w.Write(cv::Mat(64, 96, CV_8UC3, cv::Scalar(level + 40, level, level - 20)));
+          luma.push_back(0.114 * (level + 40) + 0.587 * level + 0.299 * (level - 20));
+        } else {
+          w.Write(cv::Mat(64, 96, CV_8UC1, cv::Scalar(level)));
+          luma.push_back(level);
+        }
+      }
+      EXPECT_FALSE(fs::exists(path)) << "the name is taken only when the file is whole";
+      w.Commit();
+    }
+    VideoDecoder d(path, 1);
+    EXPECT_NEAR(d.fps(), c.fps, 0.01) << c.name;
+    EXPECT_EQ(d.width(), 96);
+    EXPECT_EQ(d.height(), 64);
+    DecodedFrame f;
+    size_t n = 0;
+    while (d.Read(&f)) {
+      ASSERT_LT(n, luma.size()) << c.name;
+      const double expected = c.full_range ? luma[n] : 16 + luma[n] * 219 / 255;
+      EXPECT_NEAR(cv::mean(f.grey)[0], expected, 2.0) << c.name << " frame " << n;
+      ++n;
+    }
+    EXPECT_EQ(n, luma.size()) << c.name;
+  }
+  // A writer dropped before Commit leaves nothing behind, not even its temporary file.
+  {
+    VideoFileWriter w((dir / "dropped.avi").string(), VideoKind::kMjpegAvi, 25, {96, 64});
+    w.Write(cv::Mat(64, 96, CV_8UC1, cv::Scalar(50)));
+  }
+  EXPECT_FALSE(fs::exists(dir / "dropped.avi"));
+  EXPECT_FALSE(fs::exists(dir / "dropped.partial.avi"));
 }
 
 TEST(FrameSourceTest, DamagedVideoKeepsGoingInOrder) {
@@ -172,7 +227,8 @@ TEST(FrameSourceTest, AnImageFolderSeeksByIndexAndNamesItsProblems) {
   const fs::path dir = FreshDir("folder_seek");
   const SceneParams p = SmallScene();
   for (int i : {0, 1, 2}) {
-    cv::imwrite((dir / ("f" + std::to_string(i) + ".png")).string(), RenderFrame(p, i, nullptr));
+    WriteImageAtomically((dir / ("f" + std::to_string(i) + ".png")).string(),
+                         RenderFrame(p, i, nullptr));
   }
   auto src = FrameSource::OpenImageFolder(dir.string());
   EXPECT_EQ(src->kind(), SourceKind::kImages);

@@ -7,7 +7,6 @@
 #include <filesystem>
 #include <fstream>
 #include <mutex>
-#include <opencv2/imgcodecs.hpp>
 #include <thread>
 
 #include "synthetic/synthetic.h"
@@ -28,7 +27,7 @@ cv::Mat Grey(int level) { return cv::Mat(48, 64, CV_8UC1, cv::Scalar(level)); }
 
 // A fresh folder holding one image already (not to be delivered), watched every 20 ms.
 std::unique_ptr<FrameSource> OpenFolderWithAnOldImage(const fs::path& d, std::atomic<bool>* stop) {
-  cv::imwrite((d / "old.png").string(), Grey(10));
+  WriteImageAtomically((d / "old.png").string(), Grey(10));
   LiveSourceOptions o;
   o.folder_poll_s = 0.02;
   return OpenLiveSource(d.string(), o, stop);
