@@ -195,6 +195,7 @@ struct JpegShape {
 bool JpegHeader(jpeg_decompress_struct* d, JpegErrors* e, std::string_view bytes,
                 JpegShape* shape) {
   if (setjmp(e->jump)) return false;
+  jpeg_create_decompress(d);  // after the setjmp: it can fail (memory)
   jpeg_mem_src(d, reinterpret_cast<const unsigned char*>(bytes.data()),
                static_cast<unsigned long>(bytes.size()));
   jpeg_read_header(d, TRUE);
@@ -218,11 +219,10 @@ bool JpegPixels(jpeg_decompress_struct* d, JpegErrors* e, cv::Mat* img) {
 }
 
 cv::Mat DecodeJpeg(std::string_view bytes, std::string* error) {
-  jpeg_decompress_struct d;
+  jpeg_decompress_struct d{};  // zeroed: destroying one never created does nothing
   JpegErrors e;
   d.err = &e.mgr;
   JpegErrorsInit(&e);
-  jpeg_create_decompress(&d);
   JpegShape s;
   cv::Mat img;
   bool ok = JpegHeader(&d, &e, bytes, &s);
@@ -231,12 +231,14 @@ cv::Mat DecodeJpeg(std::string_view bytes, std::string* error) {
     ok = JpegPixels(&d, &e, &img);
   }
   jpeg_destroy_decompress(&d);
-  if (!ok) {
-    *error = "cannot decode image (" + Shorten(e.error) + ")";
-    return cv::Mat();
-  }
+  // A warning first, failing or not: a file cut inside its tables warns of its end, then fails on
+  // the marker libjpeg put there ("missing SOS marker").
   if (e.mgr.num_warnings > 0) {
     *error = "damaged image (" + Shorten(e.first_warning) + ")";
+    return cv::Mat();
+  }
+  if (!ok) {
+    *error = "cannot decode image (" + Shorten(e.error) + ")";
     return cv::Mat();
   }
   return img;
@@ -245,6 +247,7 @@ cv::Mat DecodeJpeg(std::string_view bytes, std::string* error) {
 bool JpegWriteAll(jpeg_compress_struct* c, JpegErrors* e, const cv::Mat& img, int quality,
                   unsigned char** out, unsigned long* size) {
   if (setjmp(e->jump)) return false;
+  jpeg_create_compress(c);  // after the setjmp: it can fail (memory)
   jpeg_mem_dest(c, out, size);
   c->image_width = static_cast<JDIMENSION>(img.cols);
   c->image_height = static_cast<JDIMENSION>(img.rows);
@@ -262,18 +265,19 @@ bool JpegWriteAll(jpeg_compress_struct* c, JpegErrors* e, const cv::Mat& img, in
 }
 
 std::string EncodeJpeg(const cv::Mat& img, int quality) {
-  jpeg_compress_struct c;
+  jpeg_compress_struct c{};  // zeroed: destroying one never created does nothing
   JpegErrors e;
   c.err = &e.mgr;
   JpegErrorsInit(&e);
-  jpeg_create_compress(&c);
   unsigned char* out = nullptr;
   unsigned long size = 0;
   const bool ok = JpegWriteAll(&c, &e, img, quality, &out, &size);
   jpeg_destroy_compress(&c);
-  std::string bytes = ok ? std::string(reinterpret_cast<const char*>(out), size) : std::string();
-  std::free(out);
+  // On failure `out` may be a buffer libjpeg has already freed and replaced (it tells the new one
+  // only when it finishes): left alone. Only running out of memory fails mid-way.
   if (!ok) throw std::runtime_error(std::string("libjpeg: ") + e.error);
+  std::string bytes(reinterpret_cast<const char*>(out), size);
+  std::free(out);
   return bytes;
 }
 
@@ -285,7 +289,8 @@ std::string Lower(std::string s) {
 }  // namespace
 
 cv::Mat DecodeImage(std::string_view bytes, std::string* error) {
-  const std::string format = ParseImageHeader(bytes).format;
+  const ImageHeader header = ParseImageHeader(bytes);
+  const std::string& format = header.format;
   cv::Mat img;
   if (format == "png") {
     img = DecodePng(bytes, error);
@@ -295,6 +300,15 @@ cv::Mat DecodeImage(std::string_view bytes, std::string* error) {
     img = DecodeWithLibav(bytes, format, error);
   } else {
     *error = "not an image format the tool reads (PNG, JPEG, TIFF, BMP, PGM/PPM)";
+  }
+  // The picture decoded is the one its header describes, whose size callers checked (a TIFF's
+  // first directory may be a thumbnail whose sub-directory FFmpeg decodes instead).
+  if (!img.empty() && header.width_px > 0 &&
+      (img.cols != header.width_px || img.rows != header.height_px)) {
+    *error = "cannot decode image (it holds a " + std::to_string(img.cols) + "x" +
+             std::to_string(img.rows) + " picture where its header says " +
+             std::to_string(header.width_px) + "x" + std::to_string(header.height_px) + ")";
+    img.release();
   }
   return img;
 }

@@ -7,6 +7,7 @@
 
 #include "vision/io/av_error.h"
 #include "vision/io/av_handles.h"
+#include "vision/io/video_io.h"
 
 extern "C" {
 #include <libavcodec/avcodec.h>
@@ -71,6 +72,8 @@ cv::Mat DecodeWithLibav(std::string_view bytes, const std::string& format, std::
   // Not AV_EF_EXPLODE: the TIFF decoder then refuses files for tags it does not know (a
   // ResolutionUnit). A frame it reports damaged is refused below.
   ctx->thread_count = 1;
+  // The largest frame measured: what a file decodes to may be larger than its header said.
+  ctx->max_pixels = kMaxFramePixels;
   av_log_set_level(AV_LOG_QUIET);  // the error comes back as a code
   AvPacketPtr packet(av_packet_alloc());
   AvFramePtr frame(av_frame_alloc());

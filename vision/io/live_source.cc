@@ -140,6 +140,7 @@ class DeviceSource : public FrameSource {
   }
 
   FrameRead Read(InputFrame* out, std::string* why) override {
+    if (Stopped(stop_)) return FrameRead::kStopped;
     cv::Mat frame;
     if (!first_.empty()) {
       frame = first_;

@@ -277,6 +277,7 @@ bool VideoDecoder::Read(DecodedFrame* out) {
     if (skip_before_s_ >= 0 && time_of(pts) < skip_before_s_ - 1e-6) return false;
     skip_before_s_ = -1;
     out->grey.release();
+    out->bgr.release();
     stamp(pts);
     out->corrupt = true;
     out->damage = std::move(why);
@@ -344,10 +345,10 @@ bool VideoDecoder::Read(DecodedFrame* out) {
         int dst_stride[4] = {static_cast<int>(out->grey.step), 0, 0, 0};
         sws_scale(d.sws, d.frame->data, d.frame->linesize, 0, h, dst, dst_stride);
       }
-      if (d.bgr && !out->grey.empty()) {
-        // swscale's bicubic conversion, OpenCV's reader's (cap_ffmpeg), on this frame's pixels.
-        d.bgr_sws = sws_getCachedContext(d.bgr_sws, w, h, fmt, w, h, AV_PIX_FMT_BGR24, SWS_BICUBIC,
-                                         nullptr, nullptr, nullptr);
+      // swscale's bicubic conversion, OpenCV's reader's (cap_ffmpeg), on this frame's pixels.
+      if (d.bgr && !out->grey.empty() &&
+          (d.bgr_sws = sws_getCachedContext(d.bgr_sws, w, h, fmt, w, h, AV_PIX_FMT_BGR24,
+                                            SWS_BICUBIC, nullptr, nullptr, nullptr))) {
         out->bgr.create(h, w, CV_8UC3);
         uint8_t* dst[4] = {out->bgr.data, nullptr, nullptr, nullptr};
         int dst_stride[4] = {static_cast<int>(out->bgr.step), 0, 0, 0};

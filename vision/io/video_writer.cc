@@ -139,7 +139,10 @@ VideoFileWriter::VideoFileWriter(const std::string& path, VideoKind kind, double
   d.frame->format = c->pix_fmt;
   d.frame->width = c->width;
   d.frame->height = c->height;
-  if (av_frame_get_buffer(d.frame.get(), 0) < 0) throw std::bad_alloc();
+  if (av_frame_get_buffer(d.frame.get(), 0) < 0) {
+    std::remove(temp_path_.c_str());  // no destructor runs for a constructor that throws
+    throw std::bad_alloc();
+  }
 }
 
 VideoFileWriter::~VideoFileWriter() {

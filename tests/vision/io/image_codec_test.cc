@@ -96,6 +96,87 @@ TEST(ImageCodecTest, DamagedFilesAreRefusedWithTheDecodersReason) {
   EXPECT_EQ(why, "not an image format the tool reads (PNG, JPEG, TIFF, BMP, PGM/PPM)");
 }
 
+// A JPEG cut anywhere after its frame header is damaged, whatever libjpeg then trips on: cut
+// inside its tables, it warns of the end and fails on the end marker it put there.
+TEST(ImageCodecTest, AJpegCutAnywhereAfterItsFrameHeaderIsDamaged) {
+  const std::string jpeg = EncodeImage(".jpg", RandomImage(CV_8UC3, 9), 90);
+  const size_t sof = jpeg.find("\xFF\xC0");
+  ASSERT_NE(sof, std::string::npos);
+  int cuts = 0;
+  for (size_t cut = sof + 20; cut + 2 < jpeg.size(); cut += 7, ++cuts) {
+    std::string why;
+    EXPECT_TRUE(DecodeImage(std::string_view(jpeg).substr(0, cut), &why).empty()) << cut;
+    EXPECT_EQ(why.rfind("damaged image (", 0), 0u) << "cut at " << cut << ": " << why;
+  }
+  EXPECT_GT(cuts, 100);
+}
+
+// A TIFF's first directory describes what callers check (ParseImageHeader); one that is a
+// thumbnail pointing to a larger sub-directory, which FFmpeg decodes instead, is refused.
+TEST(ImageCodecTest, ATiffThatDecodesToAnotherSizeThanItsHeaderIsRefused) {
+  const auto u16 = [](std::string* b, unsigned v) {
+    b->push_back(static_cast<char>(v & 0xFF));
+    b->push_back(static_cast<char>(v >> 8));
+  };
+  const auto u32 = [&](std::string* b, unsigned v) {
+    u16(b, v & 0xFFFF);
+    u16(b, v >> 16);
+  };
+  // Little-endian: header, directory 0 (8x8 thumbnail, SubIFDs -> directory 1), directory 1
+  // (64x48), the two uncompressed 8-bit grey strips.
+  const unsigned kW = 64, kH = 48, n0 = 11, n1 = 9;
+  const unsigned ifd0 = 8, ifd1 = ifd0 + 2 + 12 * n0 + 4, small = ifd1 + 2 + 12 * n1 + 4;
+  const unsigned big = small + 64;
+  struct Entry {
+    unsigned tag, type, value;
+  };
+  const auto directory = [&](std::string* b, const std::vector<Entry>& entries) {
+    u16(b, static_cast<unsigned>(entries.size()));
+    for (const Entry& e : entries) {
+      u16(b, e.tag);
+      u16(b, e.type);
+      u32(b, 1);
+      if (e.type == 3) {
+        u16(b, e.value);
+        u16(b, 0);
+      } else {
+        u32(b, e.value);
+      }
+    }
+    u32(b, 0);
+  };
+  std::string tiff = "II*";
+  tiff.push_back('\0');
+  u32(&tiff, ifd0);
+  directory(&tiff, {{254, 4, 1},
+                    {256, 3, 8},
+                    {257, 3, 8},
+                    {258, 3, 8},
+                    {259, 3, 1},
+                    {262, 3, 1},
+                    {273, 4, small},
+                    {277, 3, 1},
+                    {278, 3, 8},
+                    {279, 4, 64},
+                    {330, 4, ifd1}});
+  directory(&tiff, {{256, 4, kW},
+                    {257, 4, kH},
+                    {258, 3, 8},
+                    {259, 3, 1},
+                    {262, 3, 1},
+                    {273, 4, big},
+                    {277, 3, 1},
+                    {278, 4, kH},
+                    {279, 4, kW * kH}});
+  ASSERT_EQ(tiff.size(), small);
+  tiff += std::string(64, '\x40') + std::string(kW * kH, '\x80');
+  ASSERT_EQ(ParseImageHeader(tiff).width_px, 8);
+  std::string why;
+  const cv::Mat img = DecodeImage(tiff, &why);
+  EXPECT_TRUE(img.empty()) << img.cols << "x" << img.rows;
+  EXPECT_NE(why.find("where its header says 8x8"), std::string::npos) << why;
+}
+
 // What a format cannot hold is refused with the extension named, not written some other way.
 TEST(ImageCodecTest, AFormatThatCannotHoldTheImageIsNamed) {
   const auto refusal = [](const char* ext, int type) {
