@@ -404,17 +404,21 @@ std::vector<cv::Mat> RenderAdversarial(const AdversarialScene& p, int frames,
     const std::string path = EncodeX264Clip(out, dir, "round_trip.mp4", 25);
     if (encoder) *encoder = vision::ReadX264Settings(path);
     // Read back in BGR, as OpenCV's reader gave the frames this matrix was built on (grey from
-    // BGR: limited-range luma stretched to full range and clipped), not as `measure` reads a
-    // video (its decoder's luma plane, unstretched).
+    // BGR: limited-range luma stretched to full range and clipped); or as `measure` reads a
+    // video (its decoder's luma plane, as stored).
     vision::VideoDecoderOptions colour;
-    colour.bgr = true;
+    colour.bgr = !p.h264_luma_as_stored;
     vision::VideoDecoder decoder(path, colour);
     for (cv::Mat& f : out) {
       vision::DecodedFrame decoded;
-      if (!decoder.Read(&decoded) || decoded.bgr.empty())
+      if (!decoder.Read(&decoded) || (colour.bgr ? decoded.bgr : decoded.grey).empty())
         throw std::runtime_error(path + ": H.264 round trip lost a frame");
-      f = decoded.bgr;
-      if (!p.colour) cv::cvtColor(f, f, cv::COLOR_BGR2GRAY);
+      if (!colour.bgr) {
+        f = decoded.grey;
+      } else {
+        f = decoded.bgr;
+        if (!p.colour) cv::cvtColor(f, f, cv::COLOR_BGR2GRAY);
+      }
     }
     std::error_code ec;
     fs::remove_all(dir, ec);

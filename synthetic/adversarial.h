@@ -68,6 +68,10 @@ struct AdversarialScene {
   bool colour = false;            // Bayer mosaic and demosaic
   Codec codec = Codec::kPng;
   int jpeg_quality = 90;
+  // H.264 read back as `measure` reads a video (the decoder's luma plane as stored, 16-235)
+  // rather than in BGR as OpenCV's reader gave it (stretched to 0-255 and clipped), which the
+  // matrix's figures are for. Not drawn: the matrix's option (MatrixOptions).
+  bool h264_luma_as_stored = false;
   uint64_t seed = 1;
 };
 

@@ -77,6 +77,7 @@ MatrixResult RunAdversarialMatrix(const MatrixOptions& o) {
       const uint64_t seed = o.first_seed + k;
       AdversarialScene scene = RandomAdversarialScene(trouble, seed);
       scene.noise_sigma *= o.noise_scale;
+      scene.h264_luma_as_stored = o.h264_luma_as_stored;
       AdversarialTruth truth;
       vision::X264Settings encoder;
       const std::vector<cv::Mat> frames =

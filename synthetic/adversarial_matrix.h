@@ -21,6 +21,8 @@ struct MatrixOptions {
   // Every scene's noise times this: below 1, a bias the noise hid (its σ was too large to be
   // valid) shows as a confidently wrong width where the model's doubt does not cover it.
   double noise_scale = 1.0;
+  // H.264 read back as `measure` reads it (AdversarialScene::h264_luma_as_stored).
+  bool h264_luma_as_stored = false;
   std::string temp_dir;  // for H.264 round trips; empty: the system's temporary directory
 };
 
