@@ -411,14 +411,10 @@ std::vector<cv::Mat> RenderAdversarial(const AdversarialScene& p, int frames,
     vision::VideoDecoder decoder(path, colour);
     for (cv::Mat& f : out) {
       vision::DecodedFrame decoded;
-      if (!decoder.Read(&decoded) || (colour.bgr ? decoded.bgr : decoded.grey).empty())
-        throw std::runtime_error(path + ": H.264 round trip lost a frame");
-      if (!colour.bgr) {
-        f = decoded.grey;
-      } else {
-        f = decoded.bgr;
-        if (!p.colour) cv::cvtColor(f, f, cv::COLOR_BGR2GRAY);
-      }
+      const bool read = decoder.Read(&decoded);
+      f = colour.bgr ? decoded.bgr : decoded.grey;
+      if (!read || f.empty()) throw std::runtime_error(path + ": H.264 round trip lost a frame");
+      if (colour.bgr && !p.colour) cv::cvtColor(f, f, cv::COLOR_BGR2GRAY);
     }
     std::error_code ec;
     fs::remove_all(dir, ec);

@@ -74,7 +74,7 @@ cv::Mat DecodeWithLibav(std::string_view bytes, const std::string& format, std::
   ctx->thread_count = 1;
   // The largest frame measured: what a file decodes to may be larger than its header said.
   ctx->max_pixels = kMaxFramePixels;
-  av_log_set_level(AV_LOG_QUIET);  // the error comes back as a code
+  QuietFfmpeg();
   AvPacketPtr packet(av_packet_alloc());
   AvFramePtr frame(av_frame_alloc());
   int rc = avcodec_open2(ctx.get(), codec, nullptr);
@@ -146,7 +146,7 @@ std::string EncodeWithLibav(const std::string& format, const cv::Mat& image) {
   ctx->height = image.rows;
   ctx->pix_fmt = to;
   ctx->time_base = AVRational{1, 1};
-  av_log_set_level(AV_LOG_QUIET);
+  QuietFfmpeg();
   AvFramePtr frame(av_frame_alloc());
   AvPacketPtr packet(av_packet_alloc());
   frame->format = to;

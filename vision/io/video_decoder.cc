@@ -174,7 +174,7 @@ VideoDecoder::VideoDecoder(const std::string& path, int threads)
 
 VideoDecoder::VideoDecoder(const std::string& path, const VideoDecoderOptions& options)
     : impl_(std::make_unique<Impl>()), path_(path) {
-  av_log_set_level(AV_LOG_QUIET);
+  QuietFfmpeg();
   const std::string shown = RedactCredentials(path);  // a URL's password is never in a message
   std::string why;
   const bool url = path.find("://") != std::string::npos;

@@ -86,7 +86,7 @@ VideoFileWriter::VideoFileWriter(const std::string& path, VideoKind kind, double
   if (access(dir.c_str(), W_OK) != 0)
     throw std::invalid_argument(path + ": folder " + dir.string() + " is not writable");
 
-  av_log_set_level(AV_LOG_QUIET);  // x264 reports its settings on every open
+  QuietFfmpeg();
   Impl& d = *impl_;
   const bool mjpeg = kind == VideoKind::kMjpegAvi;
   const AVCodec* codec = avcodec_find_encoder_by_name(mjpeg ? "mjpeg" : "libx264");

@@ -73,9 +73,7 @@ bool X264RoundTrip::Available() {
   return avcodec_find_encoder_by_name("libx264") && avcodec_find_decoder(AV_CODEC_ID_H264);
 }
 
-X264RoundTrip::X264RoundTrip(const X264Settings& settings) : settings_(settings) {
-  av_log_set_level(AV_LOG_QUIET);  // x264 reports its settings on every open
-}
+X264RoundTrip::X264RoundTrip(const X264Settings& settings) : settings_(settings) { QuietFfmpeg(); }
 
 cv::Mat X264RoundTrip::Apply(const cv::Mat& image) {
   if (image.depth() != CV_8U || (image.channels() != 1 && image.channels() != 3) ||
