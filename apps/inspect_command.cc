@@ -98,6 +98,8 @@ InspectReport InspectInput(const InspectCommandOptions& o) {
   if (!o.Validate(&why)) throw std::invalid_argument(why);
   const vision::InputFrame f = ReadFrame(o.input, o.frame);
   const cv::Mat& img = f.image;
+  vision::StrandMeasureOptions strand = o.strand;
+  strand.luma_range = f.luma_range;  // a video frame's, as `measure` reads it
   InspectReport rep;
   rep.frame_rect = cv::Rect(0, 0, img.cols, img.rows);
   const cv::Rect roi = vision::ResolveRoi(img, o.strand);
@@ -107,7 +109,7 @@ InspectReport InspectInput(const InspectCommandOptions& o) {
   if (!o.target_given) tries = {vision::MeasureTarget::kStrand, vision::MeasureTarget::kFilament};
   for (const auto t : tries) {
     rep.target = t;
-    rep.measurement = vision::FindAndMeasure(img, ForTarget(o.strand, t, o.band_given), &rep.scene);
+    rep.measurement = vision::FindAndMeasure(img, ForTarget(strand, t, o.band_given), &rep.scene);
     if (rep.scene.status != vision::FrameStatus::kNoTip) break;
   }
   const vision::StrandMeasurement& m = rep.measurement;

@@ -220,7 +220,7 @@ StepResult MeasureStep(const StepSpec& spec, const ExperimentOptions& o, int dec
       f.m.status = vision::FrameStatus::kUnreadable;
       f.m.detail = "cannot decode";
     } else {
-      f.m = tracker.Measure(img);
+      f.m = tracker.Measure(in);
     }
     ++r.n_examined;
     if (f.m.valid()) {

@@ -113,7 +113,7 @@ FeedstockResult MeasureFeedstock(const std::string& video, double start_s, doubl
       if (!dec->Next(&f)) break;
       if (f.time_s < target - 1e-9 && in_pair == 0) continue;
       if (in_pair == 0 && f.time_s >= b - 1e-9) break;  // the step's part is over
-      const vision::StrandMeasurement m = strand.Measure(f.image);
+      const vision::StrandMeasurement m = strand.Measure(f);
       if (in_pair == 0) {
         ++r.n_pairs;
         if (m.valid()) widths.Add(m.width_px, m.width_sigma_px, m.model_sigma_px);

@@ -367,9 +367,11 @@ AdversarialScene RandomAdversarialScene(TroubleClass trouble, uint64_t seed) {
 
 std::vector<cv::Mat> RenderAdversarial(const AdversarialScene& p, int frames,
                                        const std::string& temp_dir, AdversarialTruth* truth,
-                                       vision::X264Settings* encoder) {
+                                       vision::X264Settings* encoder,
+                                       vision::LumaRange* luma_range) {
   if (frames < 1) throw std::invalid_argument("adversarial render: need at least one frame");
   if (encoder) *encoder = vision::X264Settings{};
+  if (luma_range) *luma_range = vision::LumaRange::kFull;
   cv::Mat tau_hi, emit_hi;
   RenderLayers(p, &tau_hi, &emit_hi);
   const cv::Mat tau = Optics(p, tau_hi), emit = Optics(p, emit_hi);
@@ -415,6 +417,7 @@ std::vector<cv::Mat> RenderAdversarial(const AdversarialScene& p, int frames,
       f = colour.bgr ? decoded.bgr : decoded.grey;
       if (!read || f.empty()) throw std::runtime_error(path + ": H.264 round trip lost a frame");
       if (colour.bgr && !p.colour) cv::cvtColor(f, f, cv::COLOR_BGR2GRAY);
+      if (luma_range && !colour.bgr) *luma_range = decoded.luma_range;
     }
     std::error_code ec;
     fs::remove_all(dir, ec);

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "vision/io/data_range.h"
 #include "vision/io/encoder_note.h"
 
 namespace clogscope::synthetic {
@@ -91,10 +92,12 @@ AdversarialScene RandomAdversarialScene(TroubleClass trouble, uint64_t seed);
 // Renders `frames` frames of the scene (the same scene, independent noise), passed through its
 // codec (an H.264 clip goes through a temporary file in `temp_dir`). 8-bit grey, or BGR.
 // encoder (optional): the settings x264 wrote into an H.264 clip, read from it as `measure` reads
-// a video's.
+// a video's; luma_range (optional): where the frames' black and white lie, as the decoder says
+// of an H.264 clip's luma read as stored (else full range).
 std::vector<cv::Mat> RenderAdversarial(const AdversarialScene& scene, int frames,
                                        const std::string& temp_dir, AdversarialTruth* truth,
-                                       vision::X264Settings* encoder = nullptr);
+                                       vision::X264Settings* encoder = nullptr,
+                                       vision::LumaRange* luma_range = nullptr);
 
 // A one-line account of the scene, for tables and failures.
 std::string Describe(const AdversarialScene& scene);

@@ -80,14 +80,16 @@ MatrixResult RunAdversarialMatrix(const MatrixOptions& o) {
       scene.h264_luma_as_stored = o.h264_luma_as_stored;
       AdversarialTruth truth;
       vision::X264Settings encoder;
+      vision::LumaRange luma_range = vision::LumaRange::kFull;
       const std::vector<cv::Mat> frames =
-          RenderAdversarial(scene, o.frames_per_scene, temp, &truth, &encoder);
+          RenderAdversarial(scene, o.frames_per_scene, temp, &truth, &encoder, &luma_range);
       const double bound_px = WidthBoundSigmaPx(scene, truth.width_px);
       const bool allows =
           truth.strand &&
           bound_px <= vision::MaxValidSigmaPx(vision::StrandMeasureOptions{}, truth.width_px);
       for (int i = 0; i < static_cast<int>(frames.size()); ++i) {
-        const vision::StrandMeasurement m = MeasureAdversarialFrame(frames[i], scene, encoder);
+        const vision::StrandMeasurement m =
+            MeasureAdversarialFrame(frames[i], scene, encoder, luma_range);
         FrameRecord r;
         r.trouble = trouble;
         r.seed = seed;
@@ -125,8 +127,10 @@ MatrixResult RunAdversarialMatrix(const MatrixOptions& o) {
 
 vision::StrandMeasurement MeasureAdversarialFrame(const cv::Mat& frame,
                                                   const AdversarialScene& scene,
-                                                  const vision::X264Settings& encoder) {
+                                                  const vision::X264Settings& encoder,
+                                                  vision::LumaRange luma_range) {
   vision::StrandMeasureOptions o;
+  o.luma_range = luma_range;
   const vision::BandPx band =
       vision::DefaultBand(vision::MeasureTarget::kStrand, scene.scale_um_per_px);
   o.band_start_px = band.start_px;

@@ -74,10 +74,10 @@ MatrixResult RunAdversarialMatrix(const MatrixOptions& options);
 
 // How the matrix measures a frame of a scene: the default options with the reference band (50 µm
 // below the tip, 150 µm long) at the scene's scale; a width from an x264 clip (`encoder` found)
-// with the codec's doubt, as `measure` gives it (codec_doubt.h).
-vision::StrandMeasurement MeasureAdversarialFrame(const cv::Mat& frame,
-                                                  const AdversarialScene& scene,
-                                                  const vision::X264Settings& encoder = {});
+// with the codec's doubt, as `measure` gives it (codec_doubt.h); in the frame's luma range.
+vision::StrandMeasurement MeasureAdversarialFrame(
+    const cv::Mat& frame, const AdversarialScene& scene, const vision::X264Settings& encoder = {},
+    vision::LumaRange luma_range = vision::LumaRange::kFull);
 
 // A Markdown table of the result, one row per class and one for all.
 std::string MatrixTable(const MatrixResult& result);

@@ -136,7 +136,7 @@ class FrameMeasurer {
     }
     if (refused->empty()) {
       try {
-        *m = tracker_.Measure(frame.image);
+        *m = tracker_.Measure(frame);
         if (m->valid()) {
           memory_.Remember(frame.image, *m);
           return FrameView::kStrand;

@@ -16,6 +16,7 @@ struct Frame {
   int64_t index = 0;
   double time_s = -1;
   std::string error;
+  vision::LumaRange luma_range = vision::LumaRange::kFull;
 };
 
 class FrameReader {
@@ -33,7 +34,7 @@ class FrameReader {
       source_.reset();
       throw py::stop_iteration();
     }
-    return {ArrayFromMat(std::move(f.image)), f.source, f.index, f.time_s, f.error};
+    return {ArrayFromMat(std::move(f.image)), f.source, f.index, f.time_s, f.error, f.luma_range};
   }
   int expected_frames() const { return source_ ? source_->expected_frames() : 0; }
   double fps() const { return source_ ? source_->fps() : 0; }
@@ -55,8 +56,11 @@ void BindFrames(py::module_& m) {
       .def_readonly("index", &Frame::index, "Frame number within the input, from 0.")
       .def_readonly("time_s", &Frame::time_s, "Position in a video, s; -1 for still images.")
       .def_readonly("error", &Frame::error, "Why image is empty, or a warning.")
+      .def_readonly("luma_range", &Frame::luma_range,
+                    "Where the image's black and white lie (LumaRange.limited for most video "
+                    "luma): give it to Tracker.measure.")
       .def("__repr__", [](const py::object& self) {
-        return ReprOf(self, "Frame", {"source", "index", "time_s", "error"});
+        return ReprOf(self, "Frame", {"source", "index", "time_s", "error", "luma_range"});
       });
   py::class_<vision::X264Settings>(m, "X264Settings",
                                    "The settings x264 wrote into a video it encoded "
@@ -89,7 +93,7 @@ reads them): iterate for Frame objects (image, index, time_s, source).
     frames = clogscope.open_frames("step1.mp4")
     tracker = clogscope.Tracker(encoder=frames.encoder)
     for f in frames:
-        m = tracker.measure(f.image)
+        m = tracker.measure(f.image, luma_range=f.luma_range)
 
 Raises ValueError naming the path when it cannot be opened.)");
   m.def(

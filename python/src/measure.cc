@@ -66,12 +66,14 @@ class Tracker {
       : options_(options), tracker_(options) {
     tracker_.SetEncoder(encoder);
   }
-  StrandMeasurement Measure(const py::array& frame) {
-    const cv::Mat view = MatView(frame);
+  StrandMeasurement Measure(const py::array& frame, vision::LumaRange luma_range) {
+    vision::InputFrame in;
+    in.image = MatView(frame);
+    in.luma_range = luma_range;
     py::gil_scoped_release release;
     std::lock_guard<std::mutex> lock(mutex_);
     Inside inside;
-    return tracker_.Measure(view);
+    return tracker_.Measure(in);
   }
   void Reset() {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -123,6 +125,10 @@ void BindMeasure(py::module_& m) {
   }
   m.attr("Reason") = status;
 
+  py::enum_<vision::LumaRange>(m, "LumaRange", "Where a frame's black and white lie.")
+      .value("full", vision::LumaRange::kFull, "0 and full scale: images, full-range video")
+      .value("limited", vision::LumaRange::kLimited,
+             "16 and 235 of 255: most video luma (as the decoder says)");
   py::enum_<vision::Polarity>(m, "Polarity", "Which way the strand differs from the background.")
       .value("auto", vision::Polarity::kAuto, "measurement option only: decide from the frame")
       .value("bright", vision::Polarity::kBrightOnDark, "a lit strand on a dark background")
@@ -168,6 +174,9 @@ void BindMeasure(py::module_& m) {
                      "Fewer consistent calipers than this fraction: occluded.")
       .def_readwrite("max_saturated_fraction", &StrandMeasureOptions::max_saturated_fraction,
                      "More clipped pixels at the edges than this fraction: saturated.")
+      .def_readwrite("luma_range", &StrandMeasureOptions::luma_range,
+                     "LumaRange of the frames (a video frame's: Frame.luma_range): where clipped "
+                     "white and black are looked for.")
       .def_readwrite("max_sigma_px", &StrandMeasureOptions::max_sigma_px,
                      "A width whose σ is above max(max_sigma_px, max_sigma_fraction·width) is "
                      "imprecise, px.")
@@ -181,7 +190,7 @@ void BindMeasure(py::module_& m) {
                       {"roi", "polarity", "target", "band_start_px", "band_height_px",
                        "caliper_spacing_px", "min_contrast_fraction", "max_blur_px", "max_tilt_deg",
                        "min_length_px", "shading", "min_caliper_fraction", "max_saturated_fraction",
-                       "max_sigma_px", "max_sigma_fraction"});
+                       "luma_range", "max_sigma_px", "max_sigma_fraction"});
       });
 
   py::class_<vision::Caliper>(m, "Caliper", "One caliper across the band: its edges and width, px.")
@@ -321,7 +330,7 @@ when that fails, so a steady video costs the caliper fits alone and the band doe
 
     tracker = clogscope.Tracker(options)
     for frame in frames:
-        m = tracker.measure(frame)
+        m = tracker.measure(frame)  # a video's Frame f: tracker.measure(f.image, f.luma_range)
 
 encoder: a video's x264 settings (FrameReader.encoder): every width then carries the codec's
 doubt, as measure gives it (vision/scene/codec_doubt.h).
@@ -335,8 +344,10 @@ doubt, as measure gives it (vision/scene/codec_doubt.h).
            py::arg("options") = py::none(), py::arg("encoder") = py::none(),
            "Raises ValueError when the options do not validate.")
       .def("measure", &Tracker::Measure, py::arg("frame"),
-           "Measures the next frame (arrays as measure_frame takes them; GIL released). Returns a "
-           "Measurement.")
+           py::arg("luma_range") = vision::LumaRange::kFull,
+           "Measures the next frame (arrays as measure_frame takes them; GIL released), whose "
+           "black and white lie as luma_range says (a video frame's: Frame.luma_range). Returns "
+           "a Measurement.")
       .def("reset", &Tracker::Reset, "Forgets the strand: the next frame is searched afresh.")
       .def_property_readonly("options", &Tracker::options)
       .def_property_readonly("full_detections", &Tracker::full_detections,

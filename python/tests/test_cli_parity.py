@@ -57,7 +57,10 @@ def test_tracker_over_a_video_gives_the_command_lines_numbers(testdata, run_cli,
     frames = clogscope.open_frames(video)
     assert frames.encoder.found  # x264 wrote it: each width carries the codec's doubt
     tracker = clogscope.Tracker(encoder=frames.encoder)
-    rows = [(f.index, f.time_s, tracker.measure(f.image)) for f in frames]
+    rows = []
+    for f in frames:
+        assert f.luma_range == clogscope.LumaRange.limited  # H.264's luma as stored: 16-235
+        rows.append((f.index, f.time_s, tracker.measure(f.image, luma_range=f.luma_range)))
     assert len(rows) == len(cli) == 25
     assert tracker.tracked_frames > 0  # it did track, not search afresh every frame
     for (index, time_s, m), (_, row) in zip(rows, cli.iterrows()):

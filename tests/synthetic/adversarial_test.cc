@@ -379,6 +379,26 @@ TEST(AdversarialTest, ANoisyStraightStrandIsNotTakenForADiscOrBend) {
   }
 }
 
+TEST(AdversarialTest, AClippedBackgroundThroughH264ReadAsStoredIsNoWidth) {
+  // x264 in limited range puts a clipped background near its white (235), not at 255.
+  for (uint64_t seed : {14u, 116u, 119u, 7u, 11u}) {
+    AdversarialScene p = RandomAdversarialScene(TroubleClass::kSaturated, seed);
+    p.h264_luma_as_stored = true;
+    AdversarialTruth t;
+    vision::X264Settings encoder;
+    vision::LumaRange range;
+    const std::vector<cv::Mat> frames =
+        RenderAdversarial(p, 4, Scratch().string(), &t, &encoder, &range);
+
+    for (const cv::Mat& frame : frames) {
+      const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, encoder, range);
+      EXPECT_TRUE(!m.valid() || std::abs(m.width_px - t.width_px) <= WrongTolerancePx(t.width_px))
+          << m.width_px << " ± " << m.width_sigma_px << " px, truth " << t.width_px << ": "
+          << Describe(p);
+    }
+  }
+}
+
 TEST(AdversarialTest, NozzleAloneNeverGivesAWidth) {
   for (uint64_t seed = 1; seed <= 6; ++seed) {
     const AdversarialScene p = RandomAdversarialScene(TroubleClass::kNoStrand, seed);

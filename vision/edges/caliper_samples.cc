@@ -79,12 +79,14 @@ void SlabRow(const AxisFrame& f, int y, int x_lo, int x_hi, double s0, double s1
 }  // namespace
 
 ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
-                          double u1, double data_max) {
+                          double u1, const DataLevels& levels) {
+  const double data_max = levels.max;
   ClipLevels clip{0.0f, static_cast<float>(data_max)};
   int x_lo, x_hi, y_lo, y_hi;
   if (!SlabBounds(img, f, s0, s1, u0, u1, &x_lo, &x_hi, &y_lo, &y_hi)) return clip;
-  // 256 bins over the data's range; only the outer 4 % on each side is looked at.
+  // 256 bins over the data's range; only its ends are looked at (below).
   constexpr int kBins = 256, kEdgeBins = 10, kBelow = 4;
+  constexpr double kNearWhiteFraction = 0.01;  // of black to white
   std::array<int, kBins> h{};
   const double scale = (kBins - 1) / data_max;
   int n = 0;
@@ -103,7 +105,7 @@ ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, d
     else
       count_row(img.m.ptr<uint8_t>(y), y);
   }
-  // A spike: the fullest bin of the outer tenth, well above the bins just inside it.
+  // A spike: the fullest bin of a window, well above the bins just inside it.
   const auto spike = [&](int from, int to, int inward) {
     int best = -1;
     for (int b = from; b != to; b += inward) {
@@ -119,8 +121,18 @@ ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, d
                           beyond <= 0.5 * h[best] && h[best] > 8;
     return is_spike ? best : -1;
   };
-  const int top = spike(kBins - 1, kBins - 1 - kEdgeBins, -1);
-  const int bottom = spike(0, kEdgeBins, +1);
+  // Where a clip lands: at the data's white (black), give or take the level or two a codec moves a
+  // flat area (x264's clipped white in limited range decodes at 233-235), and in full-range data
+  // anywhere in its outer 4 % (JPEG's clipped white at 252-254). Not lower in limited range:
+  // Greeff's MPEG-4 background, unclipped, peaks at 231.
+  const int near_bins =
+      static_cast<int>(std::lround(kNearWhiteFraction * (levels.white - levels.black) * scale));
+  const int top_end = std::min(kBins - 1 - kEdgeBins,
+                               static_cast<int>(std::lround(levels.white * scale)) - near_bins - 1);
+  const int bottom_end =
+      std::max(kEdgeBins, static_cast<int>(std::lround(levels.black * scale)) + near_bins + 1);
+  const int top = spike(kBins - 1, top_end, -1);
+  const int bottom = spike(0, bottom_end, +1);
   // Half a bin inward, so that every value of the spike's bin counts.
   if (top >= 0) clip.high = static_cast<float>((top - 0.5) / scale);
   if (bottom >= 0) clip.low = static_cast<float>((bottom + 0.5) / scale);

@@ -8,19 +8,21 @@
 
 namespace clogscope::vision {
 
-// The values at which a frame's data is clipped: 0 and the data's full scale, or where a codec
-// put them. A clipped plateau passed through a codec keeps a spike in the histogram below full
-// scale (H.264 in TV range decodes clipped white at ~252 of 255); such a spike is the clip level.
+// The values at which a frame's data is clipped: its black and white, or where a codec put them. A
+// clipped plateau passed through a codec keeps a spike in the histogram near its white (x264 in
+// limited range decodes clipped white at ~233 of 235; the same read as full-range BGR at ~252 of
+// 255); such a spike is the clip level.
 struct ClipLevels {
   float low = 0, high = 255;
   double clipped_low_fraction = 0, clipped_high_fraction = 0;  // of the slab's pixels at or beyond
 };
 
-// The clip levels of the slab s0 <= s < s1, u0 <= u <= u1: data_max and 0, or a spike in the
-// top (bottom) 4 % of the range holding ≥ 2 % of the slab's pixels, ≥ 5× the pixels of the values
-// just inside it and ≥ 2× those beyond it.
+// The clip levels of the slab s0 <= s < s1, u0 <= u <= u1: the data's max and 0, or a spike in
+// the top (bottom) 4 % of the data's range, or within 1 % of black to white from its white (black)
+// or beyond, holding ≥ 2 % of the slab's pixels, ≥ 5× the pixels of the values just inside it and
+// ≥ 2× those beyond it.
 ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
-                          double u1, double data_max);
+                          double u1, const DataLevels& levels);
 
 // Gathers the pixels of the slab s0 <= s < s1, u0 <= u <= u1 (axis frame f) in (u, value) form,
 // counting those at or beyond the clip levels in *saturated (when given). Returns false when the

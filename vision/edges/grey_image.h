@@ -41,6 +41,11 @@ struct GreyImage {
   }
 };
 
+// The data's largest value and where its black and white lie (data_range.h: LumaRange).
+struct DataLevels {
+  double max = 255, black = 0, white = 255;
+};
+
 // The measurement frame of a strand: origin on its axis, unit axis direction pointing down the
 // strand. Across-axis coordinate u grows along n = (dy, −dx), to the right of a downward axis.
 struct AxisFrame {

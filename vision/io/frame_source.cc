@@ -108,6 +108,7 @@ class VideoSource : public FrameSource {
     good.index = d.index;
     good.time_s = d.time_s;
     good.image = std::move(d.grey);
+    good.luma_range = d.luma_range;
     if (d.corrupt) good.error = d.damage.empty() ? "decoder reported damage" : d.damage;
     pending_.push_back(std::move(good));
     next_index_ = d.index + 1;

@@ -14,6 +14,7 @@
 #include <opencv2/core.hpp>
 #include <string>
 
+#include "vision/io/data_range.h"
 #include "vision/io/encoder_note.h"
 
 namespace clogscope::vision {
@@ -40,7 +41,9 @@ struct InputFrame {
   // Position in a video, seconds; -1 for still images read once; live devices, streams and
   // folders: seconds since the source was opened.
   double time_s = -1;
-  cv::Mat image;      // empty when the frame could not be decoded; video frames are grey (luma)
+  cv::Mat image;  // empty when the frame could not be decoded; video frames are grey (luma)
+  // Where image's black and white lie: limited range for most video luma (DecodedFrame).
+  LumaRange luma_range = LumaRange::kFull;
   std::string error;  // why image is empty, or a warning about a damaged but decoded frame
   std::chrono::steady_clock::time_point arrival;  // live sources: when the frame was in hand
 };

@@ -106,6 +106,7 @@ class DecodedSource : public FrameSource {
     // concealed would be measured as the strand.
     if (f.corrupt) f.grey.release();
     out->image = std::move(f.grey);
+    out->luma_range = f.luma_range;
     out->error = !out->image.empty() ? "" : f.damage.empty() ? "undecodable frame" : f.damage;
     out->time_s = kind_ == SourceKind::kVideo ? f.time_s : SecondsSince(opened_);
     out->index = index_++;
@@ -152,6 +153,7 @@ class DeviceSource : public FrameSource {
     }
     out->arrival = Clock::now();
     out->image = frame;
+    out->luma_range = camera_->luma_range();
     out->error.clear();
     out->time_s = SecondsSince(opened_);
     out->index = index_++;

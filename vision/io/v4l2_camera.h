@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "vision/io/data_range.h"
+
 namespace clogscope::vision {
 
 class V4l2Camera {
@@ -23,6 +25,8 @@ class V4l2Camera {
   // The next frame's luma as 8-bit grey. Waits up to wait_s, returning early when *stop turns true
   // (kStopped); kFailed and *why when the camera fails or sends nothing in that time.
   Grab Read(cv::Mat* grey, double wait_s, const std::atomic<bool>* stop, std::string* why);
+  // The luma's range: full when the driver says so, else limited (V4L2's default for YUV).
+  LumaRange luma_range() const { return luma_range_; }
 
   int width() const { return width_; }
   int height() const { return height_; }
@@ -30,6 +34,7 @@ class V4l2Camera {
  private:
   std::string device_;
   int fd_ = -1;
+  LumaRange luma_range_ = LumaRange::kLimited;
   int width_ = 0, height_ = 0, stride_ = 0;
   std::vector<unsigned char> buffer_;
 };

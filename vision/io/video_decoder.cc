@@ -9,6 +9,7 @@
 #include <cstring>
 #include <memory>
 #include <stdexcept>
+#include <string_view>
 
 #include "common/atomic_file.h"
 #include "vision/io/av_error.h"
@@ -95,6 +96,16 @@ bool HasLumaPlane(AVPixelFormat fmt) {
     return false;
   if (!(d->flags & AV_PIX_FMT_FLAG_PLANAR) && d->nb_components > 1) return false;  // packed YUYV …
   return d->comp[0].plane == 0 && d->comp[0].step <= 2;
+}
+
+// Limited-range luma unless the frame says otherwise: YUV (MPEG's convention) but for JPEG's
+// full-range "yuvj" formats and frames flagged full range; grey is full range.
+LumaRange LumaRangeOf(const AVFrame* frame) {
+  const AVPixFmtDescriptor* d = av_pix_fmt_desc_get(static_cast<AVPixelFormat>(frame->format));
+  if (!d || d->nb_components < 3 || frame->color_range == AVCOL_RANGE_JPEG ||
+      std::string_view(d->name).substr(0, 4) == "yuvj")
+    return LumaRange::kFull;
+  return LumaRange::kLimited;
 }
 
 // Frame memory the decoder may hold at once: reference frames, frames delayed for reordering,
@@ -324,10 +335,12 @@ bool VideoDecoder::Read(DecodedFrame* out) {
       skip_before_s_ = -1;
       const AVPixelFormat fmt = static_cast<AVPixelFormat>(d.frame->format);
       const int w = d.frame->width, h = d.frame->height;
+      out->luma_range = LumaRange::kFull;  // swscale's grey from RGB or a palette is full range
       if (!FrameSizeProblem(w, h).empty()) {
         // A stream that grows mid-way: that frame is unreadable, never converted.
         out->grey.release();
       } else if (HasLumaPlane(fmt)) {
+        out->luma_range = LumaRangeOf(d.frame);
         const AVPixFmtDescriptor* desc = av_pix_fmt_desc_get(fmt);
         const bool deep = desc->comp[0].depth > 8;
         const cv::Mat view(h, w, deep ? CV_16UC1 : CV_8UC1, d.frame->data[0], d.frame->linesize[0]);

@@ -5,12 +5,17 @@
 #include <opencv2/core.hpp>
 #include <string>
 
+#include "vision/io/data_range.h"
+
 namespace clogscope::vision {
 
 // One decoded video frame as a grey image: the luma plane straight from the decoder (8-bit, or
 // 16-bit for deeper formats), so no colour conversion is spent on what the measurement drops.
 struct DecodedFrame {
   cv::Mat grey;
+  // kLimited when grey is limited-range luma (black 16, white 235): a YUV frame not marked full
+  // range. Grey, RGB and full-range ("yuvj", JPEG) frames are kFull.
+  LumaRange luma_range = LumaRange::kFull;
   int index = 0;      // frame number: from the timestamp at constant frame rate, else decode order
   double time_s = 0;  // presentation time from the stream start
   bool corrupt = false;  // the decoder reported damage in this frame's data

@@ -32,7 +32,7 @@ int MeasureFrames(FrameSource& source, const StrandMeasureOptions& options,
         m.status = FrameStatus::kUnreadable;
         m.detail = f.error;
       } else {
-        m = tracker.Measure(f.image);
+        m = tracker.Measure(f);
         if (!f.error.empty() && m.detail.empty()) m.detail = f.error;  // e.g. damaged but decoded
       }
       on_frame(f, m);

@@ -184,9 +184,9 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   };
   // Saturation is judged on the decoded frame: where a codec put the clipped plateau.
   const double mid_s = 0.5 * (band_s0 + band_s1), reach_px = 12.0;
-  const ClipLevels clip =
-      FindClipLevels(img, f, band_s0, band_s1, left_guess + slope_guess * mid_s - reach_px,
-                     right_guess + slope_guess * mid_s + reach_px, data_max);
+  const ClipLevels clip = FindClipLevels(
+      img, f, band_s0, band_s1, left_guess + slope_guess * mid_s - reach_px,
+      right_guess + slope_guess * mid_s + reach_px, LevelsOf(data_max, opt.luma_range));
   int total_samples = 0, total_saturated = 0, per_edge_consistent = 0;
   bool border = false;
   // A filament's band is its whole visible stretch, parts of which a drive gear or a guide may

@@ -77,6 +77,12 @@ cv::Rect ResolveRoi(const cv::Mat& frame, const StrandMeasureOptions& opt) {
   return roi;
 }
 
+DataLevels LevelsOf(double data_max, LumaRange range) {
+  if (range == LumaRange::kFull) return {data_max, 0, data_max};
+  const double per_level = (data_max + 1) / 256;  // 16 and 235 of 255, scaled to deeper data
+  return {data_max, kLimitedBlack8 * per_level, kLimitedWhite8 * per_level};
+}
+
 SceneOptions SceneOptionsFor(const StrandMeasureOptions& opt, double data_max) {
   SceneOptions so;
   so.target = opt.target;

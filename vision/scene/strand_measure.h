@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "vision/edges/caliper.h"
+#include "vision/edges/grey_image.h"
 #include "vision/edges/polarity.h"
 #include "vision/io/data_range.h"
 #include "vision/scene/frame_status.h"
@@ -33,6 +34,9 @@ struct StrandMeasureOptions {
   bool shading = true;
   double min_caliper_fraction = 0.5;     // fewer consistent calipers than this: occluded
   double max_saturated_fraction = 0.05;  // more clipped pixels at the edges than this: saturated
+  // Where the frames' black and white lie: kLimited for limited-range video luma (16 to 235), as
+  // the source says of each frame (InputFrame::luma_range); clipping is looked for there.
+  LumaRange luma_range = LumaRange::kFull;
   // A valid width is good to max(0.3 px, 0.5 %) at 3σ: a width whose σ (the calipers' spread and
   // the edge model's doubt) is above max(max_sigma_px, max_sigma_fraction·width) is `imprecise`.
   double max_sigma_px = 0.1;
@@ -146,6 +150,9 @@ cv::Mat SearchChannel(const cv::Mat& frame, const cv::Rect& roi, int index);
 // The options' ROI, or the whole frame; throws std::invalid_argument when the options do not
 // validate, the frame is empty or the ROI leaves it.
 cv::Rect ResolveRoi(const cv::Mat& frame, const StrandMeasureOptions& options);
+
+// The levels of data whose largest value is data_max (DataMax) in the given range.
+DataLevels LevelsOf(double data_max, LumaRange range);
 
 // Scene-finding options from the measurement options and the data's range.
 SceneOptions SceneOptionsFor(const StrandMeasureOptions& options, double data_max);

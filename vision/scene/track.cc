@@ -61,6 +61,11 @@ StrandMeasurement StrandTracker::Measure(const cv::Mat& frame) {
   return m;
 }
 
+StrandMeasurement StrandTracker::Measure(const InputFrame& frame) {
+  options_.luma_range = frame.luma_range;
+  return Measure(frame.image);
+}
+
 StrandMeasurement StrandTracker::Detect(const cv::Mat& frame) {
   ++full_detections_;
   cylinders_.Clear();  // perhaps another scene, or another channel of it

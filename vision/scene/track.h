@@ -3,6 +3,7 @@
 #include <opencv2/core.hpp>
 #include <optional>
 
+#include "vision/io/frame_source.h"
 #include "vision/scene/codec_doubt.h"
 #include "vision/scene/cylinder_memory.h"
 #include "vision/scene/scene.h"
@@ -25,6 +26,9 @@ class StrandTracker {
   void SetEncoder(const X264Settings& encoder);
   // Measures one frame (as MeasureStrand does).
   StrandMeasurement Measure(const cv::Mat& frame);
+  // Measures a frame as a source read it, in its own luma range (which then holds for images
+  // given to Measure after it).
+  StrandMeasurement Measure(const InputFrame& frame);
 
   // Forgets the strand and the codec's checks: the next frame is searched from scratch.
   void Reset() {

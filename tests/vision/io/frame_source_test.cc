@@ -141,7 +141,7 @@ TEST(FrameSourceTest, SixteenBitAndColourImagesAreRead) {
 
 // The writer's files read back as written: every frame, the rate, the size and the levels, by
 // BT.601's luma of the colour written (full range in Motion JPEG, 16-235 in H.264, which the
-// reader gives as stored).
+// reader gives as stored, saying so).
 TEST(VideoFileWriterTest, WhatIsWrittenReadsBackFrameForFrame) {
   const fs::path dir = FreshDir("writer");
   struct Case {
@@ -179,6 +179,8 @@ TEST(VideoFileWriterTest, WhatIsWrittenReadsBackFrameForFrame) {
       ASSERT_LT(n, luma.size()) << c.name;
       const double expected = c.full_range ? luma[n] : 16 + luma[n] * 219 / 255;
       EXPECT_NEAR(cv::mean(f.grey)[0], expected, 2.0) << c.name << " frame " << n;
+      // And the frame says which: where the measurement looks for clipped white and black.
+      EXPECT_EQ(f.luma_range, c.full_range ? LumaRange::kFull : LumaRange::kLimited) << c.name;
       ++n;
     }
     EXPECT_EQ(n, luma.size()) << c.name;
