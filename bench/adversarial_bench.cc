@@ -1,12 +1,11 @@
 // clogscope_bench adversarial [SCENES_PER_CLASS] [--first-seed N] [--noise-scale F] [--list]
-//                             [--frames-tsv PATH] [--h264-as-measure]:
+//                             [--frames-tsv PATH]:
 // the adversarial matrix (issue 22): every trouble class rendered by synthetic/adversarial.cc,
 // 4 frames a scene, measured with the default options; valid %, the share of frames whose
 // Cramér–Rao bound lets a valid width be measured at all and how many of those are valid,
 // confident-wrong %, bias and σ by class. Seeds from N (default 1: the slow test's scenes; another
 // N gives scenes no one tuned for); every scene's noise times F (default 1; below 1 shows biases
-// the noise hid). --h264-as-measure reads the H.264 clips as `measure` reads a video (the
-// decoder's luma as stored) instead of in BGR as OpenCV's reader did (docs/accuracy.md, *How the
+// the noise hid). H.264 clips are read as `measure` reads a video (docs/accuracy.md, *How the
 // matrix reads H.264*). --list prints every frame that was confidently wrong, with its scene;
 // --frames-tsv writes every frame (class, seed, frame, status, width, σ and its parts, truth,
 // bound σ, scene, reason) for analysis.
@@ -44,8 +43,6 @@ void BenchAdversarial(int argc, char** argv) {
       tsv_path = argv[++i];
     else if (a == "--noise-scale" && i + 1 < argc)
       o.noise_scale = std::max(0.0, std::atof(argv[++i]));
-    else if (a == "--h264-as-measure")
-      o.h264_luma_as_stored = true;
     else
       o.scenes_per_class = std::max(1, std::atoi(a.c_str()));
   }
@@ -53,10 +50,9 @@ void BenchAdversarial(int argc, char** argv) {
   const syn::MatrixResult r = syn::RunAdversarialMatrix(o);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   fmt::print(
-      "\n## Adversarial matrix: {} scenes per class × {} frames, seeds from {}, noise × {}{} "
+      "\n## Adversarial matrix: {} scenes per class × {} frames, seeds from {}, noise × {} "
       "({:.0f} s)\n\n",
-      o.scenes_per_class, o.frames_per_scene, o.first_seed, o.noise_scale,
-      o.h264_luma_as_stored ? ", H.264 read as `measure` reads it" : "", secs);
+      o.scenes_per_class, o.frames_per_scene, o.first_seed, o.noise_scale, secs);
   fmt::print(
       "Confident-wrong: valid but off by more than max({} px, {} %) (or any width where "
       "there is no strand). Bias and σ over the other valid frames. Bound allows: the "

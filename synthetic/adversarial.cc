@@ -367,11 +367,9 @@ AdversarialScene RandomAdversarialScene(TroubleClass trouble, uint64_t seed) {
 
 std::vector<cv::Mat> RenderAdversarial(const AdversarialScene& p, int frames,
                                        const std::string& temp_dir, AdversarialTruth* truth,
-                                       vision::X264Settings* encoder,
-                                       vision::LumaRange* luma_range) {
+                                       ClipFacts* clip) {
   if (frames < 1) throw std::invalid_argument("adversarial render: need at least one frame");
-  if (encoder) *encoder = vision::X264Settings{};
-  if (luma_range) *luma_range = vision::LumaRange::kFull;
+  if (clip) *clip = ClipFacts{};
   cv::Mat tau_hi, emit_hi;
   RenderLayers(p, &tau_hi, &emit_hi);
   const cv::Mat tau = Optics(p, tau_hi), emit = Optics(p, emit_hi);
@@ -404,20 +402,15 @@ std::vector<cv::Mat> RenderAdversarial(const AdversarialScene& p, int frames,
     const fs::path dir =
         fs::path(temp_dir) / fmt::format("adversarial_{}_{}", p.seed, static_cast<int>(p.trouble));
     const std::string path = EncodeX264Clip(out, dir, "round_trip.mp4", 25);
-    if (encoder) *encoder = vision::ReadX264Settings(path);
-    // Read back in BGR, as OpenCV's reader gave the frames this matrix was built on (grey from
-    // BGR: limited-range luma stretched to full range and clipped); or as `measure` reads a
-    // video (its decoder's luma plane, as stored).
-    vision::VideoDecoderOptions colour;
-    colour.bgr = !p.h264_luma_as_stored;
-    vision::VideoDecoder decoder(path, colour);
+    if (clip) clip->encoder = vision::ReadX264Settings(path);
+    // Read back as `measure` reads a video: the decoder's luma plane, as stored.
+    vision::VideoDecoder decoder(path);
     for (cv::Mat& f : out) {
       vision::DecodedFrame decoded;
-      const bool read = decoder.Read(&decoded);
-      f = colour.bgr ? decoded.bgr : decoded.grey;
-      if (!read || f.empty()) throw std::runtime_error(path + ": H.264 round trip lost a frame");
-      if (colour.bgr && !p.colour) cv::cvtColor(f, f, cv::COLOR_BGR2GRAY);
-      if (luma_range && !colour.bgr) *luma_range = decoded.luma_range;
+      if (!decoder.Read(&decoded) || decoded.grey.empty())
+        throw std::runtime_error(path + ": H.264 round trip lost a frame");
+      f = std::move(decoded.grey);
+      if (clip) clip->luma_range = decoded.luma_range;
     }
     std::error_code ec;
     fs::remove_all(dir, ec);

@@ -69,10 +69,6 @@ struct AdversarialScene {
   bool colour = false;            // Bayer mosaic and demosaic
   Codec codec = Codec::kPng;
   int jpeg_quality = 90;
-  // H.264 read back as `measure` reads a video (the decoder's luma plane as stored, 16-235)
-  // rather than in BGR as OpenCV's reader gave it (stretched to 0-255 and clipped), which the
-  // matrix's figures are for. Not drawn: the matrix's option (MatrixOptions).
-  bool h264_luma_as_stored = false;
   uint64_t seed = 1;
 };
 
@@ -91,13 +87,16 @@ AdversarialScene RandomAdversarialScene(TroubleClass trouble, uint64_t seed);
 
 // Renders `frames` frames of the scene (the same scene, independent noise), passed through its
 // codec (an H.264 clip goes through a temporary file in `temp_dir`). 8-bit grey, or BGR.
-// encoder (optional): the settings x264 wrote into an H.264 clip, read from it as `measure` reads
-// a video's; luma_range (optional): where the frames' black and white lie, as the decoder says
-// of an H.264 clip's luma read as stored (else full range).
+// An H.264 clip is read back as `measure` reads a video: the decoder's luma plane as stored
+// (16-235), so colour scenes come back grey. clip (optional): what `measure` knows of the frames
+// besides their pixels.
+struct ClipFacts {
+  vision::X264Settings encoder;  // the settings x264 wrote into an H.264 clip (else not found)
+  vision::LumaRange luma_range = vision::LumaRange::kFull;  // as the decoder says of the frames
+};
 std::vector<cv::Mat> RenderAdversarial(const AdversarialScene& scene, int frames,
                                        const std::string& temp_dir, AdversarialTruth* truth,
-                                       vision::X264Settings* encoder = nullptr,
-                                       vision::LumaRange* luma_range = nullptr);
+                                       ClipFacts* clip = nullptr);
 
 // A one-line account of the scene, for tables and failures.
 std::string Describe(const AdversarialScene& scene);

@@ -77,19 +77,16 @@ MatrixResult RunAdversarialMatrix(const MatrixOptions& o) {
       const uint64_t seed = o.first_seed + k;
       AdversarialScene scene = RandomAdversarialScene(trouble, seed);
       scene.noise_sigma *= o.noise_scale;
-      scene.h264_luma_as_stored = o.h264_luma_as_stored;
       AdversarialTruth truth;
-      vision::X264Settings encoder;
-      vision::LumaRange luma_range = vision::LumaRange::kFull;
+      ClipFacts clip;
       const std::vector<cv::Mat> frames =
-          RenderAdversarial(scene, o.frames_per_scene, temp, &truth, &encoder, &luma_range);
+          RenderAdversarial(scene, o.frames_per_scene, temp, &truth, &clip);
       const double bound_px = WidthBoundSigmaPx(scene, truth.width_px);
       const bool allows =
           truth.strand &&
           bound_px <= vision::MaxValidSigmaPx(vision::StrandMeasureOptions{}, truth.width_px);
       for (int i = 0; i < static_cast<int>(frames.size()); ++i) {
-        const vision::StrandMeasurement m =
-            MeasureAdversarialFrame(frames[i], scene, encoder, luma_range);
+        const vision::StrandMeasurement m = MeasureAdversarialFrame(frames[i], scene, clip);
         FrameRecord r;
         r.trouble = trouble;
         r.seed = seed;
@@ -127,17 +124,16 @@ MatrixResult RunAdversarialMatrix(const MatrixOptions& o) {
 
 vision::StrandMeasurement MeasureAdversarialFrame(const cv::Mat& frame,
                                                   const AdversarialScene& scene,
-                                                  const vision::X264Settings& encoder,
-                                                  vision::LumaRange luma_range) {
+                                                  const ClipFacts& clip) {
   vision::StrandMeasureOptions o;
-  o.luma_range = luma_range;
+  o.luma_range = clip.luma_range;
   const vision::BandPx band =
       vision::DefaultBand(vision::MeasureTarget::kStrand, scene.scale_um_per_px);
   o.band_start_px = band.start_px;
   o.band_height_px = band.height_px;
   vision::StrandMeasurement m = vision::MeasureStrand(frame, o);
   // Each frame stands alone: its own check.
-  if (encoder.found) vision::CodecDoubt(encoder, 1).Apply(frame, o, &m);
+  if (clip.encoder.found) vision::CodecDoubt(clip.encoder, 1).Apply(frame, o, &m);
   return m;
 }
 

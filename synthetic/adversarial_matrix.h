@@ -21,8 +21,6 @@ struct MatrixOptions {
   // Every scene's noise times this: below 1, a bias the noise hid (its σ was too large to be
   // valid) shows as a confidently wrong width where the model's doubt does not cover it.
   double noise_scale = 1.0;
-  // H.264 read back as `measure` reads it (AdversarialScene::h264_luma_as_stored).
-  bool h264_luma_as_stored = false;
   std::string temp_dir;  // for H.264 round trips; empty: the system's temporary directory
 };
 
@@ -74,10 +72,10 @@ MatrixResult RunAdversarialMatrix(const MatrixOptions& options);
 
 // How the matrix measures a frame of a scene: the default options with the reference band (50 µm
 // below the tip, 150 µm long) at the scene's scale; a width from an x264 clip (`encoder` found)
-// with the codec's doubt, as `measure` gives it (codec_doubt.h); in the frame's luma range.
-vision::StrandMeasurement MeasureAdversarialFrame(
-    const cv::Mat& frame, const AdversarialScene& scene, const vision::X264Settings& encoder = {},
-    vision::LumaRange luma_range = vision::LumaRange::kFull);
+// with the codec's doubt, as `measure` gives it (codec_doubt.h); in the clip's luma range.
+vision::StrandMeasurement MeasureAdversarialFrame(const cv::Mat& frame,
+                                                  const AdversarialScene& scene,
+                                                  const ClipFacts& clip = {});
 
 // A Markdown table of the result, one row per class and one for all.
 std::string MatrixTable(const MatrixResult& result);

@@ -23,9 +23,9 @@ const std::filesystem::path& Scratch() {
 
 // Renders the scene's first frame and measures it as the matrix does.
 vision::StrandMeasurement RenderAndMeasure(const AdversarialScene& p, AdversarialTruth* t) {
-  vision::X264Settings encoder;
-  const cv::Mat f = RenderAdversarial(p, 1, Scratch().string(), t, &encoder)[0];
-  return MeasureAdversarialFrame(f, p, encoder);
+  ClipFacts clip;
+  const cv::Mat f = RenderAdversarial(p, 1, Scratch().string(), t, &clip)[0];
+  return MeasureAdversarialFrame(f, p, clip);
 }
 
 TEST(AdversarialTest, RendererKeepsTheGeometricWidthOfAPlainStrand) {
@@ -129,12 +129,20 @@ TEST(AdversarialTest, ASwellsOutlineBesideTheStrandIsNotTheNozzlesFace) {
 }
 
 TEST(AdversarialTest, ClippedStrandThroughH264IsSaturatedNotMeasured) {
-  // H.264 in TV range decodes a clipped plateau at ~252 of 255: still saturation.
-  for (uint64_t seed : {3, 7, 11, 14}) {
+  // A strand (seeds 7, 11) or its background (14, 116, 119) clipped before x264, read as
+  // `measure` reads it (the luma as stored): the clip sits at 233-235, by the limited range's
+  // white, with the codec's ringing on both sides of it (in a key frame, 296 pixels at 235 and
+  // 180 above), where a check for a clip at 255 does not look. Such frames were measured valid
+  // 0.7-1.7 px off at σ 0.04-0.15: the clipped side's step is cut short. (Read in BGR, as
+  // OpenCV's reader gave them, the ringing above clipped into one spike at 255.)
+  for (uint64_t seed : {3, 7, 11, 14, 116, 119}) {
     AdversarialScene p = RandomAdversarialScene(TroubleClass::kSaturated, seed);
     p.codec = Codec::kH264;
     AdversarialTruth t;
-    const vision::StrandMeasurement m = RenderAndMeasure(p, &t);
+    ClipFacts clip;
+    const cv::Mat f = RenderAdversarial(p, 1, Scratch().string(), &t, &clip)[0];
+    EXPECT_EQ(clip.luma_range, vision::LumaRange::kLimited);
+    const vision::StrandMeasurement m = MeasureAdversarialFrame(f, p, clip);
     EXPECT_FALSE(m.valid() && std::abs(m.width_px - t.width_px) > WrongTolerancePx(t.width_px))
         << m.width_px << " px, truth " << t.width_px << ": " << Describe(p);
     if (!m.valid()) {
@@ -169,16 +177,16 @@ TEST(AdversarialTest, AHairBesideTheStrandIsNeverMeasuredAsIt) {
 
 // The matrix's four frames of a scene (an H.264 clip encodes its frames together).
 std::vector<cv::Mat> MatrixFrames(const AdversarialScene& p, AdversarialTruth* t,
-                                  vision::X264Settings* encoder = nullptr) {
-  return RenderAdversarial(p, 4, Scratch().string(), t, encoder);
+                                  ClipFacts* clip = nullptr) {
+  return RenderAdversarial(p, 4, Scratch().string(), t, clip);
 }
 
 // The scene's four matrix frames, each valid and within the matrix's tolerance of the truth.
 void ExpectMatrixFramesValidAndRight(const AdversarialScene& p) {
   AdversarialTruth t;
-  vision::X264Settings encoder;
-  for (const cv::Mat& frame : MatrixFrames(p, &t, &encoder)) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, encoder);
+  ClipFacts clip;
+  for (const cv::Mat& frame : MatrixFrames(p, &t, &clip)) {
+    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, clip);
     ASSERT_TRUE(m.valid()) << m.detail << ": " << Describe(p);
     EXPECT_LE(std::abs(m.width_px - t.width_px), WrongTolerancePx(t.width_px)) << Describe(p);
   }
@@ -193,10 +201,10 @@ TEST(AdversarialTest, AStrandAndAHairUnderANozzleAtTheBackgroundsLevelAreAmbiguo
   // nozzle the frames cannot say.
   const AdversarialScene p = RandomAdversarialScene(TroubleClass::kStringer, 24);
   AdversarialTruth t;
-  vision::X264Settings encoder;
-  const std::vector<cv::Mat> frames = RenderAdversarial(p, 4, Scratch().string(), &t, &encoder);
+  ClipFacts clip;
+  const std::vector<cv::Mat> frames = RenderAdversarial(p, 4, Scratch().string(), &t, &clip);
   for (size_t i = 0; i < frames.size(); ++i) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frames[i], p, encoder);
+    const vision::StrandMeasurement m = MeasureAdversarialFrame(frames[i], p, clip);
     EXPECT_EQ(m.status, vision::FrameStatus::kAmbiguous)
         << "frame " << i << ": " << m.width_px << " px, " << m.detail << " " << Describe(p);
   }
@@ -213,9 +221,10 @@ TEST(AdversarialTest, AStripeAtTheBackgroundsLevelSplitsTheStrandIntoAmbiguity) 
   // no strand either, though each part scores under 0.8 of it.)
   const AdversarialScene p = RandomAdversarialScene(TroubleClass::kSpecularStripe, 122);
   AdversarialTruth t;
-  const std::vector<cv::Mat> frames = MatrixFrames(p, &t);
+  ClipFacts clip;
+  const std::vector<cv::Mat> frames = MatrixFrames(p, &t, &clip);
   for (int i = 0; i < 4; ++i) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frames[i], p);
+    const vision::StrandMeasurement m = MeasureAdversarialFrame(frames[i], p, clip);
     EXPECT_EQ(m.status, vision::FrameStatus::kAmbiguous)
         << "frame " << i << ": " << m.width_px << " px, truth " << t.width_px << " " << m.detail;
   }
@@ -230,8 +239,9 @@ TEST(AdversarialTest, AStripeBetweenTwoDarkHalvesIsNotTheStrand) {
   AdversarialScene p = RandomAdversarialScene(TroubleClass::kSpecularStripe, 117);
   p.noise_sigma = 2;
   AdversarialTruth t;
-  for (const cv::Mat& frame : MatrixFrames(p, &t)) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p);
+  ClipFacts clip;
+  for (const cv::Mat& frame : MatrixFrames(p, &t, &clip)) {
+    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, clip);
     EXPECT_TRUE(!m.valid() || std::abs(m.width_px - t.width_px) <= WrongTolerancePx(t.width_px))
         << m.width_px << " ± " << m.width_sigma_px << " px, truth " << t.width_px << ": "
         << Describe(p);
@@ -248,8 +258,9 @@ TEST(AdversarialTest, ACompressedColourFrameIsMeasuredInLuma) {
   ASSERT_EQ(p.codec, Codec::kJpeg);
   AdversarialTruth t;
   int valid = 0;
-  for (const cv::Mat& frame : MatrixFrames(p, &t)) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p);
+  ClipFacts clip;
+  for (const cv::Mat& frame : MatrixFrames(p, &t, &clip)) {
+    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, clip);
     if (!m.valid()) continue;
     ++valid;
     EXPECT_LE(std::abs(m.width_px - t.width_px), WrongTolerancePx(t.width_px))
@@ -266,9 +277,9 @@ TEST(AdversarialTest, ALitCylinderThatTradedItsBlurForAStripeIsNotTrusted) {
   // least half a px.
   const AdversarialScene p = RandomAdversarialScene(TroubleClass::kSpecularStripe, 8);
   AdversarialTruth t;
-  vision::X264Settings encoder;
-  for (const cv::Mat& frame : MatrixFrames(p, &t, &encoder)) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, encoder);
+  ClipFacts clip;
+  for (const cv::Mat& frame : MatrixFrames(p, &t, &clip)) {
+    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, clip);
     EXPECT_FALSE(m.valid()) << m.width_px << " ± " << m.width_sigma_px << " px, truth "
                             << t.width_px << ": " << Describe(p);
     if (m.status == vision::FrameStatus::kImprecise) {
@@ -281,17 +292,17 @@ TEST(AdversarialTest, ALitCylinderThatTradedItsBlurForAStripeIsNotTrusted) {
 // matrix's tolerance where valid.
 void ExpectMatrixFramesWithinTheirSigma(const AdversarialScene& p) {
   AdversarialTruth t;
-  vision::X264Settings encoder;
-  const std::vector<cv::Mat> frames = MatrixFrames(p, &t, &encoder);
+  ClipFacts clip;
+  const std::vector<cv::Mat> frames = MatrixFrames(p, &t, &clip);
   if (p.codec == Codec::kH264) {
-    ASSERT_TRUE(encoder.found);
+    ASSERT_TRUE(clip.encoder.found);
   }
   for (const cv::Mat& frame : frames) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, encoder);
+    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, clip);
     ASSERT_TRUE(m.gave_width()) << m.detail << ": " << Describe(p);
     EXPECT_LE(std::abs(m.width_px - t.width_px), 3 * m.width_sigma_px)
-        << m.width_px << " ± " << m.width_sigma_px << " px, truth " << t.width_px << ": "
-        << Describe(p);
+        << m.width_px << " ± " << m.width_sigma_px << " px (codec " << m.codec_sigma_px
+        << "), truth " << t.width_px << ": " << Describe(p);
     if (m.valid()) {
       EXPECT_LE(std::abs(m.width_px - t.width_px), WrongTolerancePx(t.width_px)) << Describe(p);
     }
@@ -301,8 +312,9 @@ void ExpectMatrixFramesWithinTheirSigma(const AdversarialScene& p) {
 TEST(AdversarialTest, AWidthX264MovedCarriesTheCodecsDoubt) {
   // A lit strand through x264 at its defaults (matrix seed 109 of the unseen set, bend below the
   // band, with a third of its noise): x264's adaptive quantisation moved its edges so that every
-  // frame came out 0.32 px narrow, valid at σ 0.085. A second pass through x264 moves it by
-  // 0.15-0.38 px: that doubt makes the frames imprecise, not confidently wrong.
+  // frame came out 0.32-0.34 px narrow, valid at σ 0.085. A second pass through x264 moves it by
+  // 0.15-0.38 px: that doubt makes the frames imprecise, not confidently wrong. (Of the luma as
+  // stored, x264's own output, a second pass moved it 0.03-0.05 px: it goes in stretched.)
   AdversarialScene p = RandomAdversarialScene(TroubleClass::kBend, 109);
   p.noise_sigma *= 0.3;
   ASSERT_EQ(p.codec, Codec::kH264);
@@ -334,9 +346,10 @@ TEST(AdversarialTest, AStripeCloseInsideADarkStrandIsFittedWithTheEdge) {
   // A dark 62 px strand (42 on 146) with a stripe 88 levels brighter whose near edge lies 3.4 px
   // inside its right silhouette, blur 1.1, through H.264: a window stopping short of the stripe
   // held too little of the edge, and no caliper fitted both edges (`occluded`). The window now
-  // reaches onto the stripe and the edge is fitted with the stripe's step.
+  // reaches onto the stripe and the edge is fitted with the stripe's step: every frame gives a
+  // width (valid in the matrix but one, `imprecise` by the codec's doubt, 0.10 px).
   const AdversarialScene p = RandomAdversarialScene(TroubleClass::kSpecularStripe, 114);
-  ExpectMatrixFramesValidAndRight(p);
+  ExpectMatrixFramesWithinTheirSigma(p);
 }
 
 TEST(AdversarialTest, ANarrowStripeInsideADarkStrandIsFittedWithBothItsSides) {
@@ -351,8 +364,9 @@ TEST(AdversarialTest, ANarrowStripeInsideADarkStrandIsFittedWithBothItsSides) {
   p.stripe_gain = 60;
   p.noise_sigma = 3;
   AdversarialTruth t;
-  for (const cv::Mat& frame : MatrixFrames(p, &t)) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p);
+  ClipFacts clip;
+  for (const cv::Mat& frame : MatrixFrames(p, &t, &clip)) {
+    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, clip);
     ASSERT_TRUE(m.gave_width()) << m.detail << ": " << Describe(p);
     EXPECT_LE(std::abs(m.width_px - t.width_px), 3 * m.width_sigma_px)
         << m.width_px << " ± " << m.width_sigma_px << " px, truth " << t.width_px;
@@ -368,34 +382,15 @@ TEST(AdversarialTest, ANoisyStraightStrandIsNotTakenForADiscOrBend) {
   // covers (valid or imprecise; the noise leaves 0.2-0.5 px).
   const AdversarialScene p = RandomAdversarialScene(TroubleClass::kPlain, 22);
   AdversarialTruth t;
-  const std::vector<cv::Mat> frames = MatrixFrames(p, &t);
+  ClipFacts clip;
+  const std::vector<cv::Mat> frames = MatrixFrames(p, &t, &clip);
   for (int i = 0; i < 4; ++i) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frames[i], p);
+    const vision::StrandMeasurement m = MeasureAdversarialFrame(frames[i], p, clip);
     ASSERT_TRUE(vision::GivesWidth(m.status))
         << "frame " << i << ": " << vision::FrameStatusName(m.status) << " " << m.detail;
     EXPECT_LE(std::abs(m.width_px - t.width_px), 3.0 * m.width_sigma_px)
         << "frame " << i << ": " << m.width_px << " ± " << m.width_sigma_px << " px, truth "
         << t.width_px;
-  }
-}
-
-TEST(AdversarialTest, AClippedBackgroundThroughH264ReadAsStoredIsNoWidth) {
-  // x264 in limited range puts a clipped background near its white (235), not at 255.
-  for (uint64_t seed : {14u, 116u, 119u, 7u, 11u}) {
-    AdversarialScene p = RandomAdversarialScene(TroubleClass::kSaturated, seed);
-    p.h264_luma_as_stored = true;
-    AdversarialTruth t;
-    vision::X264Settings encoder;
-    vision::LumaRange range;
-    const std::vector<cv::Mat> frames =
-        RenderAdversarial(p, 4, Scratch().string(), &t, &encoder, &range);
-
-    for (const cv::Mat& frame : frames) {
-      const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, encoder, range);
-      EXPECT_TRUE(!m.valid() || std::abs(m.width_px - t.width_px) <= WrongTolerancePx(t.width_px))
-          << m.width_px << " ± " << m.width_sigma_px << " px, truth " << t.width_px << ": "
-          << Describe(p);
-    }
   }
 }
 

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "common/robust.h"
 
@@ -105,20 +106,29 @@ ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, d
     else
       count_row(img.m.ptr<uint8_t>(y), y);
   }
+  // Limited-range data: what a codec's ringing put beyond white (black) counts with it, as it
+  // would had the levels been stretched to the full range and clipped there (x264's clipped white
+  // in one key frame: 296 pixels at 235 and 180 above it).
+  const int white_bin = static_cast<int>(std::lround(levels.white * scale));
+  const int black_bin = static_cast<int>(std::lround(levels.black * scale));
+  std::array<int, kBins> folded = h;
+  for (int b = white_bin + 1; b < kBins; ++b) folded[white_bin] += std::exchange(folded[b], 0);
+  for (int b = 0; b < black_bin; ++b) folded[black_bin] += std::exchange(folded[b], 0);
   // A spike: the fullest bin of a window, well above the bins just inside it.
   const auto spike = [&](int from, int to, int inward) {
+    const std::array<int, kBins>& f = folded;
     int best = -1;
     for (int b = from; b != to; b += inward) {
-      if (best < 0 || h[b] > h[best]) best = b;
+      if (best < 0 || f[b] > f[best]) best = b;
     }
     double inside = 0;
-    for (int k = 1; k <= kBelow; ++k) inside += h[std::clamp(best + inward * k, 0, kBins - 1)];
+    for (int k = 1; k <= kBelow; ++k) inside += f[std::clamp(best + inward * k, 0, kBins - 1)];
     // Little beyond a clip level (a codec's ringing): an unclipped plateau has its noise on both
     // sides.
     double beyond = 0;
-    for (int b = best - inward; b >= 0 && b < kBins; b -= inward) beyond += h[b];
-    const bool is_spike = h[best] >= 0.02 * n && h[best] >= 5.0 * (inside / kBelow) &&
-                          beyond <= 0.5 * h[best] && h[best] > 8;
+    for (int b = best - inward; b >= 0 && b < kBins; b -= inward) beyond += f[b];
+    const bool is_spike = f[best] >= 0.02 * n && f[best] >= 5.0 * (inside / kBelow) &&
+                          beyond <= 0.5 * f[best] && f[best] > 8;
     return is_spike ? best : -1;
   };
   // Where a clip lands: at the data's white (black), give or take the level or two a codec moves a
@@ -127,10 +137,8 @@ ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, d
   // Greeff's MPEG-4 background, unclipped, peaks at 231.
   const int near_bins =
       static_cast<int>(std::lround(kNearWhiteFraction * (levels.white - levels.black) * scale));
-  const int top_end = std::min(kBins - 1 - kEdgeBins,
-                               static_cast<int>(std::lround(levels.white * scale)) - near_bins - 1);
-  const int bottom_end =
-      std::max(kEdgeBins, static_cast<int>(std::lround(levels.black * scale)) + near_bins + 1);
+  const int top_end = std::min(kBins - 1 - kEdgeBins, white_bin - near_bins - 1);
+  const int bottom_end = std::max(kEdgeBins, black_bin + near_bins + 1);
   const int top = spike(kBins - 1, top_end, -1);
   const int bottom = spike(0, bottom_end, +1);
   // Half a bin inward, so that every value of the spike's bin counts.

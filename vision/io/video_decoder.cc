@@ -45,9 +45,7 @@ struct VideoDecoder::Impl {
   AVCodecContext* codec = nullptr;
   AVPacket* packet = nullptr;
   AVFrame* frame = nullptr;
-  SwsContext* sws = nullptr;      // only for formats without a luma plane (RGB, palette)
-  SwsContext* bgr_sws = nullptr;  // with VideoDecoderOptions::bgr
-  bool bgr = false;
+  SwsContext* sws = nullptr;  // only for formats without a luma plane (RGB, palette)
   int stream = -1;
   bool jpeg = false;                  // Motion JPEG: every frame stands alone
   int64_t sent_pts = AV_NOPTS_VALUE;  // of the last packet sent to the decoder
@@ -77,7 +75,6 @@ struct VideoDecoder::Impl {
 
   ~Impl() {
     sws_freeContext(sws);
-    sws_freeContext(bgr_sws);
     av_frame_free(&frame);
     av_packet_free(&packet);
     avcodec_free_context(&codec);
@@ -195,7 +192,6 @@ VideoDecoder::VideoDecoder(const std::string& path, const VideoDecoderOptions& o
   if (url) avformat_network_init();
   d.format = avformat_alloc_context();
   d.stop = options.stop;
-  d.bgr = options.bgr;
   d.format->interrupt_callback = {&Impl::Interrupt, &d};
   AVDictionary* open_options = nullptr;
   if (options.low_latency) {
@@ -288,7 +284,6 @@ bool VideoDecoder::Read(DecodedFrame* out) {
     if (skip_before_s_ >= 0 && time_of(pts) < skip_before_s_ - 1e-6) return false;
     skip_before_s_ = -1;
     out->grey.release();
-    out->bgr.release();
     stamp(pts);
     out->corrupt = true;
     out->damage = std::move(why);
@@ -357,17 +352,6 @@ bool VideoDecoder::Read(DecodedFrame* out) {
         uint8_t* dst[4] = {out->grey.data, nullptr, nullptr, nullptr};
         int dst_stride[4] = {static_cast<int>(out->grey.step), 0, 0, 0};
         sws_scale(d.sws, d.frame->data, d.frame->linesize, 0, h, dst, dst_stride);
-      }
-      // swscale's bicubic conversion, OpenCV's reader's (cap_ffmpeg), on this frame's pixels.
-      if (d.bgr && !out->grey.empty() &&
-          (d.bgr_sws = sws_getCachedContext(d.bgr_sws, w, h, fmt, w, h, AV_PIX_FMT_BGR24,
-                                            SWS_BICUBIC, nullptr, nullptr, nullptr))) {
-        out->bgr.create(h, w, CV_8UC3);
-        uint8_t* dst[4] = {out->bgr.data, nullptr, nullptr, nullptr};
-        int dst_stride[4] = {static_cast<int>(out->bgr.step), 0, 0, 0};
-        sws_scale(d.bgr_sws, d.frame->data, d.frame->linesize, 0, h, dst, dst_stride);
-      } else {
-        out->bgr.release();
       }
       stamp(pts);
       out->skipped_reason = std::move(skipped_reason_);

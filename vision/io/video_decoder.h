@@ -24,9 +24,6 @@ struct DecodedFrame {
   std::string damage;
   // Why the frame before this one was not decoded, when the decoder knows (it was too large).
   std::string skipped_reason;
-  // With VideoDecoderOptions::bgr: the frame as 8-bit BGR, converted the way OpenCV's reader
-  // converts (swscale, bicubic; limited-range luma stretched to full range, clipped).
-  cv::Mat bgr;
 };
 
 // How a decoder opens and reads: for live streams, limits on how long it may wait and a flag that
@@ -37,7 +34,6 @@ struct VideoDecoderOptions {
   double read_timeout_s = 0;  // each read may wait this long for data; 0: no limit
   const std::atomic<bool>* stop = nullptr;  // when set and true, blocking calls return at once
   bool low_latency = false;  // live: short probing, no input buffering, one decoder thread
-  bool bgr = false;          // also give each frame as BGR (DecodedFrame::bgr)
 };
 
 // Reads video files and streams (any URL FFmpeg reads) through libavformat/libavcodec (FFmpeg

@@ -51,7 +51,20 @@ CodecCheck CheckCodec(const cv::Mat& frame, const StrandMeasureOptions& options,
   const cv::Rect region = StrandRegion(first, frame.size());
   if (region.width < kMacroblockPx || region.height < kMacroblockPx) return out;
   cv::Mat second = frame.clone();
-  round_trip->Apply(frame(region)).copyTo(second(region));
+  // x264 given its own decoded luma leaves it nearly where it was (its coefficients quantise to
+  // where they did), and the pass would say the codec moved nothing: limited-range luma goes in
+  // stretched to the full range, which it quantises afresh, as the first pass did. (Matrix seed
+  // 109, a lit strand with a third of its noise: 0.34 px narrow at σ 0.08; the pass on the luma as
+  // stored moved it 0.03-0.05 px, stretched 0.15-0.38.)
+  if (options.luma_range == LumaRange::kLimited && frame.channels() == 1) {
+    const DataLevels l = LevelsOf(255, LumaRange::kLimited);
+    const double gain = 255.0 / (l.white - l.black);
+    cv::Mat full;
+    frame(region).convertTo(full, CV_8U, gain, -l.black * gain);
+    round_trip->Apply(full).convertTo(second(region), CV_8U, 1 / gain, l.black);
+  } else {
+    round_trip->Apply(frame(region)).copyTo(second(region));
+  }
   // Found and measured afresh, as the first: a codec that tips the choice of object, channel or
   // tip moves the width by that choice, and that is doubt too.
   const StrandMeasurement again = MeasureStrand(second, options);
