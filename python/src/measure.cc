@@ -66,13 +66,15 @@ class Tracker {
       : options_(options), tracker_(options) {
     tracker_.SetEncoder(encoder);
   }
-  StrandMeasurement Measure(const py::array& frame, vision::LumaRange luma_range) {
+  // Without a range, the options' (or the last frame's given one).
+  StrandMeasurement Measure(const py::array& frame, std::optional<vision::LumaRange> luma_range) {
     vision::InputFrame in;
     in.image = MatView(frame);
-    in.luma_range = luma_range;
     py::gil_scoped_release release;
     std::lock_guard<std::mutex> lock(mutex_);
     Inside inside;
+    if (!luma_range) return tracker_.Measure(in.image);
+    in.luma_range = *luma_range;
     return tracker_.Measure(in);
   }
   void Reset() {
@@ -343,11 +345,10 @@ doubt, as measure gives it (vision/scene/codec_doubt.h).
            }),
            py::arg("options") = py::none(), py::arg("encoder") = py::none(),
            "Raises ValueError when the options do not validate.")
-      .def("measure", &Tracker::Measure, py::arg("frame"),
-           py::arg("luma_range") = vision::LumaRange::kFull,
+      .def("measure", &Tracker::Measure, py::arg("frame"), py::arg("luma_range") = py::none(),
            "Measures the next frame (arrays as measure_frame takes them; GIL released), whose "
-           "black and white lie as luma_range says (a video frame's: Frame.luma_range). Returns "
-           "a Measurement.")
+           "black and white lie as luma_range says (a video frame's: Frame.luma_range; None: "
+           "as the options' luma_range, or the last range given). Returns a Measurement.")
       .def("reset", &Tracker::Reset, "Forgets the strand: the next frame is searched afresh.")
       .def_property_readonly("options", &Tracker::options)
       .def_property_readonly("full_detections", &Tracker::full_detections,

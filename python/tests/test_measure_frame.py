@@ -147,3 +147,21 @@ def test_tracker_follows_a_video_and_matches_the_truth():
     tracker.reset()
     tracker.measure(images[0])
     assert tracker.full_detections == 2
+
+
+def test_a_strand_clipped_at_limited_range_white_is_saturated():
+    """A strand at the camera's white, half its pixels clipped by the noise, then put into
+    limited-range luma as a video stores it (16-235): the clip sits at 235, not 255. Measured in that range, by
+    measure_frame, by a Tracker whose options say so and by one told per frame, it is
+    `saturated`: never a width from a strand whose plateau is cut off."""
+    images, _ = clogscope.render(clogscope.SceneParams(seed=13, strand_level=255, noise_sigma=1.5))
+    rendered = images[0]
+    assert (rendered == 255).mean() > 0.02  # the renderer clipped the strand at 255
+    luma = np.rint(16 + rendered.astype(np.float64) * 219 / 255).astype(np.uint8)
+    limited = clogscope.MeasureOptions(luma_range=clogscope.LumaRange.limited)
+    for m in (clogscope.measure_frame(luma, limited),
+              clogscope.Tracker(limited).measure(luma),
+              clogscope.Tracker().measure(luma, luma_range=clogscope.LumaRange.limited)):
+        assert m.status == clogscope.FrameStatus.saturated, (m.status, m.width_px)
+    # The same pixels at full scale: clipped at 255, where full range looks.
+    assert clogscope.measure_frame(rendered).status == clogscope.FrameStatus.saturated

@@ -106,41 +106,40 @@ ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, d
     else
       count_row(img.m.ptr<uint8_t>(y), y);
   }
-  // Limited-range data: what a codec's ringing put beyond white (black) counts with it, as it
-  // would had the levels been stretched to the full range and clipped there (x264's clipped white
-  // in one key frame: 296 pixels at 235 and 180 above it).
-  const int white_bin = static_cast<int>(std::lround(levels.white * scale));
-  const int black_bin = static_cast<int>(std::lround(levels.black * scale));
-  std::array<int, kBins> folded = h;
-  for (int b = white_bin + 1; b < kBins; ++b) folded[white_bin] += std::exchange(folded[b], 0);
-  for (int b = 0; b < black_bin; ++b) folded[black_bin] += std::exchange(folded[b], 0);
-  // A spike: the fullest bin of a window, well above the bins just inside it.
+  // A spike: the fullest bin of a window, well above the bins just inside it, with little
+  // beyond it (a codec's ringing): an unclipped plateau has its noise on both sides. A spike
+  // twice as sharp may have as much beyond it as in it: x264's clipped white in one key frame
+  // (296 pixels at 235, 180 above it, 23 a bin in the four below), while a plateau of noise
+  // σ 1 has at most 5.3 times its neighbours.
   const auto spike = [&](int from, int to, int inward) {
-    const std::array<int, kBins>& f = folded;
     int best = -1;
     for (int b = from; b != to; b += inward) {
-      if (best < 0 || f[b] > f[best]) best = b;
+      if (best < 0 || h[b] > h[best]) best = b;
     }
     double inside = 0;
-    for (int k = 1; k <= kBelow; ++k) inside += f[std::clamp(best + inward * k, 0, kBins - 1)];
-    // Little beyond a clip level (a codec's ringing): an unclipped plateau has its noise on both
-    // sides.
+    for (int k = 1; k <= kBelow; ++k) inside += h[std::clamp(best + inward * k, 0, kBins - 1)];
     double beyond = 0;
-    for (int b = best - inward; b >= 0 && b < kBins; b -= inward) beyond += f[b];
-    const bool is_spike = f[best] >= 0.02 * n && f[best] >= 5.0 * (inside / kBelow) &&
-                          beyond <= 0.5 * f[best] && f[best] > 8;
+    for (int b = best - inward; b >= 0 && b < kBins; b -= inward) beyond += h[b];
+    const double sharpness = h[best] / std::max(1.0, inside / kBelow);
+    const bool is_spike =
+        h[best] >= 0.02 * n && h[best] > 8 &&
+        ((sharpness >= 5.0 && beyond <= 0.5 * h[best]) || (sharpness >= 10.0 && beyond <= h[best]));
     return is_spike ? best : -1;
   };
-  // Where a clip lands: at the data's white (black), give or take the level or two a codec moves a
-  // flat area (x264's clipped white in limited range decodes at 233-235), and in full-range data
-  // anywhere in its outer 4 % (JPEG's clipped white at 252-254). Not lower in limited range:
-  // Greeff's MPEG-4 background, unclipped, peaks at 231.
+  // Where a clip lands: at the data's white (black), or a level or two inside it where a codec
+  // moves a flat area (x264's clipped white in limited range decodes at 233-235), and anywhere in
+  // the data's outer 4 % (JPEG's clipped white at 252-254; full range's, and a limited-range
+  // frame's whose range was misjudged). Not elsewhere beyond white: a camera's superwhite plateau
+  // is no clip (one at the data's end counts anyway, below). Not lower in limited range: Greeff's
+  // MPEG-4 background, unclipped, peaks at 231.
+  const int white_bin = std::min(kBins - 1, static_cast<int>(std::lround(levels.white * scale)));
+  const int black_bin = std::max(0, static_cast<int>(std::lround(levels.black * scale)));
   const int near_bins =
       static_cast<int>(std::lround(kNearWhiteFraction * (levels.white - levels.black) * scale));
-  const int top_end = std::min(kBins - 1 - kEdgeBins, white_bin - near_bins - 1);
-  const int bottom_end = std::max(kEdgeBins, black_bin + near_bins + 1);
-  const int top = spike(kBins - 1, top_end, -1);
-  const int bottom = spike(0, bottom_end, +1);
+  int top = spike(white_bin, std::min(kBins - 1 - kEdgeBins, white_bin - near_bins - 1), -1);
+  if (top < 0 && white_bin < kBins - 1) top = spike(kBins - 1, kBins - 1 - kEdgeBins, -1);
+  int bottom = spike(black_bin, std::max(kEdgeBins, black_bin + near_bins + 1), +1);
+  if (bottom < 0 && black_bin > 0) bottom = spike(0, kEdgeBins, +1);
   // Half a bin inward, so that every value of the spike's bin counts.
   if (top >= 0) clip.high = static_cast<float>((top - 0.5) / scale);
   if (bottom >= 0) clip.low = static_cast<float>((bottom + 0.5) / scale);

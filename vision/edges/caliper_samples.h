@@ -17,10 +17,10 @@ struct ClipLevels {
   double clipped_low_fraction = 0, clipped_high_fraction = 0;  // of the slab's pixels at or beyond
 };
 
-// The clip levels of the slab s0 <= s < s1, u0 <= u <= u1: the data's max and 0, or a spike in
-// the top (bottom) 4 % of the data's range, or within 1 % of black to white from its white (black)
-// or beyond, holding ≥ 2 % of the slab's pixels, ≥ 5× the pixels of the values just inside it and
-// ≥ 2× those beyond it.
+// The clip levels of the slab s0 <= s < s1, u0 <= u <= u1: the data's max and 0, or a spike at
+// most 1 % of black-to-white inside the data's white (black), or in the outer 4 % of its range,
+// holding ≥ 2 % of the slab's pixels, ≥ 5× the pixels of the values just inside it and ≥ 2× those
+// beyond it (or ≥ 10× and ≥ 1× those).
 ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
                           double u1, const DataLevels& levels);
 

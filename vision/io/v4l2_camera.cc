@@ -36,8 +36,8 @@ V4l2Camera::V4l2Camera(const std::string& device) : device_(device) {
   if (v4l2_ioctl(fd_, VIDIOC_S_FMT, &f) < 0 || f.fmt.pix.pixelformat != V4L2_PIX_FMT_YUV420)
     fail("cannot deliver its frames as YUV 4:2:0");
   // A driver that does not say leaves the range to its colourspace's default: limited for YUV
-  // but JPEG's. Taken as limited when in doubt: clipping is then looked for from 233 up and from
-  // 18 down, which holds full range's 255 and 0.
+  // but JPEG's. Taken as limited when in doubt: clipping is then looked for at 233-235 and
+  // 16-18 as well as where full range looks for it (246-255, 0-9).
   if (f.fmt.pix.quantization == V4L2_QUANTIZATION_FULL_RANGE ||
       (f.fmt.pix.quantization == V4L2_QUANTIZATION_DEFAULT &&
        f.fmt.pix.colorspace == V4L2_COLORSPACE_JPEG))

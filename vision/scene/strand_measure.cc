@@ -79,8 +79,11 @@ cv::Rect ResolveRoi(const cv::Mat& frame, const StrandMeasureOptions& opt) {
 
 DataLevels LevelsOf(double data_max, LumaRange range) {
   if (range == LumaRange::kFull) return {data_max, 0, data_max};
-  const double per_level = (data_max + 1) / 256;  // 16 and 235 of 255, scaled to deeper data
-  return {data_max, kLimitedBlack8 * per_level, kLimitedWhite8 * per_level};
+  // 16 and 235 of 255; deeper video luma comes from the decoder scaled to 16 bits, whatever
+  // DataMax makes of a frame whose brightest pixel is below half of that.
+  const double per_level = data_max > 255 ? 256 : 1;
+  return {data_max, std::min(kLimitedBlack8 * per_level, data_max),
+          std::min(kLimitedWhite8 * per_level, data_max)};
 }
 
 SceneOptions SceneOptionsFor(const StrandMeasureOptions& opt, double data_max) {

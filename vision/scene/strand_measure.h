@@ -151,7 +151,8 @@ cv::Mat SearchChannel(const cv::Mat& frame, const cv::Rect& roi, int index);
 // validate, the frame is empty or the ROI leaves it.
 cv::Rect ResolveRoi(const cv::Mat& frame, const StrandMeasureOptions& options);
 
-// The levels of data whose largest value is data_max (DataMax) in the given range.
+// The levels of data whose largest value is data_max (DataMax) in the given range (limited-range
+// data deeper than 8 bits as the video decoder gives it, scaled to 16 bits).
 DataLevels LevelsOf(double data_max, LumaRange range);
 
 // Scene-finding options from the measurement options and the data's range.

@@ -94,5 +94,70 @@ TEST(RefineEdgeGuessTest, TakesOnlyACrossingInTheEdgesDirection) {
   EXPECT_EQ(RefineEdgeGuess(b, f, 8, guess, 10, 10, -1), guess);
 }
 
+// A slab of 3000 px (50 × 60) whose pixels take the given values, count times each, the rest
+// `fill`. The axis runs down the image (s = y, u = x), and the slab is the whole image.
+struct Level {
+  int value, count;
+};
+ClipLevels ClipsOf(const std::vector<Level>& levels, int fill, const DataLevels& data) {
+  cv::Mat m(60, 50, CV_8UC1, cv::Scalar(fill));
+  int k = 0;
+  for (const Level& l : levels)
+    for (int i = 0; i < l.count; ++i, ++k) m.at<uint8_t>(k / 50, k % 50) = l.value;
+  EXPECT_LE(k, 3000);
+  return FindClipLevels(GreyImage{m, false}, AxisFrame{}, 0, 59.5, 0, 49, data);
+}
+constexpr DataLevels kFullRange{255, 0, 255}, kLimitedRange{255, 16, 235};
+
+TEST(FindClipLevelsTest, AClipAtLimitedWhiteWithRingingAboveIsFoundThereOnly) {
+  // x264's clipped background in one key frame (matrix seed 14): 296 pixels at 235, 180 above
+  // it up to 246 (more than half the spike), a few in the four levels below, the strand at 117.
+  const std::vector<Level> clip = {{231, 5},  {232, 14}, {233, 16}, {234, 59}, {235, 296},
+                                   {236, 54}, {237, 45}, {238, 63}, {239, 8},  {240, 5},
+                                   {241, 2},  {242, 1},  {243, 1},  {246, 1}};
+  const ClipLevels limited = ClipsOf(clip, 117, kLimitedRange);
+  EXPECT_NEAR(limited.high, 234.5, 1e-3);
+  EXPECT_NEAR(limited.clipped_high_fraction, (296 + 180) / 3000.0, 1e-9);
+  EXPECT_EQ(limited.low, 0);
+  // Read as full range, 235 is no clip level: only 255 is.
+  const ClipLevels full = ClipsOf(clip, 117, kFullRange);
+  EXPECT_EQ(full.high, 255);
+  EXPECT_EQ(full.clipped_high_fraction, 0);
+}
+
+TEST(FindClipLevelsTest, UnclippedPlateausByLimitedWhiteAreNotClips) {
+  // A plateau of noise σ 1 exactly at white: 5.3 times its neighbours, a third of it above.
+  const std::vector<Level> at_white = {{231, 1},   {232, 10},  {233, 108}, {234, 484}, {235, 798},
+                                       {236, 484}, {237, 108}, {238, 10},  {239, 1}};
+  EXPECT_EQ(ClipsOf(at_white, 117, kLimitedRange).high, 255);
+  // A camera's superwhite plateau (at 240, noise σ 1), which limited range allows.
+  std::vector<Level> superwhite = at_white;
+  for (Level& l : superwhite) l.value += 5;
+  const ClipLevels s = ClipsOf(superwhite, 117, kLimitedRange);
+  EXPECT_EQ(s.high, 255);
+  EXPECT_EQ(s.clipped_high_fraction, 0);
+  // Greeff's MPEG-4 background: a peak at 231 with a third of it above, up to 243.
+  const std::vector<Level> greeff = {{228, 60}, {229, 120}, {230, 250}, {231, 900},
+                                     {232, 95}, {233, 65},  {234, 56},  {235, 33},
+                                     {236, 18}, {237, 10},  {240, 5},   {243, 2}};
+  EXPECT_EQ(ClipsOf(greeff, 117, kLimitedRange).high, 255);
+}
+
+TEST(FindClipLevelsTest, AFullRangeClipIsFoundInAFrameTakenForLimitedRange) {
+  // JPEG's clipped white at 252 (a camera whose range V4L2 did not say, taken as limited).
+  const std::vector<Level> clip = {{249, 4}, {250, 8}, {251, 12}, {252, 400}, {253, 40}, {254, 9}};
+  for (const DataLevels& data : {kFullRange, kLimitedRange})
+    EXPECT_NEAR(ClipsOf(clip, 117, data).high, 251.5, 1e-3) << data.white;
+}
+
+TEST(FindClipLevelsTest, ClippedBlackInLimitedRangeIsFoundAtSixteen) {
+  // A dark strand clipped at limited black, its ringing below 16.
+  const std::vector<Level> clip = {{12, 20}, {14, 40}, {15, 60}, {16, 400}, {17, 30}, {18, 10}};
+  const ClipLevels limited = ClipsOf(clip, 180, kLimitedRange);
+  EXPECT_NEAR(limited.low, 16.5, 1e-3);
+  EXPECT_NEAR(limited.clipped_low_fraction, (20 + 40 + 60 + 400) / 3000.0, 1e-9);
+  EXPECT_EQ(ClipsOf(clip, 180, kFullRange).low, 0);
+}
+
 }  // namespace
 }  // namespace clogscope::vision

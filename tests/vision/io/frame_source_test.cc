@@ -7,6 +7,7 @@
 
 #include "common/atomic_file.h"
 #include "synthetic/synthetic.h"
+#include "synthetic/x264_clip.h"
 #include "tests/scratch_dir.h"
 #include "vision/io/video_decoder.h"
 #include "vision/io/video_io.h"
@@ -357,6 +358,29 @@ TEST(MeasureFramesTest, AMeasuringErrorStopsAReaderThatWouldNeverEnd) {
       endless2, StrandMeasureOptions{}, [&](InputFrame&, StrandMeasurement&) { ++calls; },
       [&] { return calls == 7; });
   EXPECT_EQ(n, 7);
+}
+
+// A strand at the camera's white, half its pixels clipped by the noise, through x264: the video's
+// luma is limited range, where the clip decodes at 233-235, and every frame is measured in its
+// own range: `saturated`. (Read as full range, the same frames gave widths.)
+TEST(MeasureFramesTest, AStrandClippedBeforeX264IsSaturatedInTheVideosOwnRange) {
+  const fs::path dir = FreshDir("clipped_x264");
+  SceneParams p = SmallScene();
+  p.strand_level = 255;
+  p.noise_sigma = 1.5;
+  std::vector<cv::Mat> rendered;
+  for (int i = 0; i < 6; ++i) rendered.push_back(RenderFrame(p, i, nullptr));
+  const std::string video = synthetic::EncodeX264Clip(rendered, dir, "clipped.mp4", 25);
+  auto source = FrameSource::Open(video);
+  int frames = 0, full_range_widths = 0;
+  MeasureFrames(*source, StrandMeasureOptions{}, [&](InputFrame& f, StrandMeasurement& m) {
+    ++frames;
+    EXPECT_EQ(f.luma_range, LumaRange::kLimited);
+    EXPECT_EQ(m.status, FrameStatus::kSaturated) << frames << ": " << m.width_px << " px";
+    full_range_widths += MeasureStrand(f.image, StrandMeasureOptions{}).gave_width();
+  });
+  EXPECT_EQ(frames, 6);
+  EXPECT_GT(full_range_widths, 0);  // what the range decides
 }
 
 }  // namespace

@@ -376,5 +376,20 @@ TEST(StrandMeasureTest, TheSigmasSpreadPartIsTheNoisesScatter) {
       << m.detail;
 }
 
+TEST(LevelsOfTest, LimitedRangeIsSixteenToTwoThirtyFiveAtEveryDepth) {
+  const auto expect = [](const DataLevels& l, double max, double black, double white) {
+    EXPECT_EQ(l.max, max);
+    EXPECT_EQ(l.black, black);
+    EXPECT_EQ(l.white, white);
+  };
+  expect(LevelsOf(255, LumaRange::kFull), 255, 0, 255);
+  expect(LevelsOf(4095, LumaRange::kFull), 4095, 0, 4095);
+  expect(LevelsOf(255, LumaRange::kLimited), 255, 16, 235);
+  // Deeper video luma comes scaled to 16 bits: 16 and 235 times 256, whatever the frame's
+  // brightest pixel made of DataMax (a 10-bit stream's white is never mid-grey).
+  expect(LevelsOf(65535, LumaRange::kLimited), 65535, 4096, 60160);
+  expect(LevelsOf(32767, LumaRange::kLimited), 32767, 4096, 32767);
+}
+
 }  // namespace
 }  // namespace clogscope::vision
