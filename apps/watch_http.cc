@@ -19,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/ascii.h"
 #include "common/atomic_file.h"
 #include "common/host_port.h"
 #include "common/path_check.h"
@@ -67,9 +68,7 @@ bool HostIsThisMachine(const char* host_header) {
   if (inet_pton(AF_INET, hp.host.c_str(), &v4) == 1 ||
       inet_pton(AF_INET6, hp.host.c_str(), &v6) == 1)
     return true;
-  std::transform(hp.host.begin(), hp.host.end(), hp.host.begin(),
-                 [](unsigned char c) { return std::tolower(c); });
-  return hp.host == "localhost";
+  return LowerAscii(hp.host) == "localhost";
 }
 
 bool IsLoopback(const sockaddr_storage& a) {

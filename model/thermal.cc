@@ -3,10 +3,10 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <stdexcept>
 
+#include "common/ascii.h"
 #include "model/physics.h"
 
 namespace clogscope::model {
@@ -78,8 +78,7 @@ ThermalAssessment Assess(const CoolingData& d, double v, double t4) {
 }  // namespace
 
 Material ParseMaterial(const std::string& name) {
-  std::string n = name;
-  std::transform(n.begin(), n.end(), n.begin(), [](unsigned char c) { return std::tolower(c); });
+  const std::string n = LowerAscii(name);
   if (n == "pla") return Material::kPla;
   if (n == "abs") return Material::kAbs;
   throw std::invalid_argument("material '" + name + "': expected pla or abs");

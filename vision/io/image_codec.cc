@@ -15,8 +15,10 @@ extern "C" {
 #include <jerror.h>
 }
 
+#include "common/ascii.h"
 #include "vision/io/image_header.h"
 #include "vision/io/libav_image.h"
+#include "vision/io/video_io.h"
 
 namespace clogscope::vision {
 namespace {
@@ -281,16 +283,19 @@ std::string EncodeJpeg(const cv::Mat& img, int quality) {
   return bytes;
 }
 
-std::string Lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
 }  // namespace
 
 cv::Mat DecodeImage(std::string_view bytes, std::string* error) {
   const ImageHeader header = ParseImageHeader(bytes);
   const std::string& format = header.format;
+  // A small file may claim a huge image: refused from its header before decoding.
+  if (!format.empty()) {
+    if (header.width_px <= 0 || header.height_px <= 0) {
+      *error = "cannot decode image (its " + format + " header gives no size)";
+      return cv::Mat();
+    }
+    if (!(*error = FrameSizeProblem(header.width_px, header.height_px)).empty()) return cv::Mat();
+  }
   cv::Mat img;
   if (format == "png") {
     img = DecodePng(bytes, error);
@@ -301,7 +306,7 @@ cv::Mat DecodeImage(std::string_view bytes, std::string* error) {
   } else {
     *error = "not an image format the tool reads (PNG, JPEG, TIFF, BMP, PGM/PPM)";
   }
-  // The picture decoded is the one its header describes, whose size callers checked (a TIFF's
+  // The picture decoded is the one its header describes, whose size was checked (a TIFF's
   // first directory may be a thumbnail whose sub-directory FFmpeg decodes instead).
   if (!img.empty() && header.width_px > 0 &&
       (img.cols != header.width_px || img.rows != header.height_px)) {
@@ -314,7 +319,7 @@ cv::Mat DecodeImage(std::string_view bytes, std::string* error) {
 }
 
 std::string EncodeImage(const std::string& extension, const cv::Mat& image, int jpeg_quality) {
-  const std::string ext = Lower(extension);
+  const std::string ext = LowerAscii(extension);
   const int depth = image.depth(), channels = image.channels();
   const bool jpeg = ext == ".jpg" || ext == ".jpeg";
   const bool deep_ok = !(jpeg || ext == ".bmp");

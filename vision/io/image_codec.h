@@ -13,8 +13,8 @@ namespace clogscope::vision {
 // with transparency). Empty, and *error says why, when the bytes are not a PNG, JPEG, TIFF, BMP or
 // PGM/PPM, or the decoder refused them ("cannot decode image (libpng: IDAT: CRC error)"), or
 // complained about them and filled in what it could not read ("damaged image (Premature end of
-// JPEG file)": such a frame would be measured wrong). The size is not checked here: callers refuse
-// a huge image from its header (ParseImageHeader) before decoding.
+// JPEG file)": such a frame would be measured wrong), or its header gives no size or one over
+// kMaxFramePixels (FrameSizeProblem), refused before decoding.
 cv::Mat DecodeImage(std::string_view bytes, std::string* error);
 
 // The image in the format of `extension` (".png", ".jpg"/".jpeg", ".tif"/".tiff", ".bmp",

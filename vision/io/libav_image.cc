@@ -27,16 +27,21 @@ AVPixelFormat MatFormat(bool colour, bool deep) {
 }
 
 // Pixels from one format to another of the same size: a reordering or an expansion of a palette
-// or of packed bits, done exactly (no scaling, no dither).
+// or of packed bits, done exactly (no scaling, no dither); rows copied when the formats are one
+// (8-bit grey TIFF and PGM, 24-bit BMP), with no converter set up for them. `to` is one plane.
 bool ConvertPixels(const uint8_t* const src[4], const int src_stride[4], AVPixelFormat from,
                    uint8_t* const dst[4], const int dst_stride[4], AVPixelFormat to, int width,
                    int height) {
-  SwsContext* sws =
-      sws_getContext(width, height, from, width, height, to,
-                     SWS_POINT | SWS_ACCURATE_RND | SWS_BITEXACT, nullptr, nullptr, nullptr);
+  if (from == to) {
+    av_image_copy_plane(dst[0], dst_stride[0], src[0], src_stride[0],
+                        av_image_get_linesize(to, width, 0), height);
+    return true;
+  }
+  const SwsContextPtr sws(sws_getContext(width, height, from, width, height, to,
+                                         SWS_POINT | SWS_ACCURATE_RND | SWS_BITEXACT, nullptr,
+                                         nullptr, nullptr));
   if (!sws) return false;
-  sws_scale(sws, src, src_stride, 0, height, dst, dst_stride);
-  sws_freeContext(sws);
+  sws_scale(sws.get(), src, src_stride, 0, height, dst, dst_stride);
   return true;
 }
 

@@ -2,16 +2,16 @@
 
 #include <algorithm>
 #include <array>
-#include <cctype>
+
+#include "common/ascii.h"
 
 namespace clogscope::vision {
 namespace {
 
 constexpr const char* kHidden = "***";
 
-bool NamesASecret(std::string name) {
-  std::transform(name.begin(), name.end(), name.begin(),
-                 [](unsigned char c) { return std::tolower(c); });
+bool NamesASecret(const std::string& raw) {
+  const std::string name = LowerAscii(raw);
   static constexpr std::array<const char*, 8> kWords = {"pass", "pwd",  "token", "secret",
                                                         "key",  "auth", "sig",   "cred"};
   return std::any_of(kWords.begin(), kWords.end(),

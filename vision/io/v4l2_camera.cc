@@ -12,7 +12,7 @@
 
 namespace clogscope::vision {
 
-V4l2Camera::V4l2Camera(const std::string& device) : device_(device) {
+V4l2Camera::V4l2Camera(const std::string& device) {
   // Non-blocking, so that a read can wait in steps and see a stop.
   fd_ = v4l2_open(device.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
   if (fd_ < 0) throw std::invalid_argument(device + ": cannot open (" + std::strerror(errno) + ")");

@@ -28,11 +28,7 @@ class V4l2Camera {
   // The luma's range: full when the driver says so, else limited (V4L2's default for YUV).
   LumaRange luma_range() const { return luma_range_; }
 
-  int width() const { return width_; }
-  int height() const { return height_; }
-
  private:
-  std::string device_;
   int fd_ = -1;
   LumaRange luma_range_ = LumaRange::kLimited;
   int width_ = 0, height_ = 0, stride_ = 0;

@@ -13,6 +13,7 @@
 
 #include "common/atomic_file.h"
 #include "vision/io/av_error.h"
+#include "vision/io/av_handles.h"
 #include "vision/io/image_header.h"
 #include "vision/io/source_name.h"
 #include "vision/io/video_io.h"
@@ -42,10 +43,10 @@ struct FrameMemory {
 struct VideoDecoder::Impl {
   std::shared_ptr<FrameMemory> memory;  // the decoder's frame buffers (video_decoder.cc)
   AVFormatContext* format = nullptr;
-  AVCodecContext* codec = nullptr;
-  AVPacket* packet = nullptr;
-  AVFrame* frame = nullptr;
-  SwsContext* sws = nullptr;  // only for formats without a luma plane (RGB, palette)
+  AvCodecContextPtr codec;
+  AvPacketPtr packet;
+  AvFramePtr frame;
+  SwsContextPtr sws;  // only for formats without a luma plane (RGB, palette)
   int stream = -1;
   bool jpeg = false;                  // Motion JPEG: every frame stands alone
   int64_t sent_pts = AV_NOPTS_VALUE;  // of the last packet sent to the decoder
@@ -73,13 +74,7 @@ struct VideoDecoder::Impl {
     return 0;
   }
 
-  ~Impl() {
-    sws_freeContext(sws);
-    av_frame_free(&frame);
-    av_packet_free(&packet);
-    avcodec_free_context(&codec);
-    avformat_close_input(&format);
-  }
+  ~Impl() { avformat_close_input(&format); }
 };
 
 namespace {
@@ -95,11 +90,14 @@ bool HasLumaPlane(AVPixelFormat fmt) {
   return d->comp[0].plane == 0 && d->comp[0].step <= 2;
 }
 
-// Limited-range luma unless the frame says otherwise: YUV (MPEG's convention) but for JPEG's
-// full-range "yuvj" formats and frames flagged full range; grey is full range.
+// Limited-range luma unless the frame says otherwise: a YUV frame's luma plane (MPEG's
+// convention) but for JPEG's full-range "yuvj" formats and frames flagged full range. Grey, and
+// the grey swscale makes of RGB or a palette, are full range.
 LumaRange LumaRangeOf(const AVFrame* frame) {
-  const AVPixFmtDescriptor* d = av_pix_fmt_desc_get(static_cast<AVPixelFormat>(frame->format));
-  if (!d || d->nb_components < 3 || frame->color_range == AVCOL_RANGE_JPEG ||
+  const AVPixelFormat fmt = static_cast<AVPixelFormat>(frame->format);
+  if (!HasLumaPlane(fmt)) return LumaRange::kFull;
+  const AVPixFmtDescriptor* d = av_pix_fmt_desc_get(fmt);
+  if (d->nb_components < 3 || frame->color_range == AVCOL_RANGE_JPEG ||
       std::string_view(d->name).substr(0, 4) == "yuvj")
     return LumaRange::kFull;
   return LumaRange::kLimited;
@@ -222,8 +220,8 @@ VideoDecoder::VideoDecoder(const std::string& path, const VideoDecoderOptions& o
   AVStream* st = d.format->streams[d.stream];
   const std::string too_large = FrameSizeProblem(st->codecpar->width, st->codecpar->height);
   if (!too_large.empty()) throw std::invalid_argument(shown + ": " + too_large);
-  d.codec = avcodec_alloc_context3(codec);
-  avcodec_parameters_to_context(d.codec, st->codecpar);
+  d.codec.reset(avcodec_alloc_context3(codec));
+  avcodec_parameters_to_context(d.codec.get(), st->codecpar);
   // Frame threads each keep their own pool of frame buffers: large frames decode on one thread.
   const bool large =
       static_cast<long long>(st->codecpar->width) * st->codecpar->height > kLargeFramePixels;
@@ -235,10 +233,10 @@ VideoDecoder::VideoDecoder(const std::string& path, const VideoDecoderOptions& o
   d.jpeg = codec->id == AV_CODEC_ID_MJPEG;
   // A damaged JPEG is an error, not a picture with its gaps concealed.
   if (d.jpeg) d.codec->err_recognition |= AV_EF_EXPLODE;
-  err = avcodec_open2(d.codec, codec, nullptr);
+  err = avcodec_open2(d.codec.get(), codec, nullptr);
   if (err < 0) throw std::invalid_argument(shown + ": cannot open decoder (" + AvError(err) + ")");
-  d.packet = av_packet_alloc();
-  d.frame = av_frame_alloc();
+  d.packet.reset(av_packet_alloc());
+  d.frame.reset(av_frame_alloc());
   d.time_base = av_q2d(st->time_base);
   d.start_pts = st->start_time != AV_NOPTS_VALUE ? st->start_time : 0;
   const AVRational rate = st->avg_frame_rate.num ? st->avg_frame_rate : st->r_frame_rate;
@@ -318,24 +316,23 @@ bool VideoDecoder::Read(DecodedFrame* out) {
       d.memory->over = false;
       skipped_reason_ = one_too_large;
     }
-    int err = avcodec_receive_frame(d.codec, d.frame);
+    int err = avcodec_receive_frame(d.codec.get(), d.frame.get());
     if (err == 0) {
       const int64_t pts = d.frame->best_effort_timestamp != AV_NOPTS_VALUE
                               ? d.frame->best_effort_timestamp
                               : d.frame->pts;
       if (skip_before_s_ >= 0 && time_of(pts) < skip_before_s_ - 1e-6) {
-        av_frame_unref(d.frame);
+        av_frame_unref(d.frame.get());
         continue;
       }
       skip_before_s_ = -1;
       const AVPixelFormat fmt = static_cast<AVPixelFormat>(d.frame->format);
       const int w = d.frame->width, h = d.frame->height;
-      out->luma_range = LumaRange::kFull;  // swscale's grey from RGB or a palette is full range
+      out->luma_range = LumaRangeOf(d.frame.get());
       if (!FrameSizeProblem(w, h).empty()) {
         // A stream that grows mid-way: that frame is unreadable, never converted.
         out->grey.release();
       } else if (HasLumaPlane(fmt)) {
-        out->luma_range = LumaRangeOf(d.frame);
         const AVPixFmtDescriptor* desc = av_pix_fmt_desc_get(fmt);
         const bool deep = desc->comp[0].depth > 8;
         const cv::Mat view(h, w, deep ? CV_16UC1 : CV_8UC1, d.frame->data[0], d.frame->linesize[0]);
@@ -346,12 +343,11 @@ bool VideoDecoder::Read(DecodedFrame* out) {
           out->grey = view.clone();
         }
       } else {
-        d.sws = sws_getCachedContext(d.sws, w, h, fmt, w, h, AV_PIX_FMT_GRAY8, SWS_POINT, nullptr,
-                                     nullptr, nullptr);
+        FitSws(&d.sws, w, h, fmt, AV_PIX_FMT_GRAY8, SWS_POINT);
         out->grey.create(h, w, CV_8UC1);
         uint8_t* dst[4] = {out->grey.data, nullptr, nullptr, nullptr};
         int dst_stride[4] = {static_cast<int>(out->grey.step), 0, 0, 0};
-        sws_scale(d.sws, d.frame->data, d.frame->linesize, 0, h, dst, dst_stride);
+        sws_scale(d.sws.get(), d.frame->data, d.frame->linesize, 0, h, dst, dst_stride);
       }
       stamp(pts);
       out->skipped_reason = std::move(skipped_reason_);
@@ -361,7 +357,7 @@ bool VideoDecoder::Read(DecodedFrame* out) {
       out->damage = !out->corrupt       ? ""
                     : out->grey.empty() ? FrameSizeProblem(w, h)
                                         : "the decoder reported damage";
-      av_frame_unref(d.frame);
+      av_frame_unref(d.frame.get());
       return true;
     }
     if (err == AVERROR_EOF) {
@@ -381,26 +377,26 @@ bool VideoDecoder::Read(DecodedFrame* out) {
     // Feed the next packet of our stream.
     while (true) {
       d.ArmDeadline(read_timeout_s_);
-      err = av_read_frame(d.format, d.packet);
+      err = av_read_frame(d.format, d.packet.get());
       if (err < 0) {
-        avcodec_send_packet(d.codec, nullptr);  // drain
+        avcodec_send_packet(d.codec.get(), nullptr);  // drain
         d.flushing = true;
         break;
       }
       if (d.packet->stream_index != d.stream) {
-        av_packet_unref(d.packet);
+        av_packet_unref(d.packet.get());
         continue;
       }
       if (d.jpeg) {
         d.sent_pts = d.packet->pts;
         if (std::string why = JpegPacketProblem(*d.packet); !why.empty()) {
-          av_packet_unref(d.packet);
+          av_packet_unref(d.packet.get());
           if (refuse(std::move(why), d.sent_pts)) return true;
           continue;
         }
       }
-      err = avcodec_send_packet(d.codec, d.packet);
-      av_packet_unref(d.packet);
+      err = avcodec_send_packet(d.codec.get(), d.packet.get());
+      av_packet_unref(d.packet.get());
       if (err < 0 && err != AVERROR(EAGAIN)) {
         if (d.jpeg && refuse(jpeg_error(err), d.sent_pts)) return true;
         if (!d.jpeg) ++corrupt_packets_;
@@ -416,7 +412,7 @@ bool VideoDecoder::SeekToTime(double time_s) {
   Impl& d = *impl_;
   const int64_t target = d.start_pts + static_cast<int64_t>(std::floor(time_s / d.time_base));
   if (av_seek_frame(d.format, d.stream, target, AVSEEK_FLAG_BACKWARD) < 0) return false;
-  avcodec_flush_buffers(d.codec);
+  avcodec_flush_buffers(d.codec.get());
   d.flushing = false;
   d.finished = false;
   skip_before_s_ = time_s;

@@ -10,17 +10,14 @@
 #include <stdexcept>
 #include <vector>
 
+#include "common/ascii.h"
 #include "common/atomic_file.h"
 #include "vision/io/image_codec.h"
-#include "vision/io/image_header.h"
 
 namespace clogscope::vision {
 
 std::string LowerExtension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return std::tolower(c); });
-  return ext;
+  return LowerAscii(std::filesystem::path(path).extension().string());
 }
 
 VideoKind VideoKindForPath(const std::string& path) {
@@ -56,16 +53,8 @@ cv::Mat ReadImage(const std::string& path, std::string* error) {
   std::string bytes;
   if (!TryReadFile(path, &bytes, error)) return cv::Mat();
   // Only the formats cameras write are decoded (each other decoder is more surface for a bad
-  // file), and a small file may claim a huge image: refuse it from its header before decoding.
-  const ImageHeader header = ParseImageHeader(bytes);
-  if (!header.format.empty()) {
-    if (header.width_px <= 0 || header.height_px <= 0) {
-      *error = "cannot decode image (its " + header.format + " header gives no size)";
-      return cv::Mat();
-    }
-    if (!(*error = FrameSizeProblem(header.width_px, header.height_px)).empty()) return cv::Mat();
-  }
-  return DecodeImage(bytes, error);  // says so when the format is none it reads
+  // file), and a huge image is refused from its header: DecodeImage says so.
+  return DecodeImage(bytes, error);
 }
 
 void WriteImageAtomically(const std::string& path, const cv::Mat& image) {

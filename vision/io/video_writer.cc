@@ -41,11 +41,11 @@ struct VideoFileWriter::Impl {
   AVStream* stream = nullptr;
   AvFramePtr frame{av_frame_alloc()};
   AvPacketPtr packet{av_packet_alloc()};
-  SwsContext* sws = nullptr;
+  SwsContextPtr sws;
+  cv::Mat bgr;  // a grey frame as BGR, reused from frame to frame
   int64_t next_pts = 0;
 
   ~Impl() {
-    sws_freeContext(sws);
     if (format) {
       if (format->pb) avio_closep(&format->pb);
       avformat_free_context(format);
@@ -91,6 +91,12 @@ VideoFileWriter::VideoFileWriter(const std::string& path, VideoKind kind, double
   const bool mjpeg = kind == VideoKind::kMjpegAvi;
   const AVCodec* codec = avcodec_find_encoder_by_name(mjpeg ? "mjpeg" : "libx264");
   // The container from the extension, as for any FFmpeg output: AVI, MP4, MOV, Matroska.
+  // No destructor runs for a constructor that throws: the temporary file goes here.
+  const auto cannot_open = [&](int rc) {
+    std::remove(temp_path_.c_str());
+    throw std::invalid_argument(path + ": cannot open a video encoder for this file type (" +
+                                AvError(rc) + ")");
+  };
   int rc = codec ? avformat_alloc_output_context2(&d.format, nullptr, nullptr, temp_path_.c_str())
                  : AVERROR_ENCODER_NOT_FOUND;
   if (rc >= 0) {
@@ -98,9 +104,7 @@ VideoFileWriter::VideoFileWriter(const std::string& path, VideoKind kind, double
     d.stream = avformat_new_stream(d.format, nullptr);
     if (!d.codec || !d.stream) rc = AVERROR(ENOMEM);
   }
-  if (rc < 0)
-    throw std::invalid_argument(path + ": cannot open a video encoder for this file type (" +
-                                AvError(rc) + ")");
+  if (rc < 0) cannot_open(rc);
   AVCodecContext* c = d.codec.get();
   c->width = size.width;
   c->height = size.height;
@@ -131,16 +135,12 @@ VideoFileWriter::VideoFileWriter(const std::string& path, VideoKind kind, double
     rc = avio_open(&d.format->pb, temp_path_.c_str(), AVIO_FLAG_WRITE);
   }
   if (rc >= 0) rc = avformat_write_header(d.format, nullptr);
-  if (rc < 0) {
-    std::remove(temp_path_.c_str());
-    throw std::invalid_argument(path + ": cannot open a video encoder for this file type (" +
-                                AvError(rc) + ")");
-  }
+  if (rc < 0) cannot_open(rc);
   d.frame->format = c->pix_fmt;
   d.frame->width = c->width;
   d.frame->height = c->height;
   if (av_frame_get_buffer(d.frame.get(), 0) < 0) {
-    std::remove(temp_path_.c_str());  // no destructor runs for a constructor that throws
+    std::remove(temp_path_.c_str());
     throw std::bad_alloc();
   }
 }
@@ -160,15 +160,15 @@ void VideoFileWriter::Write(const cv::Mat& frame) {
   // Grey goes in as BGR and BGR through swscale's bicubic conversion, as OpenCV's writer did:
   // the same pictures reach the encoder, so the videos the tests and benchmarks render are the
   // ones they were tuned on (a grey source gives x264 cleaner chroma, and other choices).
-  cv::Mat bgr = frame;
-  if (frame.channels() == 1) cv::cvtColor(frame, bgr, cv::COLOR_GRAY2BGR);
-  d.sws = sws_getCachedContext(d.sws, bgr.cols, bgr.rows, AV_PIX_FMT_BGR24, bgr.cols, bgr.rows,
-                               d.codec->pix_fmt, SWS_BICUBIC, nullptr, nullptr, nullptr);
-  int rc = d.sws ? av_frame_make_writable(d.frame.get()) : AVERROR(EINVAL);
+  if (frame.channels() == 1) cv::cvtColor(frame, d.bgr, cv::COLOR_GRAY2BGR);
+  const cv::Mat& bgr = frame.channels() == 1 ? d.bgr : frame;
+  int rc = FitSws(&d.sws, bgr.cols, bgr.rows, AV_PIX_FMT_BGR24, d.codec->pix_fmt, SWS_BICUBIC)
+               ? av_frame_make_writable(d.frame.get())
+               : AVERROR(EINVAL);
   if (rc >= 0) {
     const uint8_t* src[4] = {bgr.data, nullptr, nullptr, nullptr};
     const int stride[4] = {static_cast<int>(bgr.step[0]), 0, 0, 0};
-    sws_scale(d.sws, src, stride, 0, frame.rows, d.frame->data, d.frame->linesize);
+    sws_scale(d.sws.get(), src, stride, 0, frame.rows, d.frame->data, d.frame->linesize);
     d.frame->pts = d.next_pts++;
     rc = d.Encode(d.frame.get());
   }

@@ -57,11 +57,10 @@ CodecCheck CheckCodec(const cv::Mat& frame, const StrandMeasureOptions& options,
   // 109, a lit strand with a third of its noise: 0.34 px narrow at σ 0.08; the pass on the luma as
   // stored moved it 0.03-0.05 px, stretched 0.15-0.38.)
   if (options.luma_range == LumaRange::kLimited && frame.channels() == 1) {
-    const DataLevels l = LevelsOf(255, LumaRange::kLimited);
-    const double gain = 255.0 / (l.white - l.black);
+    const double gain = 255.0 / (kLimitedWhite8 - kLimitedBlack8);
     cv::Mat full;
-    frame(region).convertTo(full, CV_8U, gain, -l.black * gain);
-    round_trip->Apply(full).convertTo(second(region), CV_8U, 1 / gain, l.black);
+    frame(region).convertTo(full, CV_8U, gain, -kLimitedBlack8 * gain);
+    round_trip->Apply(full).convertTo(second(region), CV_8U, 1 / gain, kLimitedBlack8);
   } else {
     round_trip->Apply(frame(region)).copyTo(second(region));
   }
