@@ -518,6 +518,14 @@ bool FollowPair(const GreyImage& img, const SceneOptions& o, const PairCandidate
     const TipTrace trace =
         TraceToNozzle(img, a, c.left_u0, c.right_u0, c.edge_slope, left_sign, right_sign, ref_l,
                       ref_r, std::min(s_from, bottom), o.min_contrast);
+    // Straight edges that end where the outline curves on: the straight stretch is the bent
+    // part of a strand below its tip, which lies somewhere up the curve (a tip put where the
+    // following stopped measured a 44 px strand 12 px narrow, across its bend).
+    if (trace.runs_on) {
+      *failure = PairVerdict::kNoTip;
+      *why = "the outline curves on above the straight edges: a strand bending, no tip in line";
+      return false;
+    }
     // A nozzle face ends both edges together (a strand hanging up to ~8° off the nozzle axis).
     const double mismatch = std::abs(up_l.s - up_r.s);
     if (!trace.found && mismatch > std::max(4.0, 0.14 * c.width_px)) {
@@ -594,9 +602,16 @@ PairContest ContestPairs(const PairCandidate& b, const StrandGeometry& bg, const
   // Two strands in one view look alike; a gap between objects (a mixed pair) is another thing.
   if (!disjoint || c.polarity != b.polarity) return PairContest::kNotRivals;
   // Two strand-like objects: the one hanging from the nozzle's face (the nozzle on both its
-  // sides) is the strand; a hair that ends at a flank, or in the open, is not.
-  if (o.target == MeasureTarget::kStrand && (bg.tip_face_sides == 2) != (cg.tip_face_sides == 2))
+  // sides) is the strand; a hair that ends at a flank, or in the open, is not. But the face read
+  // on one side only does not tell a rival apart: a hair from the face's corner reads so, and so
+  // does a strand whose face noise hid on one side (a 91 px strand lost so to an 8 px hair from
+  // the corner, in one of four frames).
+  if (o.target == MeasureTarget::kStrand && (bg.tip_face_sides == 2) != (cg.tip_face_sides == 2)) {
+    const int other_sides = bg.tip_face_sides == 2 ? cg.tip_face_sides : bg.tip_face_sides;
+    if (other_sides == 1 && c.score >= kRivalScoreRatio * b.score)
+      return PairContest::kFaceOnOneSide;
     return bg.tip_face_sides == 2 ? PairContest::kFirstAtFace : PairContest::kSecondAtFace;
+  }
   // Two parallel objects side by side, closer than either is wide, that the tip did not tell
   // apart: one strand whose stripe matches the background, or a strand and its neighbour.
   // Which is the strand, or whether their union is, the frame cannot say, whatever the scores.
@@ -621,6 +636,9 @@ std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const P
                      : contest == PairContest::kNeitherAtFace
                          ? "two strand-like objects, neither hanging from the nozzle's face: {} "
                            "and {}"
+                     : contest == PairContest::kFaceOnOneSide
+                         ? "two strand-like objects, one at the nozzle's face on both sides, the "
+                           "other on one side: {} and {}"
                          : "two strand-like pairs of similar score: {} and {}",
                      Describe(b), Describe(c));
 }

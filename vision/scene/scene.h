@@ -123,6 +123,7 @@ enum class PairContest {
   kSecondAtFace,
   kSideBySide,
   kNeitherAtFace,
+  kFaceOnOneSide,  // one at the face on both sides, the other on one: not decided by the face
   kSimilarScore,
   kOutscored
 };
@@ -130,9 +131,9 @@ PairContest ContestPairs(const PairCandidate& b, const StrandGeometry& bg, const
                          const StrandGeometry& cg, const SceneOptions& options);
 inline bool Ambiguous(PairContest c) {
   return c == PairContest::kSideBySide || c == PairContest::kNeitherAtFace ||
-         c == PairContest::kSimilarScore;
+         c == PairContest::kFaceOnOneSide || c == PairContest::kSimilarScore;
 }
-// The `ambiguous` detail for a kSideBySide, kNeitherAtFace or kSimilarScore contest.
+// The `ambiguous` detail for an ambiguous contest (Ambiguous).
 std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const PairCandidate& c);
 // The `ambiguous` detail when candidate `index` lies between two pairs of the other polarity that
 // held up (r.chosen and r.runners_up), share its edges, are parallel to it and each score at least

@@ -18,6 +18,7 @@ constexpr double kInsidePx = 4.0;  // the object's level is read this far inside
 struct Curve {
   double s_end = 0;       // the last strong s
   std::vector<double> u;  // u at s_from − i
+  bool ended = false;     // the edge weakened or the object's level changed (else it ran on)
 };
 
 // The object's level just inside an edge (object_side: +1 the object lies at +u).
@@ -62,6 +63,7 @@ Curve Follow(const GreyImage& img, const AxisFrame& a, double u_start, double sl
         // The half-contrast crossing between the last strong px and the first weak one.
         if (first_weak_c < 0.5 * ref && strong_c > first_weak_c)
           out.s_end -= std::clamp((strong_c - 0.5 * ref) / (strong_c - first_weak_c), 0.0, 1.0);
+        out.ended = true;
         return out;
       }
       continue;  // keep heading the same way over a weak px
@@ -252,6 +254,9 @@ TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0,
       Follow(img, a, left_u0 + slope * s_from, slope, left_sign, +1, ref_l, s_from, max_steps);
   const Curve r =
       Follow(img, a, right_u0 + slope * s_from, slope, right_sign, -1, ref_r, s_from, max_steps);
+  // An outline that runs on as far as it was followed (or out of the image) has no end here.
+  t.runs_on = !l.ended && !r.ended;
+  if (t.runs_on) return t;
   // A nozzle face ends both edges together; a hair or a flank that one edge ran into does not.
   if (std::abs(l.s_end - r.s_end) > std::max(4.0, 0.14 * width)) return t;
   t.found = true;

@@ -10,6 +10,9 @@ namespace clogscope::vision {
 // parallel. Following each edge up as a curve finds where the object's outline ends at the nozzle.
 struct TipTrace {
   bool found = false;    // both edges followed up to a common end
+  // Neither edge ended where it was followed (as far as twice the width, or to the image's
+  // side): the outline curves on above the straight edges, a strand bending above them.
+  bool runs_on = false;
   double s_tip_px = 0;   // the common end, along the axis (the caller's frame)
   double widest_px = 0;  // the widest separation of the two curves between the tip and s_from
   // On how many sides of the strand the nozzle's face shows (0–2): a strand hangs from the face,
