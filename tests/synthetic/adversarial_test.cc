@@ -240,6 +240,22 @@ TEST(AdversarialTest, AStrandBendingAboveItsStraightEdgesHasNoTipInLine) {
   ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kBend, 223));
 }
 
+TEST(AdversarialTest, AHighlightAtTheRimOfAFlatStrandCarriesItsDoubt) {
+  // Bright flat strands with a brighter stripe 2.8 px inside one edge, closer than the blur lets
+  // it show as an edge of its own: the edge's fitted step took the stripe in and moved inward,
+  // 0.43-0.51 px at sigma 0.07-0.12 (seed 201, 81 px, blur 2.1), 2.0 px at 0.11 (seed 506, 79 px,
+  // blur 1.8, the stripe brighter above the strand than the strand above the background).
+  for (const uint64_t seed : {201, 506})
+    ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kSpecularStripe, seed));
+}
+
+TEST(AdversarialTest, AStripeWithTheStrandsOutlineJustOutsideItIsNotTheStrand) {
+  // A dark 66 px strand whose stripe, 14 px wide and near the background's level, lies 5 px from
+  // its right edge: the stripe was measured as a bright object, 14.1 px at sigma 0.16-1.3, the
+  // strand's thin dark rim and outline 5.5-6 px beyond its right edge.
+  ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kSpecularStripe, 523));
+}
+
 TEST(AdversarialTest, AStripeAtTheBackgroundsLevelSplitsTheStrandIntoAmbiguity) {
   // A dark 191 px strand whose specular stripe comes out near the background's level (JPEG
   // q40) looks like two parallel strands side by side, 32 and 114 px, both under the nozzle.

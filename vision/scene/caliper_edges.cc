@@ -40,4 +40,24 @@ EdgeLines FitEdgeLines(const std::vector<CaliperFit>& fits, double band_s0, doub
   return out;
 }
 
+double InnerLevelDoubtPx(const std::vector<CaliperFit>& fits, const std::vector<bool>& use,
+                         double blur_px) {
+  std::vector<double> inner[2], step[2];
+  for (size_t k = 0; k < fits.size(); ++k) {
+    if (!use[k]) continue;
+    for (int side = 0; side < 2; ++side) {
+      const EdgeFit& fit = side == 0 ? fits[k].left : fits[k].right;
+      const double inward = (side == 0 ? 1.0 : -1.0) * 3.0 * fit.sigma_px;
+      const double in = EdgeModelValue(fit, fit.edge_px + inward);
+      inner[side].push_back(in);
+      step[side].push_back(in - EdgeModelValue(fit, fit.edge_px - inward));
+    }
+  }
+  if (inner[0].size() < 3) return 0;
+  const double larger = std::max(std::abs(Median(step[0])), std::abs(Median(step[1])));
+  if (larger <= 0) return 0;
+  const double share = std::abs(Median(inner[0]) - Median(inner[1])) / larger;
+  return std::max(0.0, share - kInnerLevelAllowance) * 2.0 * blur_px;
+}
+
 }  // namespace clogscope::vision

@@ -28,4 +28,15 @@ struct EdgeLines {
 
 EdgeLines FitEdgeLines(const std::vector<CaliperFit>& fits, double band_s0, double spacing);
 
+// A flat object's level just inside its two edges (each plain step's model three of its blurs
+// inside the edge, the median over the calipers `use`d) is one level. A step of the object's
+// level within the blur of one edge (a highlight at the rim) folds into that edge's fitted step
+// and moves it by up to its share of the step times its distance, ≲ 2 blurs (further in it shows
+// as an edge of its own, caliper_samples.h's InnerEdgeDistance). The width's doubt from the two
+// levels' difference over the larger step, beyond kInnerLevelAllowance: that share of 2 blurs.
+// 0 with fewer than 3 calipers.
+inline constexpr double kInnerLevelAllowance = 0.1;
+double InnerLevelDoubtPx(const std::vector<CaliperFit>& fits, const std::vector<bool>& use,
+                         double blur_px);
+
 }  // namespace clogscope::vision

@@ -640,6 +640,13 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   doubt.shading_px = 0.5 * (shading_doubt_px[0] + shading_doubt_px[1]);
   doubt.cylinder_px = cylinder_doubt_px;
   doubt.missing_px = missing_doubt_px;
+  // A flat object's two edges (plain steps, no stripe modelled beside either) see one level
+  // inside it: where they do not, a step beside one edge may have moved it (caliper_edges.h).
+  if (!filament && shade[0] == 0 && shade[1] == 0 && !inner_step[0] && !inner_step[1]) {
+    std::vector<bool> use(n_cal);
+    for (int k = 0; k < n_cal; ++k) use[k] = m->calipers[k].inlier && fits[k].width_sigma_px < 0;
+    doubt.inner_level_px = InnerLevelDoubtPx(fits, use, m->blur_px);
+  }
   {
     // The inlier calipers' own edge models; a strand's calipers refitted as cylinders, the
     // cylinders'. (A filament's cylinders carry only their disagreement with the per-edge fits:

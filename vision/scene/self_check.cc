@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "common/robust.h"
+#include "vision/edges/caliper_samples.h"
 
 namespace clogscope::vision {
 namespace {
@@ -83,6 +84,28 @@ SelfCheck CheckOutsideIsBackground(const GreyImage& img, const AxisFrame& f, dou
         "the background outside its edges differs ({:.0f} and {:.0f} grey levels, the object "
         "{:.0f}): not one object's silhouette",
         background[0], background[1], object);
+  }
+  return out;
+}
+
+SelfCheck CheckNoEdgeJustOutside(const GreyImage& img, const AxisFrame& f, double s0, double s1,
+                                 double left_u0, double right_u0, double slope, double blur_px,
+                                 double min_step) {
+  SelfCheck out;
+  const double mid = 0.5 * (s0 + s1);
+  const double depth = 2.5 * blur_px + 4.0;
+  for (int side = 0; side < 2; ++side) {
+    const double u = (side == 0 ? left_u0 : right_u0) + slope * mid;
+    // Outward: away from the object, which lies toward +u of the left edge.
+    const double d = InnerEdgeDistance(img, f, s0, s1, u, side == 0 ? -1 : 1, depth, min_step);
+    if (std::isfinite(d)) {
+      out.passed = false;
+      out.why = fmt::format(
+          "another edge {:.1f} px outside its {} edge: the strand's own outline beyond a stripe, "
+          "or another object against it",
+          d, side == 0 ? "left" : "right");
+      return out;
+    }
   }
   return out;
 }

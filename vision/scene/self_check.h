@@ -25,6 +25,14 @@ struct SelfCheck {
 SelfCheck CheckOutsideIsBackground(const GreyImage& img, const AxisFrame& f, double s0, double s1,
                                    double left_u0, double right_u0, double slope, double blur_px);
 
+// Looks outward from each fitted edge, over the band, for another edge just beyond its blur
+// (InnerEdgeDistance turned outward, as far as 2.5 blurs and 4 px past the edge's own step): the
+// strand's own outline beyond a stripe measured as the object, or another object against it.
+// Fails when either side has one.
+SelfCheck CheckNoEdgeJustOutside(const GreyImage& img, const AxisFrame& f, double s0, double s1,
+                                 double left_u0, double right_u0, double slope, double blur_px,
+                                 double min_step);
+
 // The calipers' residual RMS of each edge's fit (grey levels): fails when one edge's median is
 // more than twice the other's and more than 1.5 grey levels above it (the noise is the frame's on
 // both sides).

@@ -287,9 +287,13 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
   MeasureCalipers(img, data_max, g, s0, s1, calipers, &m, memory);
   if (m.valid() && opt.target == MeasureTarget::kStrand) {
     if (g.tip_width_px > 0) m.swell_ratio = std::max(1.0, g.tip_width_px / m.width_px);
-    const SelfCheck check =
+    SelfCheck check =
         CheckOutsideIsBackground(img, g.axis, m.band_start_px, m.band_end_px, m.left_u0_px,
                                  m.right_u0_px, m.edge_slope, m.blur_px);
+    if (check.passed)
+      check = CheckNoEdgeJustOutside(img, g.axis, m.band_start_px, m.band_end_px, m.left_u0_px,
+                                     m.right_u0_px, m.edge_slope, m.blur_px,
+                                     opt.min_contrast_fraction * data_max);
     if (!check.passed) {
       m.status = FrameStatus::kNotSilhouette;
       m.detail = check.why;
@@ -303,7 +307,7 @@ namespace {
 // Every part of a width's σ, each named for a user: the spread first, then the model's parts in
 // WidthDoubt's order, then the codec's. The one list the σ is combined from and shown as.
 constexpr size_t kSpreadPart = 0;
-std::array<DoubtPart, 8> AllDoubtParts(const StrandMeasurement& m) {
+std::array<DoubtPart, 9> AllDoubtParts(const StrandMeasurement& m) {
   const WidthDoubt& d = m.doubt;
   return {{{"the calipers' spread", d.spread_px},
            {"shading too weak to decide", d.shading_px},
@@ -312,12 +316,13 @@ std::array<DoubtPart, 8> AllDoubtParts(const StrandMeasurement& m) {
            {"residual structure the calipers share", d.structure_px},
            {"a background sloping to the edge", d.two_slope_px},
            {"calipers missing from a changing width", d.missing_px},
+           {"the object's level differing at its two edges", d.inner_level_px},
            {"the codec", m.codec_sigma_px}}};
 }
 }  // namespace
 
 void CombineSigmas(StrandMeasurement* m) {
-  const std::array<DoubtPart, 8> parts = AllDoubtParts(*m);
+  const std::array<DoubtPart, 9> parts = AllDoubtParts(*m);
   double model_sq = 0;
   for (size_t k = 0; k < parts.size(); ++k)
     if (k != kSpreadPart) model_sq += parts[k].sigma_px * parts[k].sigma_px;
@@ -326,7 +331,7 @@ void CombineSigmas(StrandMeasurement* m) {
 }
 
 std::vector<DoubtPart> DoubtParts(const StrandMeasurement& m) {
-  const std::array<DoubtPart, 8> all = AllDoubtParts(m);
+  const std::array<DoubtPart, 9> all = AllDoubtParts(m);
   std::vector<DoubtPart> parts(all.begin(), all.end());
   std::stable_sort(parts.begin(), parts.end(),
                    [](const DoubtPart& a, const DoubtPart& b) { return a.sigma_px > b.sigma_px; });

@@ -68,6 +68,7 @@ struct WidthDoubt {
   double structure_px = 0;  // the residual structure the calipers share at each edge
   double two_slope_px = 0;  // a background sloping to a flat object: the move it makes, or its σ
   double missing_px = 0;    // calipers left out of the mean of a width changing along the band
+  double inner_level_px = 0;  // a flat object's level differing at its two edges: a step by one
 };
 
 // The result for one frame. Geometry is in full-frame pixel coordinates (ROI offset added).
