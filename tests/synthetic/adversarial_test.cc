@@ -249,6 +249,39 @@ TEST(AdversarialTest, AHighlightAtTheRimOfAFlatStrandCarriesItsDoubt) {
     ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kSpecularStripe, seed));
 }
 
+TEST(AdversarialTest, LightSlopingAcrossAFlatStrandIsNoStepBesideAnEdge) {
+  // Lit from one side, a flat strand's level falls across it: its two edges read different
+  // levels inside it with nothing beside either. The level's trend across the strand's middle
+  // accounts for that (without it these were imprecise at sigma 0.25-0.8 px, all within 0.1 px).
+  AdversarialScene p = RandomAdversarialScene(TroubleClass::kPlain, 3);
+  p.codec = Codec::kPng;
+  p.noise_sigma = 2;
+  p.shading_ambient = 1;
+  p.background_texture = 0;
+  p.background_slope = 0;
+  p.tilt_deg = 0;
+  p.blur_sigma_px = 1.5;
+  AdversarialTruth t;
+  const cv::Mat frame = RenderAdversarial(p, 1, Scratch().string(), &t)[0];
+  for (const double fall : {0.15, 0.3}) {
+    // The strand's excess over the background scaled from 1 at its left edge to 1 − fall at its
+    // right.
+    cv::Mat lit = frame.clone();
+    const double left = p.tip_x_px - 0.5 * t.width_px;
+    for (int y = 0; y < lit.rows; ++y) {
+      for (int x = 0; x < lit.cols; ++x) {
+        const double across = std::clamp((x - left) / t.width_px, 0.0, 1.0);
+        const double v = p.background_level +
+                         (frame.at<uchar>(y, x) - p.background_level) * (1 - fall * across);
+        lit.at<uchar>(y, x) = cv::saturate_cast<uchar>(v);
+      }
+    }
+    const vision::StrandMeasurement m = MeasureAdversarialFrame(lit, p);
+    ASSERT_TRUE(m.valid()) << "fall " << fall << ": " << m.detail << " " << Describe(p);
+    EXPECT_LE(std::abs(m.width_px - t.width_px), WrongTolerancePx(t.width_px)) << fall;
+  }
+}
+
 TEST(AdversarialTest, AStripeWithTheStrandsOutlineJustOutsideItIsNotTheStrand) {
   // A dark 66 px strand whose stripe, 14 px wide and near the background's level, lies 5 px from
   // its right edge: the stripe was measured as a bright object, 14.1 px at sigma 0.16-1.3, the

@@ -40,24 +40,55 @@ EdgeLines FitEdgeLines(const std::vector<CaliperFit>& fits, double band_s0, doub
   return out;
 }
 
-double InnerLevelDoubtPx(const std::vector<CaliperFit>& fits, const std::vector<bool>& use,
+double InnerLevelDoubtPx(const GreyImage& img, const AxisFrame& f, double band_s0, double spacing,
+                         const std::vector<CaliperFit>& fits, const std::vector<bool>& use,
                          double blur_px) {
-  std::vector<double> inner[2], step[2];
+  constexpr double kLevelBlurs = 3.0;        // where each edge's inner level is read
+  constexpr double kHiddenStepBlurs = 2.0;   // how far inside a step may hide in an edge's blur
+  constexpr double kAllowance = 0.1;         // of the larger step
+  constexpr double kHalves[2][2] = {{0.2, 0.4}, {0.6, 0.8}};  // the middle's halves, of the width
+  constexpr int kRows = 4, kPerHalf = 5;     // samples of each half in each caliper
+  std::vector<double> inner[2], step[2], middle[2], at[2];
   for (size_t k = 0; k < fits.size(); ++k) {
     if (!use[k]) continue;
+    const EdgeFit& l = fits[k].left;
+    const EdgeFit& r = fits[k].right;
+    const double width = r.edge_px - l.edge_px;
+    if (width <= 0) continue;
     for (int side = 0; side < 2; ++side) {
-      const EdgeFit& fit = side == 0 ? fits[k].left : fits[k].right;
-      const double inward = (side == 0 ? 1.0 : -1.0) * 3.0 * fit.sigma_px;
+      const EdgeFit& fit = side == 0 ? l : r;
+      const double inward = (side == 0 ? 1.0 : -1.0) * kLevelBlurs * fit.sigma_px;
       const double in = EdgeModelValue(fit, fit.edge_px + inward);
       inner[side].push_back(in);
       step[side].push_back(in - EdgeModelValue(fit, fit.edge_px - inward));
+      at[side].push_back((side == 0 ? inward : width + inward) / width);
+    }
+    for (int half = 0; half < 2; ++half) {
+      for (int r_i = 0; r_i < kRows; ++r_i) {
+        const double s = band_s0 + (k + (r_i + 0.5) / kRows) * spacing;
+        for (int q = 0; q < kPerHalf; ++q) {
+          const double frac =
+              kHalves[half][0] + (kHalves[half][1] - kHalves[half][0]) * (q + 0.5) / kPerHalf;
+          const double u = l.edge_px + frac * width;
+          const double x = f.ImageX(s, u), y = f.ImageY(s, u);
+          if (img.InsideForBilinear(x, y)) middle[half].push_back(img.Bilinear(x, y));
+        }
+      }
     }
   }
-  if (inner[0].size() < 3) return 0;
+  if (inner[0].size() < 3 || middle[0].empty() || middle[1].empty()) return 0;
   const double larger = std::max(std::abs(Median(step[0])), std::abs(Median(step[1])));
   if (larger <= 0) return 0;
-  const double share = std::abs(Median(inner[0]) - Median(inner[1])) / larger;
-  return std::max(0.0, share - kInnerLevelAllowance) * 2.0 * blur_px;
+  // The light's slope across the object, per width, from the middle's halves (their centres 0.4
+  // apart), carried to the places the levels are read. A stripe in the middle makes a slope of
+  // its own: the disagreement is the smaller of the two, with the slope and without.
+  const double centre[2] = {0.5 * (kHalves[0][0] + kHalves[0][1]),
+                            0.5 * (kHalves[1][0] + kHalves[1][1])};
+  const double trend = (Median(middle[1]) - Median(middle[0])) / (centre[1] - centre[0]);
+  const double expected = trend * (Median(at[1]) - Median(at[0]));
+  const double apart = Median(inner[1]) - Median(inner[0]);
+  const double share = std::min(std::abs(apart), std::abs(apart - expected)) / larger;
+  return std::max(0.0, share - kAllowance) * kHiddenStepBlurs * blur_px;
 }
 
 }  // namespace clogscope::vision

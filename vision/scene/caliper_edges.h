@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "vision/edges/edge_fit.h"
+#include "vision/edges/grey_image.h"
 
 namespace clogscope::vision {
 
@@ -28,15 +29,19 @@ struct EdgeLines {
 
 EdgeLines FitEdgeLines(const std::vector<CaliperFit>& fits, double band_s0, double spacing);
 
-// A flat object's level just inside its two edges (each plain step's model three of its blurs
-// inside the edge, the median over the calipers `use`d) is one level. A step of the object's
-// level within the blur of one edge (a highlight at the rim) folds into that edge's fitted step
-// and moves it by up to its share of the step times its distance, ≲ 2 blurs (further in it shows
-// as an edge of its own, caliper_samples.h's InnerEdgeDistance). The width's doubt from the two
-// levels' difference over the larger step, beyond kInnerLevelAllowance: that share of 2 blurs.
-// 0 with fewer than 3 calipers.
-inline constexpr double kInnerLevelAllowance = 0.1;
-double InnerLevelDoubtPx(const std::vector<CaliperFit>& fits, const std::vector<bool>& use,
+// A flat object's level just inside its two edges (each plain step's model kLevelBlurs of its
+// blurs inside the edge, the median over the calipers `use`d; caliper k spans s from band_s0 +
+// k·spacing in axis frame f) is one level, but for the light's slope across the object: the trend
+// between the medians of its middle's two halves (0.2–0.4 and 0.6–0.8 of the width) carried out
+// to where the levels are read (taken only where it lessens their disagreement: a stripe in the
+// middle has a trend of its own). A step of the object's level within the blur of one edge (a
+// highlight at the rim) folds into that edge's fitted step and moves it by up to its share of the
+// step times its distance, up to kHiddenStepBlurs blurs (further in it shows as an edge of its
+// own: InnerEdgeDistance). The width's doubt, px: the levels' disagreement beyond the trend, over
+// the larger step, less an allowance (the correct frames of two matrices came to 0.09 at most),
+// times that distance. 0 with fewer than 3 calipers.
+double InnerLevelDoubtPx(const GreyImage& img, const AxisFrame& f, double band_s0, double spacing,
+                         const std::vector<CaliperFit>& fits, const std::vector<bool>& use,
                          double blur_px);
 
 }  // namespace clogscope::vision

@@ -642,10 +642,13 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   doubt.missing_px = missing_doubt_px;
   // A flat object's two edges (plain steps, no stripe modelled beside either) see one level
   // inside it: where they do not, a step beside one edge may have moved it (caliper_edges.h).
+  // (The inlier calipers with their own edge models, not refitted as one cylinder.)
+  std::vector<bool> own_edges(n_cal);
+  for (int k = 0; k < n_cal; ++k)
+    own_edges[k] = m->calipers[k].inlier && fits[k].width_sigma_px < 0;
   if (!filament && shade[0] == 0 && shade[1] == 0 && !inner_step[0] && !inner_step[1]) {
-    std::vector<bool> use(n_cal);
-    for (int k = 0; k < n_cal; ++k) use[k] = m->calipers[k].inlier && fits[k].width_sigma_px < 0;
-    doubt.inner_level_px = InnerLevelDoubtPx(fits, use, m->blur_px);
+    doubt.inner_level_px = InnerLevelDoubtPx(img, f, band_s0, opt.caliper_spacing_px, fits,
+                                             own_edges, m->blur_px);
   }
   {
     // The inlier calipers' own edge models; a strand's calipers refitted as cylinders, the
@@ -656,7 +659,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     for (int side = 0; side < 2; ++side) {
       std::vector<CaliperEdge> edges;
       for (int k = 0; k < n_cal; ++k) {
-        if (!m->calipers[k].inlier || fits[k].width_sigma_px >= 0) continue;
+        if (!own_edges[k]) continue;
         const double s0 = band_s0 + k * opt.caliper_spacing_px;
         edges.push_back(
             {s0, s0 + opt.caliper_spacing_px, side == 0 ? fits[k].left : fits[k].right});

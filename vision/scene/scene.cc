@@ -605,10 +605,11 @@ PairContest ContestPairs(const PairCandidate& b, const StrandGeometry& bg, const
   // sides) is the strand; a hair that ends at a flank, or in the open, is not. But the face read
   // on one side only does not tell a rival apart: a hair from the face's corner reads so, and so
   // does a strand whose face noise hid on one side (a 91 px strand lost so to an 8 px hair from
-  // the corner, in one of four frames).
+  // the corner, in one of four frames). The better-scoring pair read so is never outranked by
+  // the face; a weaker one that is no rival (below kRivalScoreRatio) is.
   if (o.target == MeasureTarget::kStrand && (bg.tip_face_sides == 2) != (cg.tip_face_sides == 2)) {
-    const int other_sides = bg.tip_face_sides == 2 ? cg.tip_face_sides : bg.tip_face_sides;
-    if (other_sides == 1 && c.score >= kRivalScoreRatio * b.score)
+    if (bg.tip_face_sides == 1 ||
+        (cg.tip_face_sides == 1 && c.score >= kRivalScoreRatio * b.score))
       return PairContest::kFaceOnOneSide;
     return bg.tip_face_sides == 2 ? PairContest::kFirstAtFace : PairContest::kSecondAtFace;
   }
@@ -637,8 +638,8 @@ std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const P
                          ? "two strand-like objects, neither hanging from the nozzle's face: {} "
                            "and {}"
                      : contest == PairContest::kFaceOnOneSide
-                         ? "two strand-like objects, one at the nozzle's face on both sides, the "
-                           "other on one side: {} and {}"
+                         ? "two strand-like objects, the nozzle's face read on one side only of "
+                           "one of them: {} and {}"
                          : "two strand-like pairs of similar score: {} and {}",
                      Describe(b), Describe(c));
 }

@@ -17,6 +17,8 @@ constexpr double kMinReachPx = 20.0;       // how far out the outside is looked 
 constexpr double kNearPx = 3.0;            // the background's level: this far beyond the blur
 constexpr double kMaxObjectLike = 0.4;     // of one side's outside samples
 constexpr double kMaxLevelMismatch = 1.0;  // of the object's contrast
+// Another edge just outside a silhouette: looked for this far from it (blurs, and px).
+constexpr double kOutsideEdgeBlurs = 2.5, kOutsideEdgePx = 4.0;
 // One edge's residuals this many times the other's, and by this many grey levels.
 constexpr double kMaxResidualRatio = 2.0, kMinResidualExcess = 1.5;
 
@@ -93,16 +95,16 @@ SelfCheck CheckNoEdgeJustOutside(const GreyImage& img, const AxisFrame& f, doubl
                                  double min_step) {
   SelfCheck out;
   const double mid = 0.5 * (s0 + s1);
-  const double depth = 2.5 * blur_px + 4.0;
+  const double depth_px = kOutsideEdgeBlurs * blur_px + kOutsideEdgePx;
   for (int side = 0; side < 2; ++side) {
     const double u = (side == 0 ? left_u0 : right_u0) + slope * mid;
     // Outward: away from the object, which lies toward +u of the left edge.
-    const double d = InnerEdgeDistance(img, f, s0, s1, u, side == 0 ? -1 : 1, depth, min_step);
+    const double d = InnerEdgeDistance(img, f, s0, s1, u, side == 0 ? -1 : 1, depth_px, min_step);
     if (std::isfinite(d)) {
       out.passed = false;
       out.why = fmt::format(
-          "another edge {:.1f} px outside its {} edge: the strand's own outline beyond a stripe, "
-          "or another object against it",
+          "another edge {:.1f} px outside its {} edge: the strand's own outline beyond a stripe "
+          "measured as the object, or another object against it (a shadow, a hair)",
           d, side == 0 ? "left" : "right");
       return out;
     }

@@ -26,9 +26,9 @@ SelfCheck CheckOutsideIsBackground(const GreyImage& img, const AxisFrame& f, dou
                                    double left_u0, double right_u0, double slope, double blur_px);
 
 // Looks outward from each fitted edge, over the band, for another edge just beyond its blur
-// (InnerEdgeDistance turned outward, as far as 2.5 blurs and 4 px past the edge's own step): the
-// strand's own outline beyond a stripe measured as the object, or another object against it.
-// Fails when either side has one.
+// (InnerEdgeDistance turned outward: from 3.5 px past the edge's own gradient peak to 2.5 blurs
+// and 4 px from the edge): the strand's own outline beyond a stripe measured as the object, or
+// another object against it (a shadow, a hair). Fails when either side has one.
 SelfCheck CheckNoEdgeJustOutside(const GreyImage& img, const AxisFrame& f, double s0, double s1,
                                  double left_u0, double right_u0, double slope, double blur_px,
                                  double min_step);

@@ -306,8 +306,8 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
 namespace {
 // Every part of a width's σ, each named for a user: the spread first, then the model's parts in
 // WidthDoubt's order, then the codec's. The one list the σ is combined from and shown as.
-constexpr size_t kSpreadPart = 0;
-std::array<DoubtPart, 9> AllDoubtParts(const StrandMeasurement& m) {
+constexpr size_t kSpreadPart = 0, kDoubtParts = 9;
+std::array<DoubtPart, kDoubtParts> AllDoubtParts(const StrandMeasurement& m) {
   const WidthDoubt& d = m.doubt;
   return {{{"the calipers' spread", d.spread_px},
            {"shading too weak to decide", d.shading_px},
@@ -322,7 +322,7 @@ std::array<DoubtPart, 9> AllDoubtParts(const StrandMeasurement& m) {
 }  // namespace
 
 void CombineSigmas(StrandMeasurement* m) {
-  const std::array<DoubtPart, 9> parts = AllDoubtParts(*m);
+  const std::array<DoubtPart, kDoubtParts> parts = AllDoubtParts(*m);
   double model_sq = 0;
   for (size_t k = 0; k < parts.size(); ++k)
     if (k != kSpreadPart) model_sq += parts[k].sigma_px * parts[k].sigma_px;
@@ -331,7 +331,7 @@ void CombineSigmas(StrandMeasurement* m) {
 }
 
 std::vector<DoubtPart> DoubtParts(const StrandMeasurement& m) {
-  const std::array<DoubtPart, 9> all = AllDoubtParts(m);
+  const std::array<DoubtPart, kDoubtParts> all = AllDoubtParts(m);
   std::vector<DoubtPart> parts(all.begin(), all.end());
   std::stable_sort(parts.begin(), parts.end(),
                    [](const DoubtPart& a, const DoubtPart& b) { return a.sigma_px > b.sigma_px; });
