@@ -249,6 +249,13 @@ TEST(AdversarialTest, AHighlightAtTheRimOfAFlatStrandCarriesItsDoubt) {
     ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kSpecularStripe, seed));
 }
 
+TEST(AdversarialTest, AStrandSplitByAStripeWhoseNarrowSideIsNoPairIsAmbiguous) {
+  // A dark 65 px strand whose 15 px stripe comes out at the background's level 7 px from its
+  // right edge: the outline is ruled out for the background showing inside it, the 7 px side is
+  // no pair of its own, and the 43 px side stood alone, valid at sigma 0.02-0.06.
+  ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kSpecularStripe, 624));
+}
+
 TEST(AdversarialTest, LightSlopingAcrossAFlatStrandIsNoStepBesideAnEdge) {
   // Lit from one side, a flat strand's level falls across it: its two edges read different
   // levels inside it with nothing beside either. The level's trend across the strand's middle

@@ -181,10 +181,12 @@ StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOption
         m.detail = AmbiguityDetail(contest, next, *rival);
         break;
       }
-      if (std::string flanked = FlankedDetail(scene, index); !flanked.empty()) {
+      std::string why = FlankedDetail(scene, index);
+      if (why.empty() && opt.target == MeasureTarget::kStrand) why = SplitDetail(scene, index);
+      if (!why.empty()) {
         next.Judge(PairVerdict::kAsLikely, "a stripe or a gap as much as a strand");
         m.status = FrameStatus::kAmbiguous;
-        m.detail = std::move(flanked);
+        m.detail = std::move(why);
         break;
       }
       StrandMeasurement alt =
