@@ -79,7 +79,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     m->detail = std::move(detail);
   };
   const AxisFrame& f = g.axis;
-  const double min_contrast = opt.min_contrast_fraction * data_max;
+  const double min_contrast = MinContrastLevel(opt, data_max);
   const double width0 = g.width_px;
   const int n_cal = static_cast<int>((band_s1 - band_s0) / opt.caliper_spacing_px + 1e-9);
   m->band_start_px = band_s0;

@@ -26,6 +26,10 @@ constexpr double kParallelSine = 0.035;  // two axes within 2° of each other ar
 // short of the ambiguity ratio says little about which is the object.
 constexpr double kFlankScoreRatio = 0.5;
 constexpr double kSameEdgePx = 1.5;  // two pairs' edges this close at mid-stretch are one line
+// Whether two pairs' axes are parallel (within kParallelSine).
+bool Parallel(const PairCandidate& a, const PairCandidate& b) {
+  return std::abs(a.axis.dx * b.axis.dy - a.axis.dy * b.axis.dx) < kParallelSine;
+}
 // A rival that scores less than this share of the best is no strand, even where the tip does not
 // decide: the short pairs of clutter discs and blobs that held up scored 7-24 % of the strand's
 // in the robustness scenes, while a long hair may score as well as the strand.
@@ -618,7 +622,7 @@ PairContest ContestPairs(const PairCandidate& b, const StrandGeometry& bg, const
   // apart: one strand whose stripe matches the background, or a strand and its neighbour.
   // Which is the strand, or whether their union is, the frame cannot say, whatever the scores.
   const double gap_px = std::max(cl - br, bl - cr);
-  if (std::abs(c.axis.dx * b.axis.dy - c.axis.dy * b.axis.dx) < kParallelSine &&
+  if (Parallel(b, c) &&
       gap_px < std::max(br - bl, cr - cl))
     return PairContest::kSideBySide;
   // Neither at the face: which object is the strand the frame does not say, if the other could
@@ -645,6 +649,8 @@ std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const P
                      Describe(b), Describe(c));
 }
 
+namespace {
+
 // A dark strand's stripe at the background's level leaves two dark bars with a bright gap, and
 // the silhouette around all three is ruled out for the background showing inside it: the gap's
 // neighbours are of the other polarity, so ContestPairs sees no rivals, and nothing else would
@@ -658,7 +664,7 @@ std::string FlankedDetail(const SceneResult& r, int index) {
     const PairCandidate& c = r.candidates[other];
     if (c.polarity == b.polarity || c.polarity == Polarity::kMixed ||
         c.score < kFlankScoreRatio * b.score ||
-        std::abs(c.axis.dx * b.axis.dy - c.axis.dy * b.axis.dx) >= kParallelSine)
+        !Parallel(b, c))
       return;
     if (c.right == b.left) flank[0] = &c;
     if (c.left == b.right) flank[1] = &c;
@@ -682,7 +688,7 @@ std::string SplitDetail(const SceneResult& r, int index) {
     if (c.verdict != PairVerdict::kSpansObjects || c.polarity != b.polarity ||
         c.score < kFlankScoreRatio * b.score || c.width_px <= b.width_px ||
         c.width_px - b.width_px > b.width_px ||
-        std::abs(c.axis.dx * b.axis.dy - c.axis.dy * b.axis.dx) >= kParallelSine)
+        !Parallel(b, c))
       continue;
     // One edge in common (the same line, if not the same segment).
     const auto [cl, cr] = Interval(c, b.axis);
@@ -693,6 +699,13 @@ std::string SplitDetail(const SceneResult& r, int index) {
         Describe(b), Describe(c));
   }
   return "";
+}
+}  // namespace
+
+std::string StripeOrGapDetail(const SceneResult& r, int index, MeasureTarget target) {
+  std::string why = FlankedDetail(r, index);
+  if (why.empty() && target == MeasureTarget::kStrand) why = SplitDetail(r, index);
+  return why;
 }
 
 namespace {
@@ -765,9 +778,7 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
     r.runners_up.emplace_back(i, g);
   }
   if (r.chosen >= 0) {
-    std::string why = FlankedDetail(r, r.chosen);
-    if (why.empty() && o.target == MeasureTarget::kStrand) why = SplitDetail(r, r.chosen);
-    if (!why.empty()) {
+    if (std::string why = StripeOrGapDetail(r, r.chosen, o.target); !why.empty()) {
       r.status = FrameStatus::kAmbiguous;
       r.detail = std::move(why);
       return;

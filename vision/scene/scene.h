@@ -135,15 +135,15 @@ inline bool Ambiguous(PairContest c) {
 }
 // The `ambiguous` detail for an ambiguous contest (Ambiguous).
 std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const PairCandidate& c);
-// The `ambiguous` detail when candidate `index` lies between two pairs of the other polarity that
-// held up (r.chosen and r.runners_up), share its edges, are parallel to it and each score at least
-// half as well: a stripe in one strand or a gap between two objects. Empty when it does not.
-std::string FlankedDetail(const SceneResult& r, int index);
-// The `ambiguous` detail when candidate `index` shares an edge with a wider, parallel pair of its
-// kind that was ruled out only for the background showing inside it (kSpansObjects), whose other
-// edge is nearer than `index` is wide and which scores at least half as well: one strand split by
-// a stripe at the background's level, or a strand beside another object. Empty when none.
-std::string SplitDetail(const SceneResult& r, int index);
+// The `ambiguous` detail when candidate `index` may be a stripe or a gap rather than the object:
+// it lies between two pairs of the other polarity that held up (r.chosen and r.runners_up), share
+// its edges, are parallel to it and each score at least half as well (a stripe in one strand or
+// a gap between two objects); or, for a strand, it shares an edge with a wider, parallel pair of
+// its kind that was ruled out only for the background showing inside it (kSpansObjects), whose
+// other edge is nearer than `index` is wide and which scores at least half as well (one strand
+// split by a stripe at the background's level, or a strand beside another object). Empty when
+// neither.
+std::string StripeOrGapDetail(const SceneResult& r, int index, MeasureTarget target);
 
 // Finds the strand in one or more single-channel 8/16-bit views of the same ROI (grey, or a
 // colour frame's luma and channels): the channel whose best pair scores highest is used. Contrast

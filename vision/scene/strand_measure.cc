@@ -92,7 +92,7 @@ SceneOptions SceneOptionsFor(const StrandMeasureOptions& opt, double data_max) {
   so.polarity = opt.polarity;
   so.max_tilt_deg = opt.max_tilt_deg;
   so.min_length_px = opt.min_length_px;
-  so.min_contrast = opt.min_contrast_fraction * data_max;
+  so.min_contrast = MinContrastLevel(opt, data_max);
   return so;
 }
 
@@ -181,9 +181,7 @@ StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOption
         m.detail = AmbiguityDetail(contest, next, *rival);
         break;
       }
-      std::string why = FlankedDetail(scene, index);
-      if (why.empty() && opt.target == MeasureTarget::kStrand) why = SplitDetail(scene, index);
-      if (!why.empty()) {
+      if (std::string why = StripeOrGapDetail(scene, index, opt.target); !why.empty()) {
         next.Judge(PairVerdict::kAsLikely, "a stripe or a gap as much as a strand");
         m.status = FrameStatus::kAmbiguous;
         m.detail = std::move(why);
@@ -295,7 +293,7 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
     if (check.passed)
       check = CheckNoEdgeJustOutside(img, g.axis, m.band_start_px, m.band_end_px, m.left_u0_px,
                                      m.right_u0_px, m.edge_slope, m.blur_px,
-                                     opt.min_contrast_fraction * data_max);
+                                     MinContrastLevel(opt, data_max));
     if (!check.passed) {
       m.status = FrameStatus::kNotSilhouette;
       m.detail = check.why;

@@ -55,6 +55,12 @@ inline constexpr double kWholeStretchPx = 1e6;  // band height meaning "as far a
 inline constexpr double kNominalScaleUmPerPx = 3.0;  // the reference camera's, when none is given
 BandPx DefaultBand(MeasureTarget target, double scale_um_per_px);
 
+// The least edge step a strand's edge may have, in the data's grey levels (data_max its full
+// scale).
+inline double MinContrastLevel(const StrandMeasureOptions& options, double data_max) {
+  return options.min_contrast_fraction * data_max;
+}
+
 // What a width's σ is made of: each part a σ of width_px, both edges together, independent of the
 // others: width_sigma_px is the root of the sum of their squares and of codec_sigma_px's,
 // model_sigma_px that of all but the spread (CombineSigmas). (Shading and cylinder answer one
