@@ -1,32 +1,14 @@
 // Scenes from the adversarial renderer (synthetic/adversarial.h) built around one trouble each,
 // measured with the default options and judged against the render's geometric truth.
-#include "synthetic/adversarial.h"
-
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
-#include <filesystem>
 
-#include "synthetic/adversarial_matrix.h"
-#include "tests/scratch_dir.h"
-#include "vision/scene/strand_measure.h"
+#include "tests/synthetic/adversarial_test_util.h"
 
 namespace clogscope::synthetic {
 namespace {
-
-// Where H.264 round trips go: a folder of this run's own (the renderer names its files after the
-// scene, and another run may render the same scene at the same time).
-const std::filesystem::path& Scratch() {
-  static const testutil::ScratchDir dir("clogscope_adversarial_test");
-  return dir.path();
-}
-
-// Renders the scene's first frame and measures it as the matrix does.
-vision::StrandMeasurement RenderAndMeasure(const AdversarialScene& p, AdversarialTruth* t) {
-  ClipFacts clip;
-  const cv::Mat f = RenderAdversarial(p, 1, Scratch().string(), t, &clip)[0];
-  return MeasureAdversarialFrame(f, p, clip);
-}
 
 // Seed 3 of the plain class without what the class draws at random besides: a flat strand on a
 // flat, untextured background, lossless.
@@ -158,95 +140,6 @@ TEST(AdversarialTest, ClippedStrandThroughH264IsSaturatedNotMeasured) {
   }
 }
 
-TEST(AdversarialTest, AHairBesideTheStrandIsNeverMeasuredAsIt) {
-  // Stringers 10–50 µm beside the strand, hanging from the nozzle or from above (behind the
-  // nozzle's flank), the nozzle often barely visible: the strand or a refusal, never the hair.
-  int valid = 0;
-  for (uint64_t seed = 1; seed <= 12; ++seed) {
-    const AdversarialScene p = RandomAdversarialScene(TroubleClass::kStringer, seed);
-    AdversarialTruth t;
-    const vision::StrandMeasurement m = RenderAndMeasure(p, &t);
-    // A width, valid or `imprecise`, is the strand's.
-    if (!m.valid() && m.status != vision::FrameStatus::kImprecise) continue;
-    ++valid;
-    EXPECT_NEAR(m.width_px, t.width_px, std::max(0.45, 0.0075 * t.width_px)) << Describe(p);
-  }
-  // Seed 4's hair comes from above and ends at the nozzle's flank: the strand hangs from the
-  // face. (Ambiguous before the face decided.) Its σ sits at the valid limit (±0.20 px on a
-  // 117 px strand): the strand measured, valid or `imprecise`.
-  const AdversarialScene p = RandomAdversarialScene(TroubleClass::kStringer, 4);
-  AdversarialTruth t;
-  const vision::StrandMeasurement m = RenderAndMeasure(p, &t);
-  ASSERT_TRUE(m.valid() || m.status == vision::FrameStatus::kImprecise) << m.detail;
-  EXPECT_NEAR(m.width_px, t.width_px, WrongTolerancePx(t.width_px));
-  EXPECT_GE(valid, 8);
-}
-
-// The matrix's four frames of a scene (an H.264 clip encodes its frames together).
-std::vector<cv::Mat> MatrixFrames(const AdversarialScene& p, AdversarialTruth* t,
-                                  ClipFacts* clip = nullptr) {
-  return RenderAdversarial(p, 4, Scratch().string(), t, clip);
-}
-
-// The scene's four matrix frames, each valid and within the matrix's tolerance of the truth.
-void ExpectMatrixFramesValidAndRight(const AdversarialScene& p) {
-  AdversarialTruth t;
-  ClipFacts clip;
-  for (const cv::Mat& frame : MatrixFrames(p, &t, &clip)) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, clip);
-    ASSERT_TRUE(m.valid()) << m.detail << ": " << Describe(p);
-    EXPECT_LE(std::abs(m.width_px - t.width_px), WrongTolerancePx(t.width_px)) << Describe(p);
-  }
-}
-
-TEST(AdversarialTest, AStrandAndAHairUnderANozzleAtTheBackgroundsLevelAreAmbiguous) {
-  // An 83 px strand 19° off vertical and a 10 px hair beside it, under a nozzle 2 grey levels
-  // above the background: no face shows beside either. What the columns beside them read are
-  // steps onto other levels (the tilted strand's own outline) or that do not step the same way on
-  // both sides, which once counted as faces: the strand "hung from the face" in two frames by
-  // luck, and with fewer such readings the hair did in one. Which of the two hangs from the
-  // nozzle the frames cannot say.
-  const AdversarialScene p = RandomAdversarialScene(TroubleClass::kStringer, 24);
-  AdversarialTruth t;
-  ClipFacts clip;
-  const std::vector<cv::Mat> frames = RenderAdversarial(p, 4, Scratch().string(), &t, &clip);
-  for (size_t i = 0; i < frames.size(); ++i) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frames[i], p, clip);
-    EXPECT_EQ(m.status, vision::FrameStatus::kAmbiguous)
-        << "frame " << i << ": " << m.width_px << " px, " << m.detail << " " << Describe(p);
-  }
-}
-
-// The scene's four matrix frames: each refused, or a width within the matrix's tolerance or 3σ
-// of the truth (never another object's).
-void ExpectMatrixFramesRefusedOrRight(const AdversarialScene& p) {
-  AdversarialTruth t;
-  ClipFacts clip;
-  const std::vector<cv::Mat> frames = MatrixFrames(p, &t, &clip);
-  for (size_t i = 0; i < frames.size(); ++i) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frames[i], p, clip);
-    if (!m.gave_width()) continue;
-    EXPECT_LE(std::abs(m.width_px - t.width_px),
-              std::max(WrongTolerancePx(t.width_px), 3 * m.width_sigma_px))
-        << "frame " << i << ": " << m.width_px << " ± " << m.width_sigma_px << " px, truth "
-        << t.width_px << " " << m.detail << " " << Describe(p);
-  }
-}
-
-TEST(AdversarialTest, AFaceReadOnOneSideDoesNotChooseBetweenAStrandAndAHair) {
-  // A 91 px strand under a dim nozzle (33 grey levels above the background) and an 8 px hair
-  // from the face's corner: in one frame of four the face showed beside the strand on one side
-  // only and beside the hair on both, and the hair was measured, 7.97 ± 0.14 px.
-  ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kStringer, 322));
-}
-
-TEST(AdversarialTest, AStrandBendingAboveItsStraightEdgesHasNoTipInLine) {
-  // A 44 px strand bending 57 px below the nozzle: the only straight pair is its lower part, 43°
-  // off vertical, whose outline curves on up to the nozzle. The tip was put where the following
-  // stopped, and the band across the bend measured 31.6 ± 0.45 px.
-  ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kBend, 223));
-}
-
 TEST(AdversarialTest, AHighlightAtTheRimOfAFlatStrandCarriesItsDoubt) {
   // Bright flat strands with a brighter stripe 2.8 px inside one edge, closer than the blur lets
   // it show as an edge of its own: the edge's fitted step took the stripe in and moved inward,
@@ -254,13 +147,6 @@ TEST(AdversarialTest, AHighlightAtTheRimOfAFlatStrandCarriesItsDoubt) {
   // blur 1.8, the stripe brighter above the strand than the strand above the background).
   for (const uint64_t seed : {201, 506})
     ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kSpecularStripe, seed));
-}
-
-TEST(AdversarialTest, AStrandSplitByAStripeWhoseNarrowSideIsNoPairIsAmbiguous) {
-  // A dark 65 px strand whose 15 px stripe comes out at the background's level 7 px from its
-  // right edge: the outline is ruled out for the background showing inside it, the 7 px side is
-  // no pair of its own, and the 43 px side stood alone, valid at sigma 0.02-0.06.
-  ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kSpecularStripe, 624));
 }
 
 TEST(AdversarialTest, LightSlopingAcrossAFlatStrandIsNoStepBesideAnEdge) {
@@ -281,60 +167,14 @@ TEST(AdversarialTest, LightSlopingAcrossAFlatStrandIsNoStepBesideAnEdge) {
     for (int y = 0; y < lit.rows; ++y) {
       for (int x = 0; x < lit.cols; ++x) {
         const double across = std::clamp((x - left) / t.width_px, 0.0, 1.0);
-        const double v = p.background_level +
-                         (frame.at<uchar>(y, x) - p.background_level) * (1 - fall * across);
+        const double v =
+            p.background_level + (frame.at<uchar>(y, x) - p.background_level) * (1 - fall * across);
         lit.at<uchar>(y, x) = cv::saturate_cast<uchar>(v);
       }
     }
     const vision::StrandMeasurement m = MeasureAdversarialFrame(lit, p);
     ASSERT_TRUE(m.valid()) << "fall " << fall << ": " << m.detail << " " << Describe(p);
     EXPECT_LE(std::abs(m.width_px - t.width_px), WrongTolerancePx(t.width_px)) << fall;
-  }
-}
-
-TEST(AdversarialTest, AStripeWithTheStrandsOutlineJustOutsideItIsNotTheStrand) {
-  // A dark 66 px strand whose stripe, 14 px wide and near the background's level, lies 5 px from
-  // its right edge: the stripe was measured as a bright object, 14.1 px at sigma 0.16-1.3, the
-  // strand's thin dark rim and outline 5.5-6 px beyond its right edge.
-  ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kSpecularStripe, 523));
-}
-
-TEST(AdversarialTest, AStripeAtTheBackgroundsLevelSplitsTheStrandIntoAmbiguity) {
-  // A dark 191 px strand whose specular stripe comes out near the background's level (JPEG
-  // q40) looks like two parallel strands side by side, 32 and 114 px, both under the nozzle.
-  // Either part, or their union, could be the strand: `ambiguous`, whichever part scores
-  // higher. (Frame 1 was the 32 px part, valid at ± 0.06 px. In frame 3 the narrow part's edge
-  // segments ran on into the nozzle, its walks started off the edge and put its top 60 px up in
-  // the nozzle, and the 114 px part was measured, 114.17 ± 0.04 px. Walked from the middle, the
-  // narrow part's top is on the face again; and the gap between the parts, 45 px and bright, is
-  // no strand either, though each part scores under 0.8 of it.)
-  const AdversarialScene p = RandomAdversarialScene(TroubleClass::kSpecularStripe, 122);
-  AdversarialTruth t;
-  ClipFacts clip;
-  const std::vector<cv::Mat> frames = MatrixFrames(p, &t, &clip);
-  for (int i = 0; i < 4; ++i) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frames[i], p, clip);
-    EXPECT_EQ(m.status, vision::FrameStatus::kAmbiguous)
-        << "frame " << i << ": " << m.width_px << " px, truth " << t.width_px << " " << m.detail;
-  }
-}
-
-TEST(AdversarialTest, AStripeBetweenTwoDarkHalvesIsNotTheStrand) {
-  // A dark 52 px strand whose bright stripe, 10 px wide, has the background's level (matrix seed
-  // 117 of the unseen set, its noise lowered): two dark bars hang from the nozzle with a bright
-  // gap between them, and the silhouette around all three is ruled out for the background
-  // showing inside it. The gap was measured as a bright strand, 9.8 px (valid at this noise).
-  // It is as much a stripe as a strand between two gaps: `ambiguous`.
-  AdversarialScene p = RandomAdversarialScene(TroubleClass::kSpecularStripe, 117);
-  p.noise_sigma = 2;
-  AdversarialTruth t;
-  ClipFacts clip;
-  for (const cv::Mat& frame : MatrixFrames(p, &t, &clip)) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, clip);
-    EXPECT_TRUE(!m.valid() || std::abs(m.width_px - t.width_px) <= WrongTolerancePx(t.width_px))
-        << m.width_px << " ± " << m.width_sigma_px << " px, truth " << t.width_px << ": "
-        << Describe(p);
-    EXPECT_EQ(m.status, vision::FrameStatus::kAmbiguous) << m.detail;
   }
 }
 
@@ -480,16 +320,6 @@ TEST(AdversarialTest, ANoisyStraightStrandIsNotTakenForADiscOrBend) {
     EXPECT_LE(std::abs(m.width_px - t.width_px), 3.0 * m.width_sigma_px)
         << "frame " << i << ": " << m.width_px << " ± " << m.width_sigma_px << " px, truth "
         << t.width_px;
-  }
-}
-
-TEST(AdversarialTest, NozzleAloneNeverGivesAWidth) {
-  for (uint64_t seed = 1; seed <= 6; ++seed) {
-    const AdversarialScene p = RandomAdversarialScene(TroubleClass::kNoStrand, seed);
-    const vision::StrandMeasurement m = RenderAndMeasure(p, nullptr);
-    // The README's accuracy table: "nozzle alone … 0 (all `no_strand`)".
-    EXPECT_EQ(m.status, vision::FrameStatus::kNoStrand)
-        << vision::FrameStatusName(m.status) << ", " << m.width_px << " px: " << Describe(p);
   }
 }
 

@@ -34,6 +34,15 @@ bool Parallel(const PairCandidate& a, const PairCandidate& b) {
 // decide: the short pairs of clutter discs and blobs that held up scored 7-24 % of the strand's
 // in the robustness scenes, while a long hair may score as well as the strand.
 constexpr double kRivalScoreRatio = 0.5;
+// Whether `c` could be the strand as much as `b` where the tip does not decide. A score ranks by
+// length and contrast, and a strand whose shaded side is faint scores little for it: a 109 px
+// strand scored 18-34 % of a 14 px hair from the nozzle's corner, which was measured alone. So a
+// pair wider than `b` and longer than it is wide (no disc's or blob's short pair) rivals it
+// whatever its score: never the thinner object by default.
+bool CouldRival(const PairCandidate& b, const PairCandidate& c) {
+  return c.score >= kRivalScoreRatio * b.score ||
+         (c.width_px > b.width_px && c.length_px >= c.width_px);
+}
 // An edge walk that ends within this of its start began off the edge.
 constexpr double kOffEdgeStartPx = 3.0;
 constexpr double kEndFraction = 0.3;  // an edge ends where its contrast falls below this share
@@ -613,8 +622,7 @@ PairContest ContestPairs(const PairCandidate& b, const StrandGeometry& bg, const
   // the corner, in one of four frames). The better-scoring pair read so is never outranked by
   // the face; a weaker one that is no rival (below kRivalScoreRatio) is.
   if (o.target == MeasureTarget::kStrand && (bg.tip_face_sides == 2) != (cg.tip_face_sides == 2)) {
-    if (bg.tip_face_sides == 1 ||
-        (cg.tip_face_sides == 1 && c.score >= kRivalScoreRatio * b.score))
+    if (bg.tip_face_sides == 1 || (cg.tip_face_sides == 1 && CouldRival(b, c)))
       return PairContest::kFaceOnOneSide;
     return bg.tip_face_sides == 2 ? PairContest::kFirstAtFace : PairContest::kSecondAtFace;
   }
@@ -622,14 +630,12 @@ PairContest ContestPairs(const PairCandidate& b, const StrandGeometry& bg, const
   // apart: one strand whose stripe matches the background, or a strand and its neighbour.
   // Which is the strand, or whether their union is, the frame cannot say, whatever the scores.
   const double gap_px = std::max(cl - br, bl - cr);
-  if (Parallel(b, c) &&
-      gap_px < std::max(br - bl, cr - cl))
-    return PairContest::kSideBySide;
+  if (Parallel(b, c) && gap_px < std::max(br - bl, cr - cl)) return PairContest::kSideBySide;
   // Neither at the face: which object is the strand the frame does not say, if the other could
   // be one. (Scores once chose a 10 px hair over an 83 px strand whose nozzle was at the
   // background's level.)
   if (o.target == MeasureTarget::kStrand && bg.tip_face_sides != 2 && cg.tip_face_sides != 2 &&
-      c.score >= kRivalScoreRatio * b.score)
+      CouldRival(b, c))
     return PairContest::kNeitherAtFace;
   return c.score >= o.ambiguity_ratio * b.score ? PairContest::kSimilarScore
                                                 : PairContest::kOutscored;
@@ -663,8 +669,7 @@ std::string FlankedDetail(const SceneResult& r, int index) {
     if (other < 0 || other == index) return;
     const PairCandidate& c = r.candidates[other];
     if (c.polarity == b.polarity || c.polarity == Polarity::kMixed ||
-        c.score < kFlankScoreRatio * b.score ||
-        !Parallel(b, c))
+        c.score < kFlankScoreRatio * b.score || !Parallel(b, c))
       return;
     if (c.right == b.left) flank[0] = &c;
     if (c.left == b.right) flank[1] = &c;
@@ -687,8 +692,7 @@ std::string SplitDetail(const SceneResult& r, int index) {
   for (const PairCandidate& c : r.candidates) {
     if (c.verdict != PairVerdict::kSpansObjects || c.polarity != b.polarity ||
         c.score < kFlankScoreRatio * b.score || c.width_px <= b.width_px ||
-        c.width_px - b.width_px > b.width_px ||
-        !Parallel(b, c))
+        c.width_px - b.width_px > b.width_px || !Parallel(b, c))
       continue;
     // One edge in common (the same line, if not the same segment).
     const auto [cl, cr] = Interval(c, b.axis);
@@ -700,11 +704,35 @@ std::string SplitDetail(const SceneResult& r, int index) {
   }
   return "";
 }
+
+// A strand-like pair whose edges did not end together at a tip (kNoTip) is out as the strand,
+// but not as the reason to doubt a narrower one: a strand whose faint edge faded before the
+// nozzle reads so, and a hair from the face's corner was then measured alone (14.4 px where the
+// strand is 111 px, valid at sigma 0.04). Such a pair counts as a rival whose tip is unknown: one
+// not at the face. A narrower one is a hair crossing the view, or hanging from above it.
+std::string NoTipRivalDetail(const SceneResult& r, int index, const StrandGeometry& g,
+                             const SceneOptions& o) {
+  if (o.target != MeasureTarget::kStrand || g.tip_face_sides == 2) return "";
+  const PairCandidate& b = r.candidates[index];
+  const StrandGeometry unknown_tip;
+  for (const PairCandidate& c : r.candidates) {
+    if (c.verdict != PairVerdict::kNoTip || c.width_px <= b.width_px) continue;
+    const PairContest contest = ContestPairs(b, g, c, unknown_tip, o);
+    if (!Ambiguous(contest)) continue;
+    return fmt::format(
+        "{} does not hang from the nozzle's face on both sides, and another strand-like object "
+        "has no tip in line ({}: {}): which is the strand the frame does not say",
+        Describe(b), Describe(c), c.why);
+  }
+  return "";
+}
 }  // namespace
 
-std::string StripeOrGapDetail(const SceneResult& r, int index, MeasureTarget target) {
+std::string ChoiceDoubtDetail(const SceneResult& r, int index, const StrandGeometry& g,
+                              const SceneOptions& o) {
   std::string why = FlankedDetail(r, index);
-  if (why.empty() && target == MeasureTarget::kStrand) why = SplitDetail(r, index);
+  if (why.empty() && o.target == MeasureTarget::kStrand) why = SplitDetail(r, index);
+  if (why.empty()) why = NoTipRivalDetail(r, index, g, o);
   return why;
 }
 
@@ -778,7 +806,7 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
     r.runners_up.emplace_back(i, g);
   }
   if (r.chosen >= 0) {
-    if (std::string why = StripeOrGapDetail(r, r.chosen, o.target); !why.empty()) {
+    if (std::string why = ChoiceDoubtDetail(r, r.chosen, r.geometry, o); !why.empty()) {
       r.status = FrameStatus::kAmbiguous;
       r.detail = std::move(why);
       return;

@@ -135,15 +135,20 @@ inline bool Ambiguous(PairContest c) {
 }
 // The `ambiguous` detail for an ambiguous contest (Ambiguous).
 std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const PairCandidate& c);
-// The `ambiguous` detail when candidate `index` may be a stripe or a gap rather than the object:
-// it lies between two pairs of the other polarity that held up (r.chosen and r.runners_up), share
-// its edges, are parallel to it and each score at least half as well (a stripe in one strand or
-// a gap between two objects); or, for a strand, it shares an edge with a wider, parallel pair of
-// its kind that was ruled out only for the background showing inside it (kSpansObjects), whose
-// other edge is nearer than `index` is wide and which scores at least half as well (one strand
-// split by a stripe at the background's level, or a strand beside another object). Empty when
-// neither.
-std::string StripeOrGapDetail(const SceneResult& r, int index, MeasureTarget target);
+// The `ambiguous` detail when choosing candidate `index` (followed as `g`) leaves a doubt the
+// contests of pairs that held up do not see; empty when none:
+// - it lies between two pairs of the other polarity that held up (r.chosen and r.runners_up),
+//   share its edges, are parallel to it and each score at least half as well (a stripe in one
+//   strand or a gap between two objects);
+// - for a strand, it shares an edge with a wider, parallel pair of its kind that was ruled out
+//   only for the background showing inside it (kSpansObjects), whose other edge is nearer than
+//   `index` is wide and which scores at least half as well (one strand split by a stripe at the
+//   background's level, or a strand beside another object);
+// - for a strand not at the nozzle's face on both sides, a pair ruled out for having no tip
+//   (kNoTip) would be a rival by ContestPairs were its tip one not at the face (a strand whose
+//   faint edge faded before the nozzle, beside a hair).
+std::string ChoiceDoubtDetail(const SceneResult& r, int index, const StrandGeometry& g,
+                              const SceneOptions& options);
 
 // Finds the strand in one or more single-channel 8/16-bit views of the same ROI (grey, or a
 // colour frame's luma and channels): the channel whose best pair scores highest is used. Contrast

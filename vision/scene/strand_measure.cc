@@ -181,8 +181,8 @@ StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOption
         m.detail = AmbiguityDetail(contest, next, *rival);
         break;
       }
-      if (std::string why = StripeOrGapDetail(scene, index, opt.target); !why.empty()) {
-        next.Judge(PairVerdict::kAsLikely, "a stripe or a gap as much as a strand");
+      if (std::string why = ChoiceDoubtDetail(scene, index, g, scene_options); !why.empty()) {
+        next.Judge(PairVerdict::kAsLikely, "its choice left in doubt");
         m.status = FrameStatus::kAmbiguous;
         m.detail = std::move(why);
         break;

@@ -1,0 +1,66 @@
+// Helpers shared by the adversarial renderer's scene tests (adversarial_test.cc,
+// adversarial_choice_test.cc): render as the matrix does, measure, judge against the truth.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <vector>
+
+#include "synthetic/adversarial.h"
+#include "synthetic/adversarial_matrix.h"
+#include "tests/scratch_dir.h"
+#include "vision/scene/strand_measure.h"
+
+namespace clogscope::synthetic {
+
+// Where H.264 round trips go: a folder of this run's own (the renderer names its files after the
+// scene, and another run may render the same scene at the same time).
+inline const std::filesystem::path& Scratch() {
+  static const testutil::ScratchDir dir("clogscope_adversarial_test");
+  return dir.path();
+}
+
+// Renders the scene's first frame and measures it as the matrix does.
+inline vision::StrandMeasurement RenderAndMeasure(const AdversarialScene& p, AdversarialTruth* t) {
+  ClipFacts clip;
+  const cv::Mat f = RenderAdversarial(p, 1, Scratch().string(), t, &clip)[0];
+  return MeasureAdversarialFrame(f, p, clip);
+}
+
+// The matrix's four frames of a scene (an H.264 clip encodes its frames together).
+inline std::vector<cv::Mat> MatrixFrames(const AdversarialScene& p, AdversarialTruth* t,
+                                         ClipFacts* clip = nullptr) {
+  return RenderAdversarial(p, 4, Scratch().string(), t, clip);
+}
+
+// The scene's four matrix frames, each valid and within the matrix's tolerance of the truth.
+inline void ExpectMatrixFramesValidAndRight(const AdversarialScene& p) {
+  AdversarialTruth t;
+  ClipFacts clip;
+  for (const cv::Mat& frame : MatrixFrames(p, &t, &clip)) {
+    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, clip);
+    ASSERT_TRUE(m.valid()) << m.detail << ": " << Describe(p);
+    EXPECT_LE(std::abs(m.width_px - t.width_px), WrongTolerancePx(t.width_px)) << Describe(p);
+  }
+}
+
+// The scene's four matrix frames: each refused, or a width within the matrix's tolerance or 3σ
+// of the truth (never another object's).
+inline void ExpectMatrixFramesRefusedOrRight(const AdversarialScene& p) {
+  AdversarialTruth t;
+  ClipFacts clip;
+  const std::vector<cv::Mat> frames = MatrixFrames(p, &t, &clip);
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const vision::StrandMeasurement m = MeasureAdversarialFrame(frames[i], p, clip);
+    if (!m.gave_width()) continue;
+    EXPECT_LE(std::abs(m.width_px - t.width_px),
+              std::max(WrongTolerancePx(t.width_px), 3 * m.width_sigma_px))
+        << "frame " << i << ": " << m.width_px << " ± " << m.width_sigma_px << " px, truth "
+        << t.width_px << " " << m.detail << " " << Describe(p);
+  }
+}
+
+}  // namespace clogscope::synthetic
