@@ -1,5 +1,7 @@
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 #include <vector>
 
@@ -36,6 +38,12 @@ struct EdgeFit {
   double inner_step = 0, inner_edge_px = 0;
   double inner_far_px = std::numeric_limits<double>::infinity();
 };
+
+// The PSF's sigma in a fitted step's width, px: sigma_px less the pixel footprint, whose variance
+// across any straight edge is 1/12 px² whatever its tilt.
+inline double PsfSigmaPx(const EdgeFit& fit) {
+  return std::sqrt(std::max(0.0, fit.sigma_px * fit.sigma_px - 1.0 / 12.0));
+}
 
 // The blurred step whose sides slope differently (a background gradient or texture on one side of
 // a silhouette, a flat object on the other):

@@ -43,11 +43,11 @@ EdgeLines FitEdgeLines(const std::vector<CaliperFit>& fits, double band_s0, doub
 double InnerLevelDoubtPx(const GreyImage& img, const AxisFrame& f, double band_s0, double spacing,
                          const std::vector<CaliperFit>& fits, const std::vector<bool>& use,
                          double blur_px) {
-  constexpr double kLevelBlurs = 3.0;        // where each edge's inner level is read
-  constexpr double kHiddenStepBlurs = 2.0;   // how far inside a step may hide in an edge's blur
-  constexpr double kAllowance = 0.1;         // of the larger step
+  constexpr double kLevelBlurs = 3.0;       // where each edge's inner level is read
+  constexpr double kHiddenStepBlurs = 2.0;  // how far inside a step may hide in an edge's blur
+  constexpr double kAllowance = 0.1;        // of the larger step
   constexpr double kHalves[2][2] = {{0.2, 0.4}, {0.6, 0.8}};  // the middle's halves, of the width
-  constexpr int kRows = 4, kPerHalf = 5;     // samples of each half in each caliper
+  constexpr int kRows = 4, kPerHalf = 5;  // samples of each half in each caliper
   std::vector<double> inner[2], step[2], middle[2], at[2];
   for (size_t k = 0; k < fits.size(); ++k) {
     if (!use[k]) continue;
@@ -89,6 +89,37 @@ double InnerLevelDoubtPx(const GreyImage& img, const AxisFrame& f, double band_s
   const double apart = Median(inner[1]) - Median(inner[0]);
   const double share = std::min(std::abs(apart), std::abs(apart - expected)) / larger;
   return std::max(0.0, share - kAllowance) * kHiddenStepBlurs * blur_px;
+}
+
+EdgeBlur MedianBlur(const std::vector<double>& caliper_blurs_px) {
+  EdgeBlur b;
+  if (caliper_blurs_px.empty()) return b;
+  b.median_px = Median(caliper_blurs_px);
+  // The median's standard error: sqrt(pi/2) times the mean's, for normal scatter.
+  constexpr double kMedianEfficiency = 1.2533;
+  b.sigma_px = kMedianEfficiency * kMadToSigma * Mad(caliper_blurs_px, b.median_px) /
+               std::sqrt(static_cast<double>(caliper_blurs_px.size()));
+  return b;
+}
+
+double BlurMismatchDoubtPx(const EdgeBlur& left, const EdgeBlur& right, bool shaded) {
+  // Correct frames of three matrices: the blurrier plain edge at most 1.3 times the sharper, bar
+  // a few with texture in the window; shaded sides up to 1.45 under one-sided light. A stripe 4 px
+  // inside a shaded edge made it 1.7 times as blurred and moved it 1.4 px. Each median is taken
+  // one σ toward the other: at two, a stripe by the rim of a noisy strand went unseen in half its
+  // frames; with none, noisy strands with nothing by their rims were doubted by 1-2 px.
+  constexpr double kBlurAllowance = 0.3, kShadedBlurAllowance = 0.5;
+  constexpr double kBlurNoiseSigmas = 1.0;
+  // Below this the fitted blur is mostly the pixel's own: no ratio of it means anything.
+  constexpr double kMinBlurPx = 0.5;
+  if (left.median_px <= 0 || right.median_px <= 0) return 0;
+  const EdgeBlur& sharp = left.median_px < right.median_px ? left : right;
+  const EdgeBlur& blurred = left.median_px < right.median_px ? right : left;
+  const double sharp_px = std::max(kMinBlurPx, sharp.median_px + kBlurNoiseSigmas * sharp.sigma_px);
+  const double blurred_px = blurred.median_px - kBlurNoiseSigmas * blurred.sigma_px;
+  const double allowed_px = (1 + (shaded ? kShadedBlurAllowance : kBlurAllowance)) * sharp_px;
+  if (blurred_px <= allowed_px) return 0;
+  return std::sqrt(blurred_px * blurred_px - allowed_px * allowed_px);
 }
 
 }  // namespace clogscope::vision

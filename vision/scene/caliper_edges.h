@@ -44,4 +44,21 @@ double InnerLevelDoubtPx(const GreyImage& img, const AxisFrame& f, double band_s
                          const std::vector<CaliperFit>& fits, const std::vector<bool>& use,
                          double blur_px);
 
+// An edge's blur over the calipers: the median of their fitted PSF sigmas and its standard error,
+// px (0, 0 when none).
+struct EdgeBlur {
+  double median_px = 0;
+  double sigma_px = 0;
+};
+EdgeBlur MedianBlur(const std::vector<double>& caliper_blurs_px);
+
+// The two edges of one strand lie at one depth and are blurred alike: where one edge's blur
+// exceeds the other's, a step within its blur (a highlight or a stripe at the rim) has folded into
+// it, moving it by up to the excess blur (in quadrature). The width's doubt, px: that excess
+// beyond what the two medians' noise explains (each taken kBlurNoiseSigmas of its σ toward the
+// other) and an allowance of kBlurAllowance of the sharper edge's blur (kShadedBlurAllowance where
+// a side is shaded: its step's blur also takes up the shading's curvature, which differs between
+// a lit and a shadowed side). 0 when either blur is unknown.
+double BlurMismatchDoubtPx(const EdgeBlur& left, const EdgeBlur& right, bool shaded);
+
 }  // namespace clogscope::vision

@@ -400,6 +400,16 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
                             shaded ? "its shading cannot be fitted"
                                    : "the strand's level is out of range"));
   }
+  // Each edge's own blur, before any cylinder takes one for both (BlurMismatchDoubtPx).
+  EdgeBlur own_blur[2];
+  for (int side = 0; side < 2; ++side) {
+    std::vector<double> b;
+    for (const CaliperFit& cf : fits) {
+      if (!(cf.left.converged && cf.right.converged)) continue;
+      b.push_back(PsfSigmaPx(side == 0 ? cf.left : cf.right));
+    }
+    own_blur[side] = MedianBlur(b);
+  }
   // A lit object on both sides (a front-lit strand or filament): one cylinder per caliper.
   // Only on an object the per-edge fits already saw as one (enough consistent calipers): a wrong
   // pair (an edge and a shading step, filament and idler) must not become one by a richer model.
@@ -470,11 +480,8 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     cal_widths.push_back(c.width_px);
     steps.push_back(std::abs(fits[k].left.contrast));
     steps.push_back(std::abs(fits[k].right.contrast));
-    for (const EdgeFit* e : {&fits[k].left, &fits[k].right}) {
-      // The fitted width holds the PSF and the pixel footprint, whose variance across any straight
-      // edge is 1/12 px² whatever its tilt.
-      blurs.push_back(std::sqrt(std::max(0.0, e->sigma_px * e->sigma_px - 1.0 / 12.0)));
-    }
+    blurs.push_back(PsfSigmaPx(fits[k].left));
+    blurs.push_back(PsfSigmaPx(fits[k].right));
   }
   m->has_geometry = true;
   m->shading_left = shade[0] == 1;
@@ -647,8 +654,12 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   for (int k = 0; k < n_cal; ++k)
     own_edges[k] = m->calipers[k].inlier && fits[k].width_sigma_px < 0;
   if (!filament && shade[0] == 0 && shade[1] == 0 && !inner_step[0] && !inner_step[1]) {
-    doubt.inner_level_px = InnerLevelDoubtPx(img, f, band_s0, opt.caliper_spacing_px, fits,
-                                             own_edges, m->blur_px);
+    doubt.inner_level_px =
+        InnerLevelDoubtPx(img, f, band_s0, opt.caliper_spacing_px, fits, own_edges, m->blur_px);
+  }
+  if (!filament) {
+    doubt.edge_blur_px =
+        BlurMismatchDoubtPx(own_blur[0], own_blur[1], shade[0] == 1 || shade[1] == 1);
   }
   {
     // The inlier calipers' own edge models; a strand's calipers refitted as cylinders, the

@@ -306,7 +306,7 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
 namespace {
 // Every part of a width's σ, each named for a user: the spread first, then the model's parts in
 // WidthDoubt's order, then the codec's. The one list the σ is combined from and shown as.
-constexpr size_t kSpreadPart = 0, kDoubtParts = 9;
+constexpr size_t kSpreadPart = 0, kDoubtParts = 10;
 std::array<DoubtPart, kDoubtParts> AllDoubtParts(const StrandMeasurement& m) {
   const WidthDoubt& d = m.doubt;
   return {{{"the calipers' spread", d.spread_px},
@@ -317,6 +317,7 @@ std::array<DoubtPart, kDoubtParts> AllDoubtParts(const StrandMeasurement& m) {
            {"a background sloping to the edge", d.two_slope_px},
            {"calipers missing from a changing width", d.missing_px},
            {"the object's level differing at its two edges", d.inner_level_px},
+           {"one edge blurred more than the other", d.edge_blur_px},
            {"the codec", m.codec_sigma_px}}};
 }
 }  // namespace

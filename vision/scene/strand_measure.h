@@ -75,6 +75,7 @@ struct WidthDoubt {
   double two_slope_px = 0;  // a background sloping to a flat object: the move it makes, or its σ
   double missing_px = 0;    // calipers left out of the mean of a width changing along the band
   double inner_level_px = 0;  // a flat object's level differing at its two edges: a step by one
+  double edge_blur_px = 0;    // one edge blurred more than the other: a step folded into it
 };
 
 // The result for one frame. Geometry is in full-frame pixel coordinates (ROI offset added).
