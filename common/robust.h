@@ -55,4 +55,13 @@ inline double Mad(const std::vector<double>& v, double median) {
   return Median(std::move(dev));
 }
 
+// The standard error of `v`'s median `median`, for normal scatter: sqrt(pi/2) times the mean's,
+// the scatter taken from the MAD. 0 when `v` is empty.
+inline double MedianStandardError(const std::vector<double>& v, double median) {
+  if (v.empty()) return 0;
+  constexpr double kMedianOverMeanError = 1.2533;  // sqrt(pi/2)
+  return kMedianOverMeanError * kMadToSigma * Mad(v, median) /
+         std::sqrt(static_cast<double>(v.size()));
+}
+
 }  // namespace clogscope

@@ -95,10 +95,7 @@ EdgeBlur MedianBlur(const std::vector<double>& caliper_blurs_px) {
   EdgeBlur b;
   if (caliper_blurs_px.empty()) return b;
   b.median_px = Median(caliper_blurs_px);
-  // The median's standard error: sqrt(pi/2) times the mean's, for normal scatter.
-  constexpr double kMedianEfficiency = 1.2533;
-  b.sigma_px = kMedianEfficiency * kMadToSigma * Mad(caliper_blurs_px, b.median_px) /
-               std::sqrt(static_cast<double>(caliper_blurs_px.size()));
+  b.sigma_px = MedianStandardError(caliper_blurs_px, b.median_px);
   return b;
 }
 
@@ -110,7 +107,8 @@ double BlurMismatchDoubtPx(const EdgeBlur& left, const EdgeBlur& right, bool sha
   // frames; with none, noisy strands with nothing by their rims were doubted by 1-2 px.
   constexpr double kBlurAllowance = 0.3, kShadedBlurAllowance = 0.5;
   constexpr double kBlurNoiseSigmas = 1.0;
-  // Below this the fitted blur is mostly the pixel's own: no ratio of it means anything.
+  // Below this a PSF's fitted sigma is poorly determined beside the pixel's footprint: no ratio
+  // of it means anything.
   constexpr double kMinBlurPx = 0.5;
   if (left.median_px <= 0 || right.median_px <= 0) return 0;
   const EdgeBlur& sharp = left.median_px < right.median_px ? left : right;

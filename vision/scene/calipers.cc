@@ -400,9 +400,11 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
                             shaded ? "its shading cannot be fitted"
                                    : "the strand's level is out of range"));
   }
-  // Each edge's own blur, before any cylinder takes one for both (BlurMismatchDoubtPx).
+  // Each edge's own blur, before any cylinder takes one for both (BlurMismatchDoubtPx); over
+  // every caliper that fitted both edges, since which are inliers is decided after the cylinders.
+  // A strand's only.
   EdgeBlur own_blur[2];
-  for (int side = 0; side < 2; ++side) {
+  for (int side = 0; side < 2 && !filament; ++side) {
     std::vector<double> b;
     for (const CaliperFit& cf : fits) {
       if (!(cf.left.converged && cf.right.converged)) continue;

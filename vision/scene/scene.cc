@@ -35,10 +35,10 @@ bool Parallel(const PairCandidate& a, const PairCandidate& b) {
 // in the robustness scenes, while a long hair may score as well as the strand.
 constexpr double kRivalScoreRatio = 0.5;
 // Whether `c` could be the strand as much as `b` where the tip does not decide. A score ranks by
-// length and contrast, and a strand whose shaded side is faint scores little for it: a 109 px
-// strand scored 18-34 % of a 14 px hair from the nozzle's corner, which was measured alone. So a
-// pair wider than `b` and longer than it is wide (no disc's or blob's short pair) rivals it
-// whatever its score: never the thinner object by default.
+// length and contrast, and a strand whose shaded side is faint scores little for it: a 111 px
+// strand (its pair 109 px) scored 18-34 % of a 14 px hair from the nozzle's corner, which was
+// measured alone. So a pair wider than `b` whose common stretch is longer than it is wide (no
+// disc's or blob's short pair) rivals it whatever its score: never the thinner object by default.
 bool CouldRival(const PairCandidate& b, const PairCandidate& c) {
   return c.score >= kRivalScoreRatio * b.score ||
          (c.width_px > b.width_px && c.length_px >= c.width_px);
@@ -620,7 +620,7 @@ PairContest ContestPairs(const PairCandidate& b, const StrandGeometry& bg, const
   // on one side only does not tell a rival apart: a hair from the face's corner reads so, and so
   // does a strand whose face noise hid on one side (a 91 px strand lost so to an 8 px hair from
   // the corner, in one of four frames). The better-scoring pair read so is never outranked by
-  // the face; a weaker one that is no rival (below kRivalScoreRatio) is.
+  // the face; a weaker one that could not rival it (CouldRival) is.
   if (o.target == MeasureTarget::kStrand && (bg.tip_face_sides == 2) != (cg.tip_face_sides == 2)) {
     if (bg.tip_face_sides == 1 || (cg.tip_face_sides == 1 && CouldRival(b, c)))
       return PairContest::kFaceOnOneSide;
@@ -712,7 +712,7 @@ std::string SplitDetail(const SceneResult& r, int index) {
 // not at the face. A narrower one is a hair crossing the view, or hanging from above it.
 std::string NoTipRivalDetail(const SceneResult& r, int index, const StrandGeometry& g,
                              const SceneOptions& o) {
-  if (o.target != MeasureTarget::kStrand || g.tip_face_sides == 2) return "";
+  if (g.tip_face_sides == 2) return "";
   const PairCandidate& b = r.candidates[index];
   const StrandGeometry unknown_tip;
   for (const PairCandidate& c : r.candidates) {
@@ -731,7 +731,8 @@ std::string NoTipRivalDetail(const SceneResult& r, int index, const StrandGeomet
 std::string ChoiceDoubtDetail(const SceneResult& r, int index, const StrandGeometry& g,
                               const SceneOptions& o) {
   std::string why = FlankedDetail(r, index);
-  if (why.empty() && o.target == MeasureTarget::kStrand) why = SplitDetail(r, index);
+  if (!why.empty() || o.target != MeasureTarget::kStrand) return why;
+  why = SplitDetail(r, index);
   if (why.empty()) why = NoTipRivalDetail(r, index, g, o);
   return why;
 }

@@ -113,9 +113,10 @@ struct SceneResult {
 // kFirstAtFace / kSecondAtFace: the tip decides — only that one hangs from the nozzle's face;
 // kSideBySide: parallel and closer than either is wide (one strand with a stripe at the
 // background's level, or two strands): ambiguous whatever the scores;
-// kNeitherAtFace: a strand's target, and neither hangs from the nozzle's face (on both sides):
-// the tip does not decide, and a score (contrast, length) does not tell a strand from a hair or
-// another strand: ambiguous;
+// kNeitherAtFace: a strand's target, neither hangs from the nozzle's face (on both sides), and c
+// could be the strand (it scores at least half as well as b, or is wider than b and its common
+// stretch longer than it is wide): the tip does not decide, and a score (contrast, length) does
+// not tell a strand from a hair or another strand: ambiguous;
 // kSimilarScore: c scores at least ambiguity_ratio of b: ambiguous; kOutscored: b wins.
 enum class PairContest {
   kNotRivals,
@@ -144,7 +145,7 @@ std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const P
 //   only for the background showing inside it (kSpansObjects), whose other edge is nearer than
 //   `index` is wide and which scores at least half as well (one strand split by a stripe at the
 //   background's level, or a strand beside another object);
-// - for a strand not at the nozzle's face on both sides, a pair ruled out for having no tip
+// - for a strand not at the nozzle's face on both sides, a wider pair ruled out for having no tip
 //   (kNoTip) would be a rival by ContestPairs were its tip one not at the face (a strand whose
 //   faint edge faded before the nozzle, beside a hair).
 std::string ChoiceDoubtDetail(const SceneResult& r, int index, const StrandGeometry& g,

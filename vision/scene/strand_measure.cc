@@ -182,7 +182,8 @@ StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOption
         break;
       }
       if (std::string why = ChoiceDoubtDetail(scene, index, g, scene_options); !why.empty()) {
-        next.Judge(PairVerdict::kAsLikely, "its choice left in doubt");
+        next.Judge(PairVerdict::kAsLikely,
+                   "a stripe, a gap or another object's as much as the strand");
         m.status = FrameStatus::kAmbiguous;
         m.detail = std::move(why);
         break;
