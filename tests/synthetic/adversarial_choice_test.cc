@@ -39,15 +39,7 @@ TEST(AdversarialTest, AStrandAndAHairUnderANozzleAtTheBackgroundsLevelAreAmbiguo
   // both sides, which once counted as faces: the strand "hung from the face" in two frames by
   // luck, and with fewer such readings the hair did in one. Which of the two hangs from the
   // nozzle the frames cannot say.
-  const AdversarialScene p = RandomAdversarialScene(TroubleClass::kStringer, 24);
-  AdversarialTruth t;
-  ClipFacts clip;
-  const std::vector<cv::Mat> frames = RenderAdversarial(p, 4, Scratch().string(), &t, &clip);
-  for (size_t i = 0; i < frames.size(); ++i) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frames[i], p, clip);
-    EXPECT_EQ(m.status, vision::FrameStatus::kAmbiguous)
-        << "frame " << i << ": " << m.width_px << " px, " << m.detail << " " << Describe(p);
-  }
+  ExpectMatrixFramesAmbiguous(RandomAdversarialScene(TroubleClass::kStringer, 24));
 }
 
 TEST(AdversarialTest, AFaceReadOnOneSideDoesNotChooseBetweenAStrandAndAHair) {
@@ -96,15 +88,7 @@ TEST(AdversarialTest, AStripeAtTheBackgroundsLevelSplitsTheStrandIntoAmbiguity) 
   // the nozzle, and the 114 px part was measured, 114.17 ± 0.04 px. Walked from the middle, the
   // narrow part's top is on the face again; and the gap between the parts, 45 px and bright, is
   // no strand either, though each part scores under 0.8 of it.)
-  const AdversarialScene p = RandomAdversarialScene(TroubleClass::kSpecularStripe, 122);
-  AdversarialTruth t;
-  ClipFacts clip;
-  const std::vector<cv::Mat> frames = MatrixFrames(p, &t, &clip);
-  for (int i = 0; i < 4; ++i) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frames[i], p, clip);
-    EXPECT_EQ(m.status, vision::FrameStatus::kAmbiguous)
-        << "frame " << i << ": " << m.width_px << " px, truth " << t.width_px << " " << m.detail;
-  }
+  ExpectMatrixFramesAmbiguous(RandomAdversarialScene(TroubleClass::kSpecularStripe, 122));
 }
 
 TEST(AdversarialTest, AStripeBetweenTwoDarkHalvesIsNotTheStrand) {
@@ -116,9 +100,7 @@ TEST(AdversarialTest, AStripeBetweenTwoDarkHalvesIsNotTheStrand) {
   AdversarialScene p = RandomAdversarialScene(TroubleClass::kSpecularStripe, 117);
   p.noise_sigma = 2;
   AdversarialTruth t;
-  ClipFacts clip;
-  for (const cv::Mat& frame : MatrixFrames(p, &t, &clip)) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, clip);
+  for (const vision::StrandMeasurement& m : MeasuredMatrixFrames(p, &t)) {
     EXPECT_TRUE(!m.valid() || std::abs(m.width_px - t.width_px) <= WrongTolerancePx(t.width_px))
         << m.width_px << " ± " << m.width_sigma_px << " px, truth " << t.width_px << ": "
         << Describe(p);

@@ -195,9 +195,7 @@ TEST(AdversarialTest, ACompressedColourFrameIsMeasuredInLuma) {
   ASSERT_EQ(p.codec, Codec::kJpeg);
   AdversarialTruth t;
   int valid = 0;
-  ClipFacts clip;
-  for (const cv::Mat& frame : MatrixFrames(p, &t, &clip)) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, clip);
+  for (const vision::StrandMeasurement& m : MeasuredMatrixFrames(p, &t)) {
     if (!m.valid()) continue;
     ++valid;
     EXPECT_LE(std::abs(m.width_px - t.width_px), WrongTolerancePx(t.width_px))
@@ -214,9 +212,7 @@ TEST(AdversarialTest, ALitCylinderThatTradedItsBlurForAStripeIsNotTrusted) {
   // least half a px.
   const AdversarialScene p = RandomAdversarialScene(TroubleClass::kSpecularStripe, 8);
   AdversarialTruth t;
-  ClipFacts clip;
-  for (const cv::Mat& frame : MatrixFrames(p, &t, &clip)) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, clip);
+  for (const vision::StrandMeasurement& m : MeasuredMatrixFrames(p, &t)) {
     EXPECT_FALSE(m.valid()) << m.width_px << " ± " << m.width_sigma_px << " px, truth "
                             << t.width_px << ": " << Describe(p);
     if (m.status == vision::FrameStatus::kImprecise) {
@@ -230,12 +226,11 @@ TEST(AdversarialTest, ALitCylinderThatTradedItsBlurForAStripeIsNotTrusted) {
 void ExpectMatrixFramesWithinTheirSigma(const AdversarialScene& p) {
   AdversarialTruth t;
   ClipFacts clip;
-  const std::vector<cv::Mat> frames = MatrixFrames(p, &t, &clip);
+  const std::vector<vision::StrandMeasurement> measured = MeasuredMatrixFrames(p, &t, &clip);
   if (p.codec == Codec::kH264) {
     ASSERT_TRUE(clip.encoder.found);
   }
-  for (const cv::Mat& frame : frames) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, clip);
+  for (const vision::StrandMeasurement& m : measured) {
     ASSERT_TRUE(m.gave_width()) << m.detail << ": " << Describe(p);
     EXPECT_LE(std::abs(m.width_px - t.width_px), 3 * m.width_sigma_px)
         << m.width_px << " ± " << m.width_sigma_px << " px (codec " << m.codec_sigma_px
@@ -301,9 +296,7 @@ TEST(AdversarialTest, ANarrowStripeInsideADarkStrandIsFittedWithBothItsSides) {
   p.stripe_gain = 60;
   p.noise_sigma = 3;
   AdversarialTruth t;
-  ClipFacts clip;
-  for (const cv::Mat& frame : MatrixFrames(p, &t, &clip)) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, clip);
+  for (const vision::StrandMeasurement& m : MeasuredMatrixFrames(p, &t)) {
     ASSERT_TRUE(m.gave_width()) << m.detail << ": " << Describe(p);
     EXPECT_LE(std::abs(m.width_px - t.width_px), 3 * m.width_sigma_px)
         << m.width_px << " ± " << m.width_sigma_px << " px, truth " << t.width_px;
@@ -319,10 +312,9 @@ TEST(AdversarialTest, ANoisyStraightStrandIsNotTakenForADiscOrBend) {
   // covers (valid or imprecise; the noise leaves 0.2-0.5 px).
   const AdversarialScene p = RandomAdversarialScene(TroubleClass::kPlain, 22);
   AdversarialTruth t;
-  ClipFacts clip;
-  const std::vector<cv::Mat> frames = MatrixFrames(p, &t, &clip);
-  for (int i = 0; i < 4; ++i) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frames[i], p, clip);
+  const std::vector<vision::StrandMeasurement> measured = MeasuredMatrixFrames(p, &t);
+  for (size_t i = 0; i < measured.size(); ++i) {
+    const vision::StrandMeasurement& m = measured[i];
     ASSERT_TRUE(vision::GivesWidth(m.status))
         << "frame " << i << ": " << vision::FrameStatusName(m.status) << " " << m.detail;
     EXPECT_LE(std::abs(m.width_px - t.width_px), 3.0 * m.width_sigma_px)

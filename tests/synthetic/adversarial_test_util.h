@@ -30,18 +30,23 @@ inline vision::StrandMeasurement RenderAndMeasure(const AdversarialScene& p, Adv
   return MeasureAdversarialFrame(f, p, clip);
 }
 
-// The matrix's four frames of a scene (an H.264 clip encodes its frames together).
-inline std::vector<cv::Mat> MatrixFrames(const AdversarialScene& p, AdversarialTruth* t,
-                                         ClipFacts* clip = nullptr) {
-  return RenderAdversarial(p, 4, Scratch().string(), t, clip);
+// The matrix's four frames of a scene (an H.264 clip encodes its frames together), each measured
+// as the matrix measures it; what the render's encoding did in `clip_out`, if given.
+inline std::vector<vision::StrandMeasurement> MeasuredMatrixFrames(const AdversarialScene& p,
+                                                                   AdversarialTruth* t,
+                                                                   ClipFacts* clip_out = nullptr) {
+  ClipFacts clip;
+  std::vector<vision::StrandMeasurement> measured;
+  for (const cv::Mat& frame : RenderAdversarial(p, 4, Scratch().string(), t, &clip))
+    measured.push_back(MeasureAdversarialFrame(frame, p, clip));
+  if (clip_out) *clip_out = clip;
+  return measured;
 }
 
 // The scene's four matrix frames, each valid and within the matrix's tolerance of the truth.
 inline void ExpectMatrixFramesValidAndRight(const AdversarialScene& p) {
   AdversarialTruth t;
-  ClipFacts clip;
-  for (const cv::Mat& frame : MatrixFrames(p, &t, &clip)) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frame, p, clip);
+  for (const vision::StrandMeasurement& m : MeasuredMatrixFrames(p, &t)) {
     ASSERT_TRUE(m.valid()) << m.detail << ": " << Describe(p);
     EXPECT_LE(std::abs(m.width_px - t.width_px), WrongTolerancePx(t.width_px)) << Describe(p);
   }
@@ -51,15 +56,25 @@ inline void ExpectMatrixFramesValidAndRight(const AdversarialScene& p) {
 // of the truth (never another object's).
 inline void ExpectMatrixFramesRefusedOrRight(const AdversarialScene& p) {
   AdversarialTruth t;
-  ClipFacts clip;
-  const std::vector<cv::Mat> frames = MatrixFrames(p, &t, &clip);
-  for (size_t i = 0; i < frames.size(); ++i) {
-    const vision::StrandMeasurement m = MeasureAdversarialFrame(frames[i], p, clip);
+  const std::vector<vision::StrandMeasurement> measured = MeasuredMatrixFrames(p, &t);
+  for (size_t i = 0; i < measured.size(); ++i) {
+    const vision::StrandMeasurement& m = measured[i];
     if (!m.gave_width()) continue;
     EXPECT_LE(std::abs(m.width_px - t.width_px),
               std::max(WrongTolerancePx(t.width_px), 3 * m.width_sigma_px))
         << "frame " << i << ": " << m.width_px << " ± " << m.width_sigma_px << " px, truth "
         << t.width_px << " " << m.detail << " " << Describe(p);
+  }
+}
+
+// The scene's four matrix frames, each `ambiguous`.
+inline void ExpectMatrixFramesAmbiguous(const AdversarialScene& p) {
+  AdversarialTruth t;
+  const std::vector<vision::StrandMeasurement> measured = MeasuredMatrixFrames(p, &t);
+  for (size_t i = 0; i < measured.size(); ++i) {
+    EXPECT_EQ(measured[i].status, vision::FrameStatus::kAmbiguous)
+        << "frame " << i << ": " << measured[i].width_px << " px, truth " << t.width_px << " "
+        << measured[i].detail << " " << Describe(p);
   }
 }
 

@@ -404,13 +404,14 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   // every caliper that fitted both edges, since which are inliers is decided after the cylinders.
   // A strand's only.
   EdgeBlur own_blur[2];
-  for (int side = 0; side < 2 && !filament; ++side) {
-    std::vector<double> b;
+  if (!filament) {
+    std::vector<double> blurs_px[2];
     for (const CaliperFit& cf : fits) {
       if (!(cf.left.converged && cf.right.converged)) continue;
-      b.push_back(PsfSigmaPx(side == 0 ? cf.left : cf.right));
+      blurs_px[0].push_back(PsfSigmaPx(cf.left));
+      blurs_px[1].push_back(PsfSigmaPx(cf.right));
     }
-    own_blur[side] = MedianBlur(b);
+    for (int side = 0; side < 2; ++side) own_blur[side] = MedianBlur(blurs_px[side]);
   }
   // A lit object on both sides (a front-lit strand or filament): one cylinder per caliper.
   // Only on an object the per-edge fits already saw as one (enough consistent calipers): a wrong
@@ -655,11 +656,11 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   std::vector<bool> own_edges(n_cal);
   for (int k = 0; k < n_cal; ++k)
     own_edges[k] = m->calipers[k].inlier && fits[k].width_sigma_px < 0;
-  if (!filament && shade[0] == 0 && shade[1] == 0 && !inner_step[0] && !inner_step[1]) {
-    doubt.inner_level_px =
-        InnerLevelDoubtPx(img, f, band_s0, opt.caliper_spacing_px, fits, own_edges, m->blur_px);
-  }
   if (!filament) {
+    if (shade[0] == 0 && shade[1] == 0 && !inner_step[0] && !inner_step[1]) {
+      doubt.inner_level_px =
+          InnerLevelDoubtPx(img, f, band_s0, opt.caliper_spacing_px, fits, own_edges, m->blur_px);
+    }
     doubt.edge_blur_px =
         BlurMismatchDoubtPx(own_blur[0], own_blur[1], shade[0] == 1 || shade[1] == 1);
   }
