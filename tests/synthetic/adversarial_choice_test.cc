@@ -58,6 +58,18 @@ TEST(AdversarialTest, AStrandWhoseFaintEdgeLostItsTipStillDoubtsAHairFromTheCorn
   ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kStringer, 709));
 }
 
+TEST(AdversarialTest, AStrandWhoseShadedEdgeSankBelowTheBackgroundStillDoubtsTheHair) {
+  // The same scene with the strand dimmer (level 40 or 60, not 84): its shaded rim falls to the
+  // background's level or below. Its pair was then mixed, too faint along its edges, scored
+  // below the minimum or shared too short a stretch, and the hair was measured alone, 14.4 px at
+  // sigma 0.04-0.08, in all four frames (level 40) or three (60).
+  for (const double level : {40.0, 60.0}) {
+    AdversarialScene p = RandomAdversarialScene(TroubleClass::kStringer, 709);
+    p.strand_level = level;
+    ExpectMatrixFramesRefusedOrRight(p);
+  }
+}
+
 TEST(AdversarialTest, AStrandBendingAboveItsStraightEdgesHasNoTipInLine) {
   // A 44 px strand bending 57 px below the nozzle: the only straight pair is its lower part, 43°
   // off vertical, whose outline curves on up to the nozzle. The tip was put where the following

@@ -37,11 +37,13 @@ constexpr double kRivalScoreRatio = 0.5;
 // Whether `c` could be the strand as much as `b` where the tip does not decide. A score ranks by
 // length and contrast, and a strand whose shaded side is faint scores little for it: a 111 px
 // strand (its pair 109 px) scored 18-34 % of a 14 px hair from the nozzle's corner, which was
-// measured alone. So a pair wider than `b` whose common stretch is longer than it is wide (no
-// disc's or blob's short pair) rivals it whatever its score: never the thinner object by default.
+// measured alone. So a pair wider than `b` rivals it whatever its score where one of its edges is
+// longer than the pair is wide (a disc's or blob's edges are all short): never the thinner object
+// by default. The longer edge, not the common stretch: where the faint edge broke up, the stretch
+// shrank to 80 px of that strand while its lit edge ran 250 px.
 bool CouldRival(const PairCandidate& b, const PairCandidate& c) {
   return c.score >= kRivalScoreRatio * b.score ||
-         (c.width_px > b.width_px && c.length_px >= c.width_px);
+         (c.width_px > b.width_px && c.long_edge_px >= c.width_px);
 }
 // An edge walk that ends within this of its start began off the edge.
 constexpr double kOffEdgeStartPx = 3.0;
@@ -101,6 +103,7 @@ bool MakeCandidate(const EdgeSegment& a, const EdgeSegment& b, double noise_full
   c.right = ri;
   c.polarity = pol;
   c.length_px = len;
+  c.long_edge_px = std::max(a.length_px(), b.length_px());
   c.width_px = width;
   c.snr = std::min(L.strength, R.strength) / noise_full;
   // Length and continuity first; contrast with diminishing returns (a highlight stripe inside a
@@ -705,23 +708,32 @@ std::string SplitDetail(const SceneResult& r, int index) {
   return "";
 }
 
-// A strand-like pair whose edges did not end together at a tip (kNoTip) is out as the strand,
-// but not as the reason to doubt a narrower one: a strand whose faint edge faded before the
-// nozzle reads so, and a hair from the face's corner was then measured alone (14.4 px where the
-// strand is 111 px, valid at sigma 0.04). Such a pair counts as a rival whose tip is unknown: one
-// not at the face. A narrower one is a hair crossing the view, or hanging from above it.
-std::string NoTipRivalDetail(const SceneResult& r, int index, const StrandGeometry& g,
-                             const SceneOptions& o) {
+// A wider strand-like pair that did not hold up as the strand is out as the strand, but not as
+// the reason to doubt a narrower one that does not hang from the nozzle's face on both sides: a
+// strand lit from one side whose shaded edge is faint reads so. Beside a 14 px hair from the
+// face's corner (measured alone, valid at sigma 0.04, where the strand is 111 px), such a strand's
+// pair had no tip in line (its faint edge faded before the nozzle), was too faint along its edges
+// (kWeakEdges), or scored below the minimum, from frame to frame; where its shaded rim sank below
+// the background's level (at a strand level of 40-60 on a background of 21) it paired as mixed.
+// Such a pair counts as a rival whose tip is unknown (one not at the face) and, if mixed, of the
+// narrower one's polarity. A narrower one is a hair crossing the view, or hanging from above it.
+// (On ten matrices of 1100 strand frames each, such rivals made 7 valid frames ambiguous: pairs
+// of faint background texture.)
+std::string UnheldRivalDetail(const SceneResult& r, int index, const StrandGeometry& g,
+                              const SceneOptions& o) {
   if (g.tip_face_sides == 2) return "";
   const PairCandidate& b = r.candidates[index];
   const StrandGeometry unknown_tip;
   for (const PairCandidate& c : r.candidates) {
-    if (c.verdict != PairVerdict::kNoTip || c.width_px <= b.width_px) continue;
-    const PairContest contest = ContestPairs(b, g, c, unknown_tip, o);
-    if (!Ambiguous(contest)) continue;
+    const bool unheld = c.verdict == PairVerdict::kNoTip || c.verdict == PairVerdict::kWeakEdges ||
+                        c.verdict == PairVerdict::kScoreBelow;
+    if (!unheld || c.width_px <= b.width_px) continue;
+    PairCandidate as_strand = c;
+    if (as_strand.polarity == Polarity::kMixed) as_strand.polarity = b.polarity;
+    if (!Ambiguous(ContestPairs(b, g, as_strand, unknown_tip, o))) continue;
     return fmt::format(
-        "{} does not hang from the nozzle's face on both sides, and another strand-like object "
-        "has no tip in line ({}: {}): which is the strand the frame does not say",
+        "{} does not hang from the nozzle's face on both sides, and a wider strand-like object "
+        "did not hold up as a pair ({}: {}): which is the strand the frame does not say",
         Describe(b), Describe(c), c.why);
   }
   return "";
@@ -733,7 +745,7 @@ std::string ChoiceDoubtDetail(const SceneResult& r, int index, const StrandGeome
   std::string why = FlankedDetail(r, index);
   if (!why.empty() || o.target != MeasureTarget::kStrand) return why;
   why = SplitDetail(r, index);
-  if (why.empty()) why = NoTipRivalDetail(r, index, g, o);
+  if (why.empty()) why = UnheldRivalDetail(r, index, g, o);
   return why;
 }
 

@@ -58,9 +58,10 @@ struct PairCandidate {
   AxisFrame axis;                       // origin on the axis at the top of the common stretch
   double left_u0 = 0, right_u0 = 0;     // edge lines u = u0 + slope·s in `axis`
   double edge_slope = 0;
-  double length_px = 0;  // common stretch (from the segments)
-  double width_px = 0;   // perpendicular separation
-  double snr = 0;        // weaker edge's gradient over the gradient noise
+  double length_px = 0;     // common stretch (from the segments)
+  double long_edge_px = 0;  // the longer of its two edges' own lengths
+  double width_px = 0;      // perpendicular separation
+  double snr = 0;           // weaker edge's gradient over the gradient noise
   double score = 0;
   PairVerdict verdict = PairVerdict::kNotExamined;
   std::string why;  // the verdict in words
@@ -114,8 +115,8 @@ struct SceneResult {
 // kSideBySide: parallel and closer than either is wide (one strand with a stripe at the
 // background's level, or two strands): ambiguous whatever the scores;
 // kNeitherAtFace: a strand's target, neither hangs from the nozzle's face (on both sides), and c
-// could be the strand (it scores at least half as well as b, or is wider than b and its common
-// stretch longer than it is wide): the tip does not decide, and a score (contrast, length) does
+// could be the strand (it scores at least half as well as b, or is wider than b and one of its
+// edges longer than it is wide): the tip does not decide, and a score (contrast, length) does
 // not tell a strand from a hair or another strand: ambiguous;
 // kSimilarScore: c scores at least ambiguity_ratio of b: ambiguous; kOutscored: b wins.
 enum class PairContest {
@@ -145,9 +146,10 @@ std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const P
 //   only for the background showing inside it (kSpansObjects), whose other edge is nearer than
 //   `index` is wide and which scores at least half as well (one strand split by a stripe at the
 //   background's level, or a strand beside another object);
-// - for a strand not at the nozzle's face on both sides, a wider pair ruled out for having no tip
-//   (kNoTip) would be a rival by ContestPairs were its tip one not at the face (a strand whose
-//   faint edge faded before the nozzle, beside a hair).
+// - for a strand not at the nozzle's face on both sides, a wider pair that did not hold up (no tip
+//   in line, edges too faint along it, a score below the minimum) would be a rival by
+//   ContestPairs were its tip one not at the face and, if mixed, its polarity `index`'s (a strand
+//   whose shaded edge is faint, beside a hair).
 std::string ChoiceDoubtDetail(const SceneResult& r, int index, const StrandGeometry& g,
                               const SceneOptions& options);
 
