@@ -36,14 +36,13 @@ TEST(AdversarialMatrixTest, FewConfidentlyWrongWidthsAndNoneWithoutAStrand) {
   // model's first round. The renders are the same from run to run (H.264 on one thread).
   EXPECT_LE(r.all.wrong, 1);
   EXPECT_LE(r.all.wrong_beyond_sigma, 1);
-  // What that costs: valid widths on 661 of the 1000 measurable strand frames when this was
-  // written (664 before a wider pair too faint or short to hold up counted as a rival of one
-  // not at the face on both sides: three frames beside faint background texture; 672 before a face
-  // read beside one object on one side only stopped deciding between it and a rival: two scenes of
-  // a hair from the face's corner are ambiguous; 660 before an edge whose background slopes toward
-  // a flat object was put where the band's two-slope step says; 674 before a width from x264
-  // carried the codec's doubt, 654 while its second pass coded a lone key frame, 677 before the
-  // change above; the saturated and nozzle-alone classes are refused by design).
+  // What that costs: valid widths on 664 of the 1000 measurable strand frames when this was
+  // written (672 before a face read beside one object on one side only stopped deciding between
+  // it and a rival: two scenes of a hair from the face's corner are ambiguous; 660 before an edge
+  // whose background slopes toward a flat object was put where the band's two-slope step says;
+  // 674 before a width from x264 carried the codec's doubt, 654 while its second pass coded a
+  // lone key frame, 677 before the change above; the saturated and nozzle-alone classes are
+  // refused by design).
   const int measurable = r.all.frames -
                          r.classes[static_cast<int>(TroubleClass::kSaturated)].frames -
                          r.classes[static_cast<int>(TroubleClass::kNoStrand)].frames;

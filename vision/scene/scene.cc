@@ -39,8 +39,8 @@ constexpr double kRivalScoreRatio = 0.5;
 // strand (its pair 109 px) scored 18-34 % of a 14 px hair from the nozzle's corner, which was
 // measured alone. So a pair wider than `b` rivals it whatever its score where one of its edges is
 // longer than the pair is wide (a disc's or blob's edges are all short): never the thinner object
-// by default. The longer edge, not the common stretch: where the faint edge broke up, the stretch
-// shrank to 80 px of that strand while its lit edge ran 250 px.
+// by default. The longer edge, not the common stretch: where a faint edge broke up, the stretch
+// shrank to 80 px of that strand while its longer edge ran 250 px.
 bool CouldRival(const PairCandidate& b, const PairCandidate& c) {
   return c.score >= kRivalScoreRatio * b.score ||
          (c.width_px > b.width_px && c.long_edge_px >= c.width_px);
@@ -712,29 +712,35 @@ std::string SplitDetail(const SceneResult& r, int index) {
 // the reason to doubt a narrower one that does not hang from the nozzle's face on both sides: a
 // strand lit from one side whose shaded edge is faint reads so. Beside a 14 px hair from the
 // face's corner (measured alone, valid at sigma 0.04, where the strand is 111 px), such a strand's
-// pair had no tip in line (its faint edge faded before the nozzle), was too faint along its edges
-// (kWeakEdges), or scored below the minimum, from frame to frame; where its shaded rim sank below
-// the background's level (at a strand level of 40-60 on a background of 21) it paired as mixed.
-// Such a pair counts as a rival whose tip is unknown (one not at the face) and, if mixed, of the
-// narrower one's polarity. A narrower one is a hair crossing the view, or hanging from above it.
-// (On ten matrices of 1100 strand frames each, such rivals made 7 valid frames ambiguous: pairs
-// of faint background texture.)
+// pair had no tip in line (its faint edge faded before the nozzle) or scored below the minimum
+// (never followed), from frame to frame; where its shaded rim sank to the background's level (a
+// strand level of 40-60 on a background of 21) it paired as mixed. Such a pair counts as a rival
+// whose tip is unknown (one not at the face) and, if mixed, of the narrower one's polarity. A
+// narrower one is a hair crossing the view, or hanging from above it. (On ten matrices of 1100
+// strand frames each, 3 valid frames became ambiguous so, on pairs of background texture. Pairs
+// whose edges faded along them, kWeakEdges, do not count: there they were faint texture 150-680
+// px wide, and would have cost 4 more valid frames for no wrong one.)
 std::string UnheldRivalDetail(const SceneResult& r, int index, const StrandGeometry& g,
                               const SceneOptions& o) {
   if (g.tip_face_sides == 2) return "";
   const PairCandidate& b = r.candidates[index];
   const StrandGeometry unknown_tip;
   for (const PairCandidate& c : r.candidates) {
-    const bool unheld = c.verdict == PairVerdict::kNoTip || c.verdict == PairVerdict::kWeakEdges ||
-                        c.verdict == PairVerdict::kScoreBelow;
-    if (!unheld || c.width_px <= b.width_px) continue;
+    // Judged below the minimum: only while the search still followed pairs (ChoosePair). In a
+    // cluttered view it stops before the faint ones, and they do not count: counting every pair
+    // below the minimum made 4 more valid frames of ten matrices ambiguous, each on a mixed pair
+    // of a long edge (a hair's, a strand's) and a short one of texture.
+    if ((c.verdict != PairVerdict::kNoTip && c.verdict != PairVerdict::kScoreBelow) ||
+        c.width_px <= b.width_px)
+      continue;
     PairCandidate as_strand = c;
     if (as_strand.polarity == Polarity::kMixed) as_strand.polarity = b.polarity;
     if (!Ambiguous(ContestPairs(b, g, as_strand, unknown_tip, o))) continue;
     return fmt::format(
         "{} does not hang from the nozzle's face on both sides, and a wider strand-like object "
-        "did not hold up as a pair ({}: {}): which is the strand the frame does not say",
-        Describe(b), Describe(c), c.why);
+        "did not hold up as a pair ({}, {}, an edge {:.0f} px long: {}): which is the strand the "
+        "frame does not say",
+        Describe(b), Describe(c), PolarityName(c.polarity), c.long_edge_px, c.why);
   }
   return "";
 }

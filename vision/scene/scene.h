@@ -59,7 +59,7 @@ struct PairCandidate {
   double left_u0 = 0, right_u0 = 0;     // edge lines u = u0 + slope·s in `axis`
   double edge_slope = 0;
   double length_px = 0;     // common stretch (from the segments)
-  double long_edge_px = 0;  // the longer of its two edges' own lengths
+  double long_edge_px = 0;  // the longer of its edge lines' runs (ExtendPair's, else the seeds')
   double width_px = 0;      // perpendicular separation
   double snr = 0;           // weaker edge's gradient over the gradient noise
   double score = 0;
@@ -147,7 +147,7 @@ std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const P
 //   `index` is wide and which scores at least half as well (one strand split by a stripe at the
 //   background's level, or a strand beside another object);
 // - for a strand not at the nozzle's face on both sides, a wider pair that did not hold up (no tip
-//   in line, edges too faint along it, a score below the minimum) would be a rival by
+//   in line, or a score below the minimum) would be a rival by
 //   ContestPairs were its tip one not at the face and, if mixed, its polarity `index`'s (a strand
 //   whose shaded edge is faint, beside a hair).
 std::string ChoiceDoubtDetail(const SceneResult& r, int index, const StrandGeometry& g,
