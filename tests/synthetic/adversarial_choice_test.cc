@@ -70,6 +70,13 @@ TEST(AdversarialTest, AStrandWhoseShadedEdgeSankBelowTheBackgroundStillDoubtsThe
   ExpectMatrixFramesRefusedOrRight(p);
 }
 
+TEST(AdversarialTest, AHairBesideALitStrandIsNotMeasuredWithItAsOneObject) {
+  // A 10 px hair from above the view, 30 px beside a lit 112 px strand: in one frame of four the
+  // pair of the strand's left edge and the hair's right edge held up as one 152 px object at
+  // sigma 0.12, the background between them 19.7 % of its inside (two objects from 20 %).
+  ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kStringer, 1118));
+}
+
 TEST(AdversarialTest, AStrandBendingAboveItsStraightEdgesHasNoTipInLine) {
   // A 44 px strand bending 57 px below the nozzle: the only straight pair is its lower part, 43°
   // off vertical, whose outline curves on up to the nozzle. The tip was put where the following
