@@ -388,9 +388,10 @@ bool InsideIsOneObject(const Detection& d, const PairCandidate& c) {
   // Only a dark silhouette on a backlight can be a lens (its core transmits the backlight); a
   // lit pair with the background between its edges is two objects.
   if (c.polarity == Polarity::kDarkOnBright && lens_rows >= 4) return true;
-  // A lit object shows no background through itself: background between its rims in most rows
-  // is a gap between two objects, however narrow. (A 10 px hair 30 px beside a 112 px strand
-  // made one 152 px object, its gap 19.7 % of the inside, and was measured so.)
+  // A lit object shows no background through itself: a run of background between its rims a
+  // tenth of its width wide, in most rows, is a gap between two objects, though short of a fifth
+  // of the inside. (A 10 px hair 30 px beside a 112 px strand made one 152 px object, its gap
+  // 19.7 % of the inside, and was measured so.)
   if (c.polarity == Polarity::kBrightOnDark && gap_rows >= 3) return false;
   return at_background < 0.2 * inside;
 }
