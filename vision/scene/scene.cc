@@ -357,20 +357,22 @@ bool InsideIsOneObject(const Detection& d, const PairCandidate& c) {
   const double background = Median(outside), body = Median(rim);
   const double step = std::abs(body - background);
   if (step <= 0) return true;
+  const auto at_background_level = [&](double v) { return std::abs(v - background) < 0.25 * step; };
   int at_background = 0, lens_rows = 0, gap_rows = 0;
   for (const auto& r : rows) {
-    int first = -1, last = -1, here = 0, run = 0, run_start = 0;
-    bool gap = false;
     const int n_row = static_cast<int>(r.size());
+    const double min_gap = std::max(2.0, kGapWidths * n_row);
+    int first = -1, last = -1, here = 0, run = 0;
+    bool gap = false;
     for (int k = 0; k < n_row; ++k) {
-      if (std::abs(r[k] - background) >= 0.25 * step) {
+      if (!at_background_level(r[k])) {
+        // A run of background ended here: a gap when clear of the left rim too (one still open at
+        // the row's end touches the right rim).
+        gap = gap || (run >= min_gap && k - run > 0);
         run = 0;
         continue;
       }
-      if (run++ == 0) run_start = k;
-      // A run of background clear of both rims, over a tenth of the width.
-      gap = gap || (run >= std::max(2.0, kGapWidths * n_row) && run_start > 0 && k + 1 < n_row &&
-                    std::abs(r[k + 1] - background) >= 0.25 * step);
+      ++run;
       ++here;
       if (first < 0) first = k;
       last = k;

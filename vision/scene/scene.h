@@ -147,9 +147,9 @@ std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const P
 //   `index` is wide and which scores at least half as well (one strand split by a stripe at the
 //   background's level, or a strand beside another object);
 // - for a strand not at the nozzle's face on both sides, a wider pair that did not hold up (no tip
-//   in line, or a score below the minimum) would be a rival by
-//   ContestPairs were its tip one not at the face and, if mixed, its polarity `index`'s (a strand
-//   whose shaded edge is faint, beside a hair).
+//   in line, or a score below the minimum) would be a rival by ContestPairs were its tip one not
+//   at the face and, if mixed, its polarity `index`'s (a strand whose shaded edge is faint,
+//   beside a hair).
 std::string ChoiceDoubtDetail(const SceneResult& r, int index, const StrandGeometry& g,
                               const SceneOptions& options);
 
