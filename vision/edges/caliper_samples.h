@@ -20,7 +20,11 @@ struct ClipLevels {
 // The clip levels of the slab s0 <= s < s1, u0 <= u <= u1: the data's max and 0, or a spike at
 // most 1 % of black-to-white inside the data's white (black), or in the outer 4 % of its range,
 // holding ≥ 2 % of the slab's pixels, ≥ 5× the pixels of the values just inside it and ≥ 2× those
-// beyond it (or ≥ 10× and ≥ 1× those).
+// beyond it (or ≥ 10× and ≥ 1×, or ≥ 3× and ≥ 5×); or such a spike split over two levels, the
+// second half to twice the first, the pair ≥ 10× the values just inside it and ≥ 6.7× those
+// beyond it. Where the slab holds ≥ 2 % of its pixels in those levels but no spike, the spike is
+// looked for in the whole image (every 4th pixel of every 4th row, when the image holds 4 times
+// the slab's pixels), and taken where the slab holds ≥ 2 % of its pixels at it.
 ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
                           double u1, const DataLevels& levels);
 

@@ -125,11 +125,60 @@ TEST(FindClipLevelsTest, AClipAtLimitedWhiteWithRingingAboveIsFoundThereOnly) {
   EXPECT_EQ(full.clipped_high_fraction, 0);
 }
 
+TEST(FindClipLevelsTest, AClipWithItsRingingInsideOrSplitOverTwoLevelsIsFound) {
+  // x264's clipped backlight beside a dark strand at a low rate (matrix seed 1316): the ringing
+  // mostly below 235, little above.
+  const std::vector<Level> inside = {{229, 8},   {230, 7},   {231, 14}, {232, 71}, {233, 205},
+                                     {234, 171}, {235, 488}, {236, 36}, {237, 16}, {238, 14},
+                                     {239, 5},   {240, 4},   {241, 3},  {243, 2},  {244, 3}};
+  EXPECT_NEAR(ClipsOf(inside, 16, kLimitedRange).high, 234.5, 1e-3);
+  // The same clip split over 235 and 236 (seed 1318).
+  const std::vector<Level> split = {{230, 4},  {231, 5},   {232, 4},   {233, 10},
+                                    {234, 45}, {235, 374}, {236, 334}, {237, 37},
+                                    {238, 16}, {239, 6},   {240, 7},   {241, 4}};
+  const ClipLevels s = ClipsOf(split, 16, kLimitedRange);
+  EXPECT_NEAR(s.high, 234.5, 1e-3);
+  EXPECT_NEAR(s.clipped_high_fraction, (374 + 334 + 37 + 16 + 6 + 7 + 4) / 3000.0, 1e-9);
+}
+
+TEST(FindClipLevelsTest, AClipHiddenInTheSlabsRingingIsFoundInTheFrame) {
+  // A slab beside a dark strand whose clipped backlight x264 rang down to 231-232 (matrix seed
+  // 1912): no spike in the slab. The frame around it, clipped at 235, has one; a frame whose
+  // background lies unclipped at 234 (noise σ 1) has none.
+  const std::vector<Level> slab = {{231, 900}, {232, 700}, {233, 100}, {234, 200}, {235, 300}};
+  for (const int outside : {235, 234}) {
+    cv::Mat m(200, 200, CV_8UC1, cv::Scalar(outside));
+    if (outside == 234) cv::RNG(7).fill(m, cv::RNG::NORMAL, 234, 1);
+    m(cv::Rect(0, 0, 50, 60)).setTo(16);
+    int k = 0;
+    for (const Level& l : slab)
+      for (int i = 0; i < l.count; ++i, ++k) m.at<uint8_t>(k / 50, k % 50) = l.value;
+    const ClipLevels c =
+        FindClipLevels(GreyImage{m, false}, AxisFrame{}, 0, 59.5, 0, 49, kLimitedRange);
+    if (outside == 235) {
+      EXPECT_NEAR(c.high, 234.5, 1e-3);
+      EXPECT_NEAR(c.clipped_high_fraction, 300 / 3000.0, 1e-9);
+    } else {
+      EXPECT_EQ(c.high, 255);
+    }
+  }
+}
+
 TEST(FindClipLevelsTest, UnclippedPlateausByLimitedWhiteAreNotClips) {
   // A plateau of noise σ 1 exactly at white: 5.3 times its neighbours, a third of it above.
   const std::vector<Level> at_white = {{231, 1},   {232, 10},  {233, 108}, {234, 484}, {235, 798},
                                        {236, 484}, {237, 108}, {238, 10},  {239, 1}};
   EXPECT_EQ(ClipsOf(at_white, 117, kLimitedRange).high, 255);
+  // The same plateau halfway between 235 and 236: the pair of bins has 0.21 of itself above it.
+  const std::vector<Level> between = {{232, 2},   {233, 35},  {234, 260}, {235, 706},
+                                      {236, 706}, {237, 260}, {238, 35},  {239, 2}};
+  EXPECT_EQ(ClipsOf(between, 117, kLimitedRange).high, 255);
+  // And half a level below white, whichever of its two fullest levels holds a pixel more.
+  for (const int extra : {0, 1}) {
+    const std::vector<Level> below = {{231, 2},   {232, 35},  {233, 260}, {234, 706 + extra},
+                                      {235, 706}, {236, 260}, {237, 35},  {238, 2}};
+    EXPECT_EQ(ClipsOf(below, 117, kLimitedRange).high, 255) << extra;
+  }
   // A camera's superwhite plateau (at 240, noise σ 1), which limited range allows.
   std::vector<Level> superwhite = at_white;
   for (Level& l : superwhite) l.value += 5;
