@@ -77,6 +77,14 @@ TEST(AdversarialTest, AHairBesideALitStrandIsNotMeasuredWithItAsOneObject) {
   ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kStringer, 1118));
 }
 
+TEST(AdversarialTest, AHairBesideADarkStrandIsNotMeasuredWithItAsOneObject) {
+  // A 10 px hair hanging from the nozzle's face 36 px beside a dark 137 px strand on a textured
+  // background: the pair of the strand's left edge and the hair's right edge held up as one
+  // 184 px object in every frame (valid at sigma 0.05-0.11), the background between them 16-17
+  // of its 86 samples across. Both hang from the face, so the tip cannot choose between them.
+  ExpectMatrixFramesAmbiguous(RandomAdversarialScene(TroubleClass::kStringer, 1517));
+}
+
 TEST(AdversarialTest, AStrandBendingAboveItsStraightEdgesHasNoTipInLine) {
   // A 44 px strand bending 57 px below the nozzle: the only straight pair is its lower part, 43°
   // off vertical, whose outline curves on up to the nozzle. The tip was put where the following

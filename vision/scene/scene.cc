@@ -358,21 +358,33 @@ bool InsideIsOneObject(const Detection& d, const PairCandidate& c) {
   const double step = std::abs(body - background);
   if (step <= 0) return true;
   const auto at_background_level = [&](double v) { return std::abs(v - background) < 0.25 * step; };
-  int at_background = 0, lens_rows = 0, gap_rows = 0;
+  int at_background = 0, lens_rows = 0, gap_rows = 0, gaps = 0;
+  double gap_level_sum = 0;  // each gap's mean level
+  // A dark pair's gap is a plateau at least 4 samples wide: a narrow bright stripe, blurred, peaks
+  // near the background's level over 2 or 3 (a 6 px stripe 60 levels above a dark 33 px strand
+  // at a blur of 2.2 px).
+  const double min_gap_samples = c.polarity == Polarity::kDarkOnBright ? 4.0 : 2.0;
   for (const auto& r : rows) {
     const int n_row = static_cast<int>(r.size());
-    const double min_gap = std::max(2.0, kGapWidths * n_row);
+    const double min_gap = std::max(min_gap_samples, kGapWidths * n_row);
     int first = -1, last = -1, here = 0, run = 0;
+    double run_sum = 0;
     bool gap = false;
     for (int k = 0; k < n_row; ++k) {
       if (!at_background_level(r[k])) {
         // A run of background ended here: a gap when clear of the left rim too (one still open at
         // the row's end touches the right rim).
-        gap = gap || (run >= min_gap && k - run > 0);
+        if (run >= min_gap && k - run > 0) {
+          gap = true;
+          gap_level_sum += run_sum / run;
+          ++gaps;
+        }
         run = 0;
+        run_sum = 0;
         continue;
       }
       ++run;
+      run_sum += r[k];
       ++here;
       if (first < 0) first = k;
       last = k;
@@ -393,8 +405,16 @@ bool InsideIsOneObject(const Detection& d, const PairCandidate& c) {
   // A lit object shows no background through itself: a run of background between its rims a
   // tenth of its width wide, in most rows, is a gap between two objects, though short of a fifth
   // of the inside. (A 10 px hair 30 px beside a 112 px strand made one 152 px object, its gap
-  // 19.7 % of the inside, and was measured so.)
+  // 19.7 % of the inside, and was measured so.) A dark object's highlight may come near the
+  // background's level (a fifth of the step above it, clipped), and a lens's core lies 0.08–0.11
+  // of the step below it (what its surfaces reflect): there the gap must be the background's own
+  // level, within a twentieth of the step over its rows. (A 10 px hair 36 px beside a dark 137 px
+  // strand made one 184 px object, its gap within 0.14 of the step in each row and 0.01 over
+  // them.)
   if (c.polarity == Polarity::kBrightOnDark && gap_rows >= 3) return false;
+  if (c.polarity == Polarity::kDarkOnBright && gap_rows >= 3 &&
+      std::abs(gap_level_sum / gaps - background) <= 0.05 * step)
+    return false;
   return at_background < 0.2 * inside;
 }
 
