@@ -87,16 +87,19 @@ ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, d
   // 256 bins over the data's range; only its ends are looked at (below).
   constexpr int kBins = 256, kEdgeBins = 10, kBelow = 4;
   constexpr double kNearWhiteFraction = 0.01;  // of black to white
-  std::array<int, kBins> h{};
+  using Histogram = std::array<int, kBins>;
+  Histogram h{};
   const double scale = (kBins - 1) / data_max;
   int n = 0;
   // Every band of every frame passes here: the pixel type is fixed per row, and the values are
   // never negative, so rounding is a truncation of v + 0.5.
+  const auto bin_of = [&](auto v) {
+    return std::min(static_cast<int>(v * scale + 0.5), kBins - 1);
+  };
   const auto count_row = [&](const auto* row, int y) {
     int first, last;
     SlabRow(f, y, x_lo, x_hi, s0, s1, u0, u1, &first, &last);
-    for (int x = first; x <= last; ++x)
-      ++h[std::min(static_cast<int>(row[x] * scale + 0.5), kBins - 1)];
+    for (int x = first; x <= last; ++x) ++h[bin_of(row[x])];
     n += std::max(0, last - first + 1);
   };
   for (int y = y_lo; y <= y_hi; ++y) {
@@ -116,7 +119,6 @@ ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, d
   // form also takes a plateau of noise σ 0.8 or less about a level between two bins for a clip
   // (as the first two take one of σ 0.7 on a level): a plateau that flat by white is refused as
   // clipped; σ 1 is not (0.21 of a pair beyond it).
-  using Histogram = std::array<int, kBins>;
   const auto spike = [&](const Histogram& hist, int count, int from, int to, int inward) {
     int best = -1;
     for (int b = from; b != to; b += inward) {
@@ -149,19 +151,33 @@ ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, d
   const int black_bin = std::max(0, static_cast<int>(std::lround(levels.black * scale)));
   const int near_bins =
       static_cast<int>(std::lround(kNearWhiteFraction * (levels.white - levels.black) * scale));
-  const int top_to = std::min(kBins - 1 - kEdgeBins, white_bin - near_bins - 1);
-  const int bottom_to = std::max(kEdgeBins, black_bin + near_bins + 1);
-  const auto find_top = [&](const Histogram& hist, int count) {
-    const int t = spike(hist, count, white_bin, top_to, -1);
-    return t >= 0 || white_bin == kBins - 1
-               ? t
-               : spike(hist, count, kBins - 1, kBins - 1 - kEdgeBins, -1);
+  // Each end's windows, searched in turn from `from` toward `to` (not included): by the frame's
+  // white (black), then the data's outer bins where those are not the data's end.
+  // (On the stack: every band of every frame passes here.)
+  struct Window {
+    int from, to, inward;
   };
-  const auto find_bottom = [&](const Histogram& hist, int count) {
-    const int b = spike(hist, count, black_bin, bottom_to, +1);
-    return b >= 0 || black_bin == 0 ? b : spike(hist, count, 0, kEdgeBins, +1);
+  struct Windows {
+    std::array<Window, 2> w;
+    int size;
+    const Window* begin() const { return w.data(); }
+    const Window* end() const { return w.data() + size; }
   };
-  int top = find_top(h, n), bottom = find_bottom(h, n);
+  const Windows top_windows = {
+      {{{white_bin, std::min(kBins - 1 - kEdgeBins, white_bin - near_bins - 1), -1},
+        {kBins - 1, kBins - 1 - kEdgeBins, -1}}},
+      white_bin < kBins - 1 ? 2 : 1};
+  const Windows bottom_windows = {
+      {{{black_bin, std::max(kEdgeBins, black_bin + near_bins + 1), +1}, {0, kEdgeBins, +1}}},
+      black_bin > 0 ? 2 : 1};
+  const auto find = [&](const Windows& windows, const Histogram& hist, int count) {
+    for (const Window& w : windows) {
+      const int b = spike(hist, count, w.from, w.to, w.inward);
+      if (b >= 0) return b;
+    }
+    return -1;
+  };
+  int top = find(top_windows, h, n), bottom = find(bottom_windows, h, n);
   // A slab beside an object holds little of a clipped plateau, and a codec's ringing there may
   // hide its spike (x264 at a low rate: 9986 and 6715 pixels four and three levels below the
   // clip's 235 in one slab, where the frame has 736 454 at 235). Where the slab holds 2 % of its
@@ -169,23 +185,22 @@ ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, d
   // and codec, is looked for over the whole image (every 4th pixel of every 4th row), when that
   // is more than the slab, and taken where the slab holds 2 % of its pixels at it too (a clip
   // elsewhere, a lamp's, says nothing of a slab that does not reach it).
-  const auto slab_holds = [&](int lo, int hi) {
-    int k = 0;
-    for (int b = lo; b <= hi; ++b) k += h[b];
-    return k >= 0.02 * n;
+  const auto slab_holds = [&](const Windows& windows) {
+    for (const Window& w : windows) {
+      int k = 0;
+      for (int b = w.from; b != w.to; b += w.inward) k += h[b];
+      if (k >= 0.02 * n) return true;
+    }
+    return false;
   };
-  const bool look_top =
-      top < 0 && (slab_holds(top_to + 1, white_bin) ||
-                  (white_bin < kBins - 1 && slab_holds(kBins - kEdgeBins, kBins - 1)));
-  const bool look_bottom = bottom < 0 && (slab_holds(black_bin, bottom_to - 1) ||
-                                          (black_bin > 0 && slab_holds(0, kEdgeBins - 1)));
+  const bool look_top = top < 0 && slab_holds(top_windows);
+  const bool look_bottom = bottom < 0 && slab_holds(bottom_windows);
   constexpr int kStride = 4;
   if ((look_top || look_bottom) && img.m.total() >= 4.0 * std::max(n, 1)) {
     Histogram frame{};
     int frame_n = 0;
     const auto sample_row = [&](const auto* row) {
-      for (int x = 0; x < img.m.cols; x += kStride, ++frame_n)
-        ++frame[std::min(static_cast<int>(row[x] * scale + 0.5), kBins - 1)];
+      for (int x = 0; x < img.m.cols; x += kStride, ++frame_n) ++frame[bin_of(row[x])];
     };
     for (int y = 0; y < img.m.rows; y += kStride) {
       if (img.is16)
@@ -194,8 +209,8 @@ ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, d
         sample_row(img.m.ptr<uint8_t>(y));
     }
     const auto held = [&](int b) { return b >= 0 && h[b] >= 0.02 * n ? b : -1; };
-    if (look_top) top = held(find_top(frame, frame_n));
-    if (look_bottom) bottom = held(find_bottom(frame, frame_n));
+    if (look_top) top = held(find(top_windows, frame, frame_n));
+    if (look_bottom) bottom = held(find(bottom_windows, frame, frame_n));
   }
   // Half a bin inward, so that every value of the spike's bin counts.
   if (top >= 0) clip.high = static_cast<float>((top - 0.5) / scale);

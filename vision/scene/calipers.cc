@@ -342,9 +342,10 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     slope_guess = lines.slope;
     // A fit in a window too narrow for the edge underestimates its width: widen geometrically.
     sigma_guess = widen ? std::max(new_sigma, 0.6 * outer) : new_sigma;
-    // (At the blur fitted, not at a widened guess.)
+    // At the blur fitted (not at a widened guess), while a pass remains to use it.
+    const bool redecide = pass + 1 < kMaxPasses && !widen;
     bool now_inner_step = false;
-    for (int side = 0; side < 2 && pass + 1 < kMaxPasses && !widen; ++side) {
+    for (int side = 0; side < 2 && redecide; ++side) {
       bool step, stripe;
       inner_reach(side, &step, &stripe);
       if (inner_step[side] || !step || stripe) continue;

@@ -321,9 +321,9 @@ void SuppressNested(MeasureTarget target, std::vector<PairCandidate>* cands) {
 // Whether a pair's inside is one object: a pair made of the outer edges of two strands side by
 // side holds the background between them. Samples the inside at the detection scale and counts
 // how much of it sits at the background's level (within a quarter of the step), and whether that
-// makes a run clear of both rims (a gap, for a lit pair). A transparent
-// strand on a backlight is a lens: its core shows the backlight too, but as one band centred
-// between two dark rims of equal width, and it is one object.
+// makes a run clear of both rims (a gap). A transparent strand on a backlight is a lens: its core
+// shows the backlight too, but as one band centred between two dark rims of equal width, and it
+// is one object.
 constexpr double kGapWidths = 0.1;  // a gap between two objects: this share of the width
 bool InsideIsOneObject(const Detection& d, const PairCandidate& c) {
   const cv::Mat& img = d.image;  // CV_8U or CV_32F
@@ -399,8 +399,7 @@ bool InsideIsOneObject(const Detection& d, const PairCandidate& c) {
         (last - first + 1) <= 0.7 * n)
       ++lens_rows;
   }
-  // Only a dark silhouette on a backlight can be a lens (its core transmits the backlight); a
-  // lit pair with the background between its edges is two objects.
+  // Only a dark silhouette on a backlight can be a lens (its core transmits the backlight).
   if (c.polarity == Polarity::kDarkOnBright && lens_rows >= 4) return true;
   // A lit object shows no background through itself: a run of background between its rims a
   // tenth of its width wide, in most rows, is a gap between two objects, though short of a fifth
@@ -412,7 +411,7 @@ bool InsideIsOneObject(const Detection& d, const PairCandidate& c) {
   // strand made one 184 px object, its gap within 0.14 of the step in each row and 0.01 over
   // them.)
   if (c.polarity == Polarity::kBrightOnDark && gap_rows >= 3) return false;
-  if (c.polarity == Polarity::kDarkOnBright && gap_rows >= 3 &&
+  if (c.polarity == Polarity::kDarkOnBright && gap_rows >= 3 &&  // (then gaps >= gap_rows)
       std::abs(gap_level_sum / gaps - background) <= 0.05 * step)
     return false;
   return at_background < 0.2 * inside;

@@ -94,18 +94,26 @@ TEST(RefineEdgeGuessTest, TakesOnlyACrossingInTheEdgesDirection) {
   EXPECT_EQ(RefineEdgeGuess(b, f, 8, guess, 10, 10, -1), guess);
 }
 
-// A slab of 3000 px (50 × 60) whose pixels take the given values, count times each, the rest
-// `fill`. The axis runs down the image (s = y, u = x), and the slab is the whole image.
+// A slab of 3000 px (50 × 60, the image's top left) whose pixels take the given values, count
+// times each, the rest `fill`. The axis runs down the image (s = y, u = x).
 struct Level {
   int value, count;
 };
-ClipLevels ClipsOf(const std::vector<Level>& levels, int fill, const DataLevels& data) {
-  cv::Mat m(60, 50, CV_8UC1, cv::Scalar(fill));
+void FillSlab(const std::vector<Level>& levels, int fill, cv::Mat* m) {
+  (*m)(cv::Rect(0, 0, 50, 60)).setTo(fill);
   int k = 0;
   for (const Level& l : levels)
-    for (int i = 0; i < l.count; ++i, ++k) m.at<uint8_t>(k / 50, k % 50) = l.value;
+    for (int i = 0; i < l.count; ++i, ++k) m->at<uint8_t>(k / 50, k % 50) = l.value;
   EXPECT_LE(k, 3000);
+}
+ClipLevels SlabClips(const cv::Mat& m, const DataLevels& data) {
   return FindClipLevels(GreyImage{m, false}, AxisFrame{}, 0, 59.5, 0, 49, data);
+}
+// Such a slab as the whole image.
+ClipLevels ClipsOf(const std::vector<Level>& levels, int fill, const DataLevels& data) {
+  cv::Mat m(60, 50, CV_8UC1);
+  FillSlab(levels, fill, &m);
+  return SlabClips(m, data);
 }
 constexpr DataLevels kFullRange{255, 0, 255}, kLimitedRange{255, 16, 235};
 
@@ -149,12 +157,8 @@ TEST(FindClipLevelsTest, AClipHiddenInTheSlabsRingingIsFoundInTheFrame) {
   for (const int outside : {235, 234}) {
     cv::Mat m(200, 200, CV_8UC1, cv::Scalar(outside));
     if (outside == 234) cv::RNG(7).fill(m, cv::RNG::NORMAL, 234, 1);
-    m(cv::Rect(0, 0, 50, 60)).setTo(16);
-    int k = 0;
-    for (const Level& l : slab)
-      for (int i = 0; i < l.count; ++i, ++k) m.at<uint8_t>(k / 50, k % 50) = l.value;
-    const ClipLevels c =
-        FindClipLevels(GreyImage{m, false}, AxisFrame{}, 0, 59.5, 0, 49, kLimitedRange);
+    FillSlab(slab, 16, &m);
+    const ClipLevels c = SlabClips(m, kLimitedRange);
     if (outside == 235) {
       EXPECT_NEAR(c.high, 234.5, 1e-3);
       EXPECT_NEAR(c.clipped_high_fraction, 300 / 3000.0, 1e-9);
