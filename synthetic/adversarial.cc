@@ -362,6 +362,14 @@ AdversarialScene RandomAdversarialScene(TroubleClass trouble, uint64_t seed) {
   }
   p.nozzle_tip_um = widest_um * uni(1.3, 2.5);
   p.nozzle_half_angle_deg = uni(20, 50);
+  // A shaded strand is lit from the camera's side (a ring light) in half the scenes, else by a
+  // lamp up to 45° off to one side, its far rim dark out to the terminator. From a stream of its
+  // own, so that every other draw of a seed's scene stays as it was before the lamp was added.
+  if (p.strand && !p.lens && p.shading_ambient < 1) {
+    std::mt19937_64 lamp(seed * 0x51ed27ull + static_cast<uint64_t>(trouble) * 31 + 7);
+    std::uniform_real_distribution<double> lamp01(0, 1);
+    if (lamp01(lamp) < 0.5) p.light_deg = -45 + 90 * lamp01(lamp);
+  }
   return p;
 }
 
@@ -469,6 +477,7 @@ std::string Describe(const AdversarialScene& p) {
     default:
       break;
   }
+  if (p.light_deg != 0) extra += fmt::format(" light {:+.0f}°", p.light_deg);
   return fmt::format(
       "{} seed {}: {}x{} {} {:.2f} µm/px, {:.0f} µm ({:.1f} px), tilt {:+.1f}°, blur {:.1f}, noise "
       "{:.1f}, bg {:.0f} (slope {:+.2f}, texture {:.1f}) strand {:.0f} ambient {:.2f} nozzle "

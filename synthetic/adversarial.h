@@ -53,6 +53,10 @@ struct AdversarialScene {
   double spot_level = 0, spot_sigma_px = 20, spot_x_px = 0, spot_y_px = 0;  // a lamp's reflection
   // Strand: opaque (level, shading ambient 1 = flat) or a transparent lens on the backlight.
   double strand_level = 200, shading_ambient = 1;
+  // The lamp's direction across a shaded strand, from the camera's axis (+ toward +u): 0 lights
+  // both rims alike; otherwise one rim is brighter and the other is at the ambient level out to
+  // the terminator.
+  double light_deg = 0;
   bool lens = false;
   double lens_index = 1.5, lens_acceptance_rad = 0.22, lens_rim_floor = 0.1;
   double stripe_gain = 0, stripe_offset = 0, stripe_width = 0.1;  // fractions of the width

@@ -63,7 +63,12 @@ TEST(AdversarialTest, AStrandWhoseShadedEdgeSankBelowTheBackgroundStillDoubtsThe
   // background's level. Its pair was then mixed, scored below the minimum or shared too short a
   // stretch, and the hair was measured alone, 14.4 px at sigma 0.04-0.08, in all four frames
   // (level 40) or three (60). At 40 every frame is ambiguous; at 60 one is refused otherwise.
+  // (Lit from the camera's side, as it was drawn when this was found: the lamp the matrix now
+  // puts 33° off leaves the strand's far rim below the background too, and its pair was not
+  // found at all in one frame of four at 40 and two at 60: the hair alone, 14.4 px at sigma
+  // 0.05-0.08. docs/accuracy.md, left alone.)
   AdversarialScene p = RandomAdversarialScene(TroubleClass::kStringer, 709);
+  p.light_deg = 0;
   p.strand_level = 40;
   ExpectMatrixFramesAmbiguous(p);
   p.strand_level = 60;

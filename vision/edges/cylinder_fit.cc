@@ -53,11 +53,78 @@ struct Layout {
   }
 };
 
+// A cylinder lit from one side (tilt l beside its Lambertian part k) is dark from its far rim to
+// the terminator: its light k·√(1 − x²) + l·x is clamped at 0 there, where the shapes' goes
+// negative, down to −|l| at the rim (a strip R·(1 − cos θ) deep, tan θ = |l|/k). Without it the
+// fit moved that silhouette outward by up to a px at 20-35°. The clamp's part is added to the
+// model, blurred: I(u) = ∫ C(x)·φ_σ(u − c − R·x)·R dx over the strip, C = −(k√(1 − x²) + l·x),
+// and its derivatives by k, l, centre, radius and blur (the strip's ends depend on k and l only,
+// and C is 0 at the terminator: no end terms). Only where the fit without it put the light
+// within kMaxTerminatorDeg of the camera's axis: beyond, k is too weak beside l for a lit
+// cylinder's shading, and l is a gradient across a flat object, which has no terminator. (Decided
+// once, between the fit's two runs: a model that switched the fill off past that angle within a
+// run had a step in its cost, where a flat object under a gradient stuck with a spurious shading.)
+constexpr double kMaxTerminatorDeg = 60.0;
+// Shallower strips are nothing a fit can see (their fill ~ |l|·depth/3 grey level·px).
+constexpr double kMinTerminatorDepthPx = 0.01;
+
+struct TerminatorFill {
+  double value = 0, d_k = 0, d_l = 0, d_centre = 0, d_radius = 0, d_sigma = 0;
+};
+
+// Whether a fit's k and l are a lamp's within kMaxTerminatorDeg.
+bool LitFromTheSide(double k, double l) {
+  static const double kMaxTan = std::tan(kMaxTerminatorDeg * M_PI / 180.0);
+  return k > 0 && l != 0 && std::abs(l) <= kMaxTan * k;
+}
+
+// The dark strip's depth inside the far rim, px (k > 0).
+double TerminatorDepthPx(double k, double l, double radius) {
+  return radius * (1.0 - k / std::hypot(k, l));
+}
+
+// At u, or false where there is none.
+bool TerminatorFillAt(double u, double k, double l, double centre, double radius, double sigma,
+                      TerminatorFill* out) {
+  if (!(k > 0) || l == 0) return false;
+  const double cos_theta = k / std::hypot(k, l);
+  const double depth_px = TerminatorDepthPx(k, l, radius);
+  if (depth_px < kMinTerminatorDepthPx) return false;
+  // Light toward +u (l > 0) leaves the left rim (x = −1) dark.
+  const double x0 = l > 0 ? -1.0 : cos_theta, x1 = l > 0 ? -cos_theta : 1.0;
+  const double u0 = centre + radius * x0, u1 = centre + radius * x1;
+  if (u < u0 - 6 * sigma || u > u1 + 6 * sigma) return false;
+  // Midpoints at most half a blur apart: far finer than the Gaussian they are summed under.
+  const int n = std::clamp(static_cast<int>(std::ceil(2 * depth_px / sigma)) + 2, 3, 32);
+  const double dx = (x1 - x0) / n, du = radius * dx, inv_s = 1.0 / sigma;
+  TerminatorFill f;
+  double sum_cxz = 0;
+  for (int i = 0; i < n; ++i) {
+    const double x = x0 + (i + 0.5) * dx;
+    const double root = std::sqrt(std::max(0.0, 1 - x * x));
+    const double c = -(k * root + l * x);
+    if (c <= 0) continue;
+    const double z = (u - centre - radius * x) * inv_s;
+    const double g = fitcore::kInvSqrt2Pi * std::exp(-0.5 * z * z) * inv_s * du;
+    f.value += c * g;
+    f.d_k -= root * g;
+    f.d_l -= x * g;
+    f.d_centre += c * g * z * inv_s;
+    sum_cxz += c * g * x * z * inv_s;
+    f.d_sigma += c * g * (z * z - 1) * inv_s;
+  }
+  f.d_radius = f.value / radius + sum_cxz;
+  *out = f;
+  return true;
+}
+
 // The model at u, its Jacobian row j and its slope across u: the object's shapes and each side's
-// level depend on u − centre, and each side's line moves with u besides.
+// level depend on u − centre, and each side's line moves with u besides. With a line each side (a
+// strand), the terminator's fill (above); a filament's fit (one line) is its templates' reference,
+// which have none (cylinder_track.h).
 template <int kBg>
 inline double Model(double u, const Vec<Layout<kBg>::kN>& p, double u_ref,
-                    const fitcore::BlurredSqrt& root, double* j, double* slope) {
+                    const fitcore::BlurredSqrt& root, bool terminator, double* j, double* slope) {
   using L = Layout<kBg>;
   Shapes sh;
   EvalShapes<kBg == 4>(u, u_ref, p[L::kC], p[L::kR], p[L::kS], root, &sh);
@@ -72,6 +139,15 @@ inline double Model(double u, const Vec<Layout<kBg>::kN>& p, double u_ref,
     double dq = 0;
     for (int i = 0; i < L::kAmplitudes; ++i) dq += p[i] * d[i][q];
     j[L::kC + q] = dq;
+  }
+  TerminatorFill fill;
+  if (terminator && TerminatorFillAt(u, p[L::kK], p[L::kL], p[L::kC], p[L::kR], p[L::kS], &fill)) {
+    value += fill.value;
+    j[L::kK] += fill.d_k;
+    j[L::kL] += fill.d_l;
+    j[L::kC] += fill.d_centre;
+    j[L::kR] += fill.d_radius;
+    j[L::kS] += fill.d_sigma;
   }
   *slope = -j[L::kC] + p[1] * v[0] + (kBg == 4 ? p[3] * v[2] : 0.0);
   return value;
@@ -131,13 +207,15 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   std::vector<double> w(samples.size(), 1.0), residuals(samples.size());
   // Each group's slope across u where the residuals were last taken: what an LM run holds (below).
   std::vector<double> slopes;
+  // The terminator's fill: in the second run, where the first put the light within reach (above).
+  bool terminator = false;
   const auto residuals_at = [&](const Vec<kN>& q) {
     slopes.resize(groups.size());
     int k = 0;
     for (size_t g = 0; g < groups.size(); ++g) {
       double j[kN];
       double& slope = slopes[g];
-      const double model = Model<kBg>(groups.mean_u_px[g], q, u_ref, root, j, &slope);
+      const double model = Model<kBg>(groups.mean_u_px[g], q, u_ref, root, terminator, j, &slope);
       for (const int end = groups.end[g]; k < end; ++k) {
         const int i = groups.pixels[k];
         residuals[i] = model + slope * groups.offset_px[k] - samples[i].value;
@@ -176,7 +254,8 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
     int k = 0;
     for (size_t g = 0; g < groups.size(); ++g) {
       double j[kN], unused_slope;
-      const double model = Model<kBg>(groups.mean_u_px[g], q, u_ref, root, j, &unused_slope);
+      const double model =
+          Model<kBg>(groups.mean_u_px[g], q, u_ref, root, terminator, j, &unused_slope);
       const double slope = slopes[g];
       double w_sum = 0, wr_sum = 0;
       for (const int end = groups.end[g]; k < end; ++k) {
@@ -221,6 +300,7 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   if (!lm.converged) return out;
   groups = GroupCylinderPixels(samples, lm.p[kC] - lm.p[kR], lm.p[kC] + lm.p[kR], lm.p[kS]);
   normal.Resize(groups.size());
+  terminator = kBg == 4 && LitFromTheSide(lm.p[kK], lm.p[kL]);
   residuals_at(lm.p);
   const double noise = RobustScale(residuals);
   cauchy_scale = noise;
@@ -253,6 +333,7 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   out.ambient = kBg == 4 ? p[kA] - 0.5 * (p[0] + p[2] + (p[1] + p[3]) * (p[kC] - u_ref)) : p[kA];
   out.shading = p[kK];
   out.tilt = p[kL];
+  if (terminator && p[kK] > 0) out.terminator_px = TerminatorDepthPx(p[kK], p[kL], p[kR]);
   out.noise = noise;
   if (residuals_out) *residuals_out = std::move(residuals);  // not used here again
   out.rms = std::sqrt(wrss / std::max(wsum, 1.0));

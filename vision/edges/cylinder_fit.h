@@ -27,8 +27,10 @@ enum class CylinderBackground {
 //   value(u) = b₀ + b₁·u + blur_σ{ 1[|x| < 1]·(a + k·√(1 − x²) + l·x) }
 // with one line through both sides (kOneLine). a is the ambient (flat) part
 // of the object's brightness, k the Lambertian part (n·v of a lit cylinder), l a tilt for light
-// from one side. Both edges share the centre, the radius, the blur and the shading, so the
-// interior's curvature fixes k and each silhouette is placed where the shading's √d ramp starts —
+// from one side. With a line each side, light from within 60° of one side is clamped at 0 past
+// the terminator, as a lamp's is: a + max(0, k·√(1 − x²) + l·x) (the far rim's dark strip).
+// Both edges share the centre, the radius, the blur and the shading, so the interior's curvature
+// fixes k and each silhouette is placed where the shading's √d ramp starts —
 // not where a per-edge fit, trading its step against its ramp, puts it. Residuals are weighted
 // robustly (Cauchy, from the residuals' MAD), so a specular stripe or a clear strand's internal
 // lines do not pull the fit.
@@ -45,8 +47,11 @@ struct CylinderFit {
   CylinderBackground background = CylinderBackground::kEachSide;  // the model fitted
   double u_ref_px = 0;  // where the lines' levels are anchored: midway between the guessed edges
   double ambient = 0, shading = 0, tilt = 0;  // a (over the background behind the centre), k, l
-  double rms = 0;                             // weighted residual RMS, grey levels
-  double noise = 0;                           // robust residual scale (1.4826·MAD), grey levels
+  // Light from one side: how deep the dark strip inside the far rim, out to the terminator, that
+  // the fit modelled (cylinder_fit.cc); 0 without one.
+  double terminator_px = 0;
+  double rms = 0;    // weighted residual RMS, grey levels
+  double noise = 0;  // robust residual scale (1.4826·MAD), grey levels
   int samples = 0;
   int outliers = 0;  // residuals beyond 4 robust σ
   int iterations = 0;
