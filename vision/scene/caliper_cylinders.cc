@@ -16,6 +16,7 @@ void TakeCylinder(const CylinderFit& cyl, CaliperFit* cf) {
   cf->right.edge_sigma_px = cyl.right_sigma_px;
   cf->left.sigma_px = cf->right.sigma_px = cyl.sigma_px;
   cf->width_sigma_px = cyl.width_sigma_px;
+  cf->terminator_px = cyl.terminator_px;
 }
 
 void TakeTrackedCylinders(const TrackedCylinders& tracked, std::vector<CaliperFit>* fits) {

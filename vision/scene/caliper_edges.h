@@ -14,6 +14,8 @@ struct CaliperFit {
   EdgeFit left, right;
   EdgeFit left_shaded, right_shaded;  // while the model is undecided
   double width_sigma_px = -1;         // set by a joint fit of both edges (their errors correlate)
+  // A lit cylinder's dark strip by its far rim (cylinder_fit.h).
+  double terminator_px = 0;
   bool inside_roi = true;
   int saturated = 0;
   int samples = 0;
@@ -56,9 +58,13 @@ EdgeBlur MedianBlur(const std::vector<double>& caliper_blurs_px);
 // exceeds the other's, a step within its blur (a highlight or a stripe at the rim) has folded into
 // it, moving it by up to the excess blur (in quadrature). The width's doubt, px: that excess
 // beyond what the two medians' noise explains (each taken kBlurNoiseSigmas of its σ toward the
-// other) and an allowance of kBlurAllowance of the sharper edge's blur (kShadedBlurAllowance where
-// a side is shaded: its step's blur also takes up the shading's curvature, which differs between
-// a lit and a shadowed side). 0 when either blur is unknown.
-double BlurMismatchDoubtPx(const EdgeBlur& left, const EdgeBlur& right, bool shaded);
+// other) and an allowance of the sharper edge's blur, by how alike the two edges' models are
+// (caliper_edges.cc). 0 when either blur is unknown.
+enum class EdgeModels {
+  kBothPlain,
+  kOneShaded,   // the other plain: the shaded step's blur also takes up the rim's curvature
+  kBothShaded,  // one model on both sides
+};
+double BlurMismatchDoubtPx(const EdgeBlur& left, const EdgeBlur& right, EdgeModels models);
 
 }  // namespace clogscope::vision

@@ -32,6 +32,9 @@ constexpr double kMaxRefusedTemplates = 0.25;
 // How far the tip may lie from where it was placed along the axis: set by the nozzle's face on
 // both sides of the strand, or inferred from the outline (tip.h).
 constexpr double kTipSigmaWidths = 0.25;  // an unconfirmed tip's doubt, in widths
+// A lamp off to one side whose dark strip inside the far rim (cylinder_fit.h) is deeper than this
+// many blurs leaves that rim's per-edge blur no PSF's (BlurMismatchDoubtPx not taken).
+constexpr double kLampAsideBlurs = 0.25;
 // Curvature of the width along the band: more than 1 px of sag, bending like a disc (|w''|/2 above
 // 0.25/w, i.e. a chord of a circle less than 4 widths in radius), by more than 3σ of the calipers'
 // own scatter about it.
@@ -678,8 +681,19 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       doubt.inner_level_px =
           InnerLevelDoubtPx(img, f, band_s0, opt.caliper_spacing_px, fits, own_edges, m->blur_px);
     }
-    doubt.edge_blur_px =
-        BlurMismatchDoubtPx(own_blur[0], own_blur[1], shade[0] == 1 || shade[1] == 1);
+    // A lamp's dark strip by one rim deeper than a quarter of the blur: the per-edge shaded
+    // step on that side, which does not model it, takes a blur that is no PSF's (0.6 px against
+    // the lit rim's 1.1, a lamp 25° off a 95 px strand): no comparison.
+    std::vector<double> terminator_px;
+    for (int k = 0; k < n_cal; ++k)
+      if (m->calipers[k].inlier) terminator_px.push_back(fits[k].terminator_px);
+    const bool lamp_aside =
+        !terminator_px.empty() && Median(terminator_px) > kLampAsideBlurs * m->blur_px;
+    const int shaded_sides = (shade[0] == 1) + (shade[1] == 1);
+    const EdgeModels models = shaded_sides == 0   ? EdgeModels::kBothPlain
+                              : shaded_sides == 2 ? EdgeModels::kBothShaded
+                                                  : EdgeModels::kOneShaded;
+    if (!lamp_aside) doubt.edge_blur_px = BlurMismatchDoubtPx(own_blur[0], own_blur[1], models);
   }
   {
     // The inlier calipers' own edge models; a strand's calipers refitted as cylinders, the
