@@ -6,6 +6,8 @@
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "common/angle.h"
+
 namespace clogscope::synthetic {
 
 double LensTransmission(double x, double n, double acceptance_rad, double floor) {
@@ -18,7 +20,7 @@ double LensTransmission(double x, double n, double acceptance_rad, double floor)
 double StrandEmission(const AdversarialScene& p, double x) {
   // Lambertian: the surface's normal (x, √(1 − x²)) against the light's (sin θ, cos θ).
   const double bulge = std::sqrt(std::max(0.0, 1 - x * x));
-  const double theta = p.light_deg * (M_PI / 180.0);
+  const double theta = p.light_deg * kDegToRad;
   const double lit = std::max(0.0, x * std::sin(theta) + bulge * std::cos(theta));
   return p.strand_level * (p.shading_ambient + (1 - p.shading_ambient) * lit);
 }

@@ -18,7 +18,8 @@ namespace clogscope::synthetic {
 double LensTransmission(double x, double n, double acceptance_rad, double floor);
 
 // An opaque strand's own light at x (8-bit grey levels): a lit cylinder, from the ambient share at
-// its rim to its full level on its axis (flat when shading_ambient is 1), lit from light_deg.
+// its rims to its full level where its surface faces the lamp (x = sin light_deg; flat when
+// shading_ambient is 1); past the terminator, the ambient share alone.
 double StrandEmission(const AdversarialScene& p, double x);
 
 // The camera's blur and pixels on a layer rendered at `oversample` samples per pixel along each

@@ -198,6 +198,7 @@ TEST(AdversarialTest, AStripeByTheRimOfAStrandShadedOnBothSidesCarriesItsDoubt) 
   // matrix's JPEG at q45 with texture, two frames of four are still 0.8-0.9 px narrow at sigma
   // 0.08: the blurs' noise hides the excess. docs/accuracy.md.)
   AdversarialScene p = RandomAdversarialScene(TroubleClass::kSpecularStripe, 2715);
+  p.light_deg = 0;  // as drawn: lit from the camera's side
   p.codec = Codec::kPng;
   p.noise_sigma = 0.5;
   p.background_texture = 0;

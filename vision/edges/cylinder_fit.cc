@@ -4,6 +4,7 @@
 #include <cmath>
 #include <utility>
 
+#include "common/angle.h"
 #include "common/robust.h"
 #include "vision/edges/caliper_samples.h"
 #include "vision/edges/cylinder_model.h"
@@ -56,46 +57,55 @@ struct Layout {
 // A cylinder lit from one side (tilt l beside its Lambertian part k) is dark from its far rim to
 // the terminator: its light k·√(1 − x²) + l·x is clamped at 0 there, where the shapes' goes
 // negative, down to −|l| at the rim (a strip R·(1 − cos θ) deep, tan θ = |l|/k). Without it the
-// fit moved that silhouette outward by up to a px at 20-35°. The clamp's part is added to the
+// fit moved that silhouette outward, 0.1-1.4 px at 20-35°. The clamp's part is added to the
 // model, blurred: I(u) = ∫ C(x)·φ_σ(u − c − R·x)·R dx over the strip, C = −(k√(1 − x²) + l·x),
 // and its derivatives by k, l, centre, radius and blur (the strip's ends depend on k and l only,
 // and C is 0 at the terminator: no end terms). Only where the fit without it put the light
 // within kMaxTerminatorDeg of the camera's axis: beyond, k is too weak beside l for a lit
 // cylinder's shading, and l is a gradient across a flat object, which has no terminator. (Decided
 // once, between the fit's two runs: a model that switched the fill off past that angle within a
-// run had a step in its cost, where a flat object under a gradient stuck with a spurious shading.)
+// run had a step in its cost, where a flat object under a gradient stuck with a spurious shading.
+// For the same reason the run keeps its number of nodes, and k stays above 0.) The strip's groups
+// are the interior's, 2 px wide past CylinderInteriorMarginPx: where a deep strip's terminator
+// lies there, its blurred kink is read at their means (its curvature, about a grey level per px²
+// at a blur of 1 px, costs the model less than half a level over a group).
 constexpr double kMaxTerminatorDeg = 60.0;
 // Shallower strips are nothing a fit can see (their fill ~ |l|·depth/3 grey level·px).
 constexpr double kMinTerminatorDepthPx = 0.01;
+// The smallest k while the fill is on: at 0 the strip would be half the object, and the fill off.
+constexpr double kMinTerminatorShading = 1e-6;
 
 struct TerminatorFill {
   double value = 0, d_k = 0, d_l = 0, d_centre = 0, d_radius = 0, d_sigma = 0;
 };
-
-// Whether a fit's k and l are a lamp's within kMaxTerminatorDeg.
-bool LitFromTheSide(double k, double l) {
-  static const double kMaxTan = std::tan(kMaxTerminatorDeg * M_PI / 180.0);
-  return k > 0 && l != 0 && std::abs(l) <= kMaxTan * k;
-}
 
 // The dark strip's depth inside the far rim, px (k > 0).
 double TerminatorDepthPx(double k, double l, double radius) {
   return radius * (1.0 - k / std::hypot(k, l));
 }
 
-// At u, or false where there is none.
-bool TerminatorFillAt(double u, double k, double l, double centre, double radius, double sigma,
-                      TerminatorFill* out) {
-  if (!(k > 0) || l == 0) return false;
-  const double cos_theta = k / std::hypot(k, l);
+// The fill's nodes for a run from a fit's k, l, radius and blur: 0 (none) unless the light lies
+// within kMaxTerminatorDeg of the axis and the strip is deep enough to matter; else midpoints at
+// most half a blur apart, far finer than the Gaussian they are summed under.
+int TerminatorNodes(double k, double l, double radius, double sigma) {
+  static const double kMaxTan = std::tan(kMaxTerminatorDeg * kDegToRad);
+  if (!(k > 0) || l == 0 || std::abs(l) > kMaxTan * k) return 0;
   const double depth_px = TerminatorDepthPx(k, l, radius);
-  if (depth_px < kMinTerminatorDepthPx) return false;
+  if (depth_px < kMinTerminatorDepthPx) return 0;
+  return std::clamp(static_cast<int>(std::ceil(2 * depth_px / sigma)) + 2, 4, 128);
+}
+
+// At u over `nodes` midpoints, or false where there is none (no nodes, or u beyond the blur's
+// reach of the strip).
+bool TerminatorFillAt(double u, double k, double l, double centre, double radius, double sigma,
+                      int nodes, TerminatorFill* out) {
+  if (nodes <= 0 || !(k > 0) || l == 0) return false;
+  const double cos_theta = k / std::hypot(k, l);
   // Light toward +u (l > 0) leaves the left rim (x = −1) dark.
   const double x0 = l > 0 ? -1.0 : cos_theta, x1 = l > 0 ? -cos_theta : 1.0;
   const double u0 = centre + radius * x0, u1 = centre + radius * x1;
   if (u < u0 - 6 * sigma || u > u1 + 6 * sigma) return false;
-  // Midpoints at most half a blur apart: far finer than the Gaussian they are summed under.
-  const int n = std::clamp(static_cast<int>(std::ceil(2 * depth_px / sigma)) + 2, 3, 32);
+  const int n = nodes;
   const double dx = (x1 - x0) / n, du = radius * dx, inv_s = 1.0 / sigma;
   TerminatorFill f;
   double sum_cxz = 0;
@@ -124,7 +134,8 @@ bool TerminatorFillAt(double u, double k, double l, double centre, double radius
 // which have none (cylinder_track.h).
 template <int kBg>
 inline double Model(double u, const Vec<Layout<kBg>::kN>& p, double u_ref,
-                    const fitcore::BlurredSqrt& root, bool terminator, double* j, double* slope) {
+                    const fitcore::BlurredSqrt& root, int terminator_nodes, double* j,
+                    double* slope) {
   using L = Layout<kBg>;
   Shapes sh;
   EvalShapes<kBg == 4>(u, u_ref, p[L::kC], p[L::kR], p[L::kS], root, &sh);
@@ -141,7 +152,8 @@ inline double Model(double u, const Vec<Layout<kBg>::kN>& p, double u_ref,
     j[L::kC + q] = dq;
   }
   TerminatorFill fill;
-  if (terminator && TerminatorFillAt(u, p[L::kK], p[L::kL], p[L::kC], p[L::kR], p[L::kS], &fill)) {
+  if (TerminatorFillAt(u, p[L::kK], p[L::kL], p[L::kC], p[L::kR], p[L::kS], terminator_nodes,
+                       &fill)) {
     value += fill.value;
     j[L::kK] += fill.d_k;
     j[L::kL] += fill.d_l;
@@ -207,15 +219,17 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   std::vector<double> w(samples.size(), 1.0), residuals(samples.size());
   // Each group's slope across u where the residuals were last taken: what an LM run holds (below).
   std::vector<double> slopes;
-  // The terminator's fill: in the second run, where the first put the light within reach (above).
-  bool terminator = false;
+  // The terminator's fill's nodes (0: none): in the second run, where the first put the light
+  // within reach (above).
+  int terminator_nodes = 0;
   const auto residuals_at = [&](const Vec<kN>& q) {
     slopes.resize(groups.size());
     int k = 0;
     for (size_t g = 0; g < groups.size(); ++g) {
       double j[kN];
       double& slope = slopes[g];
-      const double model = Model<kBg>(groups.mean_u_px[g], q, u_ref, root, terminator, j, &slope);
+      const double model =
+          Model<kBg>(groups.mean_u_px[g], q, u_ref, root, terminator_nodes, j, &slope);
       for (const int end = groups.end[g]; k < end; ++k) {
         const int i = groups.pixels[k];
         residuals[i] = model + slope * groups.offset_px[k] - samples[i].value;
@@ -255,7 +269,7 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
     for (size_t g = 0; g < groups.size(); ++g) {
       double j[kN], unused_slope;
       const double model =
-          Model<kBg>(groups.mean_u_px[g], q, u_ref, root, terminator, j, &unused_slope);
+          Model<kBg>(groups.mean_u_px[g], q, u_ref, root, terminator_nodes, j, &unused_slope);
       const double slope = slopes[g];
       double w_sum = 0, wr_sum = 0;
       for (const int end = groups.end[g]; k < end; ++k) {
@@ -284,6 +298,7 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   const auto bound = [&](Vec<kN>* q) {
     (*q)[kS] = std::clamp((*q)[kS], kMinSigmaPx, max_sigma_px);
     (*q)[kR] = std::clamp((*q)[kR], std::max(1.0, 0.5 * r0), 1.5 * r0 + 2.0);
+    if (terminator_nodes > 0) (*q)[kK] = std::max((*q)[kK], kMinTerminatorShading);
   };
   const auto small_step = [](const Vec<kN>& d) {
     return std::abs(d[kC]) < 1e-3 && std::abs(d[kR]) < 1e-3 && std::abs(d[kS]) < 1e-2;
@@ -300,10 +315,13 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   if (!lm.converged) return out;
   groups = GroupCylinderPixels(samples, lm.p[kC] - lm.p[kR], lm.p[kC] + lm.p[kR], lm.p[kS]);
   normal.Resize(groups.size());
-  terminator = kBg == 4 && LitFromTheSide(lm.p[kK], lm.p[kL]);
   residuals_at(lm.p);
   const double noise = RobustScale(residuals);
   cauchy_scale = noise;
+  if (kBg == 4) {
+    terminator_nodes = TerminatorNodes(lm.p[kK], lm.p[kL], lm.p[kR], lm.p[kS]);
+    if (terminator_nodes > 0) residuals_at(lm.p);  // the slopes the run holds, with the fill
+  }
   lm = fitcore::MinimiseLm<kN>(lm.p, evaluate, bound, small_step);
   out.iterations += lm.iterations;
   if (!lm.converged) return out;
@@ -333,7 +351,7 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   out.ambient = kBg == 4 ? p[kA] - 0.5 * (p[0] + p[2] + (p[1] + p[3]) * (p[kC] - u_ref)) : p[kA];
   out.shading = p[kK];
   out.tilt = p[kL];
-  if (terminator && p[kK] > 0) out.terminator_px = TerminatorDepthPx(p[kK], p[kL], p[kR]);
+  if (terminator_nodes > 0) out.terminator_px = TerminatorDepthPx(p[kK], p[kL], p[kR]);
   out.noise = noise;
   if (residuals_out) *residuals_out = std::move(residuals);  // not used here again
   out.rms = std::sqrt(wrss / std::max(wsum, 1.0));

@@ -27,8 +27,9 @@ enum class CylinderBackground {
 //   value(u) = b₀ + b₁·u + blur_σ{ 1[|x| < 1]·(a + k·√(1 − x²) + l·x) }
 // with one line through both sides (kOneLine). a is the ambient (flat) part
 // of the object's brightness, k the Lambertian part (n·v of a lit cylinder), l a tilt for light
-// from one side. With a line each side, light from within 60° of one side is clamped at 0 past
-// the terminator, as a lamp's is: a + max(0, k·√(1 − x²) + l·x) (the far rim's dark strip).
+// from one side. With a line each side, light from a lamp within 60° of the camera's axis
+// (cylinder_fit.cc) is clamped at 0 past the terminator, as a lamp's is:
+// a + max(0, k·√(1 − x²) + l·x) (the far rim's dark strip).
 // Both edges share the centre, the radius, the blur and the shading, so the interior's curvature
 // fixes k and each silhouette is placed where the shading's √d ramp starts —
 // not where a per-edge fit, trading its step against its ramp, puts it. Residuals are weighted
@@ -83,7 +84,9 @@ PixelGroups GroupCylinderPixels(const std::vector<EdgeSample>& samples, double l
 
 // A fitted cylinder's contrast at one silhouette (side 0 left, 1 right), as a per-edge fit's
 // (EdgeFit::contrast): the object's part of the model (a, k, l; over the background behind it)
-// 2σ inside the silhouette, signed like the step from −u to +u there.
+// 2σ inside the silhouette, signed like the step from −u to +u there. Without the terminator's
+// fill (a lamp-lit strand's dark rim reads up to |l| low): it serves filaments' tracked fits, which
+// have none.
 double CylinderEdgeContrast(const CylinderFit& fit, int side);
 
 }  // namespace clogscope::vision

@@ -54,17 +54,19 @@ struct EdgeBlur {
 };
 EdgeBlur MedianBlur(const std::vector<double>& caliper_blurs_px);
 
+// How a strand's two edges were fitted (BlurMismatchDoubtPx).
+enum class EdgeModels {
+  kBothPlain,
+  kOneShaded,   // the other plain: the shaded step's blur also takes up the rim's curvature
+  kBothShaded,  // one model on both sides
+};
+
 // The two edges of one strand lie at one depth and are blurred alike: where one edge's blur
 // exceeds the other's, a step within its blur (a highlight or a stripe at the rim) has folded into
 // it, moving it by up to the excess blur (in quadrature). The width's doubt, px: that excess
 // beyond what the two medians' noise explains (each taken kBlurNoiseSigmas of its σ toward the
 // other) and an allowance of the sharper edge's blur, by how alike the two edges' models are
 // (caliper_edges.cc). 0 when either blur is unknown.
-enum class EdgeModels {
-  kBothPlain,
-  kOneShaded,   // the other plain: the shaded step's blur also takes up the rim's curvature
-  kBothShaded,  // one model on both sides
-};
 double BlurMismatchDoubtPx(const EdgeBlur& left, const EdgeBlur& right, EdgeModels models);
 
 }  // namespace clogscope::vision

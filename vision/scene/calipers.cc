@@ -681,9 +681,10 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       doubt.inner_level_px =
           InnerLevelDoubtPx(img, f, band_s0, opt.caliper_spacing_px, fits, own_edges, m->blur_px);
     }
-    // A lamp's dark strip by one rim deeper than a quarter of the blur: the per-edge shaded
-    // step on that side, which does not model it, takes a blur that is no PSF's (0.6 px against
-    // the lit rim's 1.1, a lamp 25° off a 95 px strand): no comparison.
+    // A lamp's dark strip by one rim deeper than kLampAsideBlurs: the per-edge shaded step on
+    // that side, which does not model it, takes a blur that is no PSF's (0.6 px against the lit
+    // rim's 1.1, a lamp 25° off a 95 px strand): no comparison. (A lamp-lit strand whose dark
+    // side was taken as plain has no cylinder, and no strip: the one-shaded allowance holds.)
     std::vector<double> terminator_px;
     for (int k = 0; k < n_cal; ++k)
       if (m->calipers[k].inlier) terminator_px.push_back(fits[k].terminator_px);

@@ -6,6 +6,8 @@
 #include <functional>
 #include <random>
 
+#include "common/angle.h"
+
 namespace clogscope::vision {
 namespace {
 
@@ -22,7 +24,7 @@ std::vector<EdgeSample> Profile(double centre, double radius, double sigma, doub
                                 const std::function<double(double)>& extra = nullptr,
                                 const std::function<double(double)>& background = nullptr,
                                 double light_deg = 0) {
-  const double theta = light_deg * M_PI / 180.0;
+  const double theta = light_deg * kDegToRad;
   const auto object = [&](double t) {
     const double x = (t - centre) / radius;
     if (std::abs(x) >= 1) return background ? background(t) - kBackground : 0.0;
@@ -54,9 +56,13 @@ std::vector<EdgeSample> Profile(double centre, double radius, double sigma, doub
 // then dark from the rim to the terminator (a strip 0.9 px deep at 20° on the 15 px radius, 2.7 px
 // at 35°, 3.6 and 11 px on the 60 px: without that strip in the model the fit put those
 // silhouettes 0.1-1.4 px out); and flat ones under a gradient of light. Where the dark rim is at a
-// fifth of the light and the lamp 35° off, its strip tells less: within 0.07 px, or no fit.
+// fifth of the light and the lamp 35° off, its strip tells less: within 0.07 px, or no fit (but
+// not none of them). (A shaded cylinder under a gradient that takes its light below the ambient
+// at one rim, tilt 30 on k 80 as this test had, is no lamp's: the model now reads it as one, and
+// puts that rim up to 0.12 px inward.)
 TEST(CylinderFitTest, FindsTheSilhouetteOfShadedAndPlainCylinders) {
   std::mt19937 rng(3);
+  int faint_fits = 0;
   for (double radius : {15.0, 60.0}) {
     for (double ambient : {0.2, 0.5, 1.0}) {
       for (double sigma : {1.0, 2.5}) {
@@ -67,13 +73,16 @@ TEST(CylinderFitTest, FindsTheSilhouetteOfShadedAndPlainCylinders) {
           const double c = 100.37;
           const auto s =
               Profile(c, radius, sigma, ambient, tilt, 0, &rng, nullptr, nullptr, light_deg);
-          const double theta = light_deg * M_PI / 180.0;
+          const double theta = light_deg * kDegToRad;
           // Started 2 px off on each side, as a per-edge fit inside the shading would start it.
           const CylinderFit f = FitLitCylinder(s, c - radius + 2, c + radius - 2, 1.5);
           const std::string where =
               ::testing::PrintToString(std::vector<double>{radius, ambient, sigma, side_light});
           const bool faint_rim = ambient < 0.5 && light_deg != 0;
-          if (faint_rim && std::abs(light_deg) > 30 && !f.converged) continue;
+          if (faint_rim && std::abs(light_deg) > 30) {
+            if (!f.converged) continue;
+            ++faint_fits;
+          }
           ASSERT_TRUE(f.converged) << where;
           const double tolerance_px = faint_rim ? 0.07 : 0.01;
           EXPECT_NEAR(f.left_px, c - radius, tolerance_px) << where;
@@ -88,6 +97,7 @@ TEST(CylinderFitTest, FindsTheSilhouetteOfShadedAndPlainCylinders) {
       }
     }
   }
+  EXPECT_GE(faint_fits, 2);
 }
 
 // An uneven lamp or backdrop: each side's background its own line, hidden behind the object.
