@@ -453,10 +453,8 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   // side's step was taken as plain (seed 2806, lamp 44° off a 39 px strand: 0.38 px wide at σ 0.09
   // without noise, per edge; 0.02 px as a cylinder with the terminator's strip). A filament's
   // stretch keeps both sides' rule (its tracked templates start from these fits).
-  const bool both_shaded = shade[0] == 1 && shade[1] == 1;
-  const bool lit_cylinder = both_shaded || (!filament && (shade[0] == 1 || shade[1] == 1));
-  // Whether the cylinders kept found a lamp off to one side (CylindersFoundALamp), decided once.
-  bool lamp_aside = false;
+  const bool lit_cylinder =
+      filament ? shade[0] == 1 && shade[1] == 1 : shade[0] == 1 || shade[1] == 1;
   if (from_memory) {
     const EdgeLines lines = FitEdgeLines(fits, band_s0, opt.caliper_spacing_px);
     if (lines.calipers >= 2) {
@@ -470,8 +468,9 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     // A strand shaded on one side only is a cylinder only where the cylinders find the lamp that
     // explains it (a colour camera's demosaicing makes one side of a flat strand look shaded:
     // Bayer seeds 21 and 22 came out 0.37-0.47 px off as cylinders, valid).
+    const bool both_sides = shade[0] == 1 && shade[1] == 1;
     std::vector<CaliperFit> per_edge;
-    if (!both_shaded) per_edge = fits;
+    if (!both_sides) per_edge = fits;
     EdgeLines lines;
     lines.left_u0 = left_guess;
     lines.right_u0 = right_guess;
@@ -479,13 +478,11 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     RefitAsCylinders(img, f, clip, band_s0, opt.caliper_spacing_px, lines, sigma_guess,
                      filament ? CylinderBackground::kOneLine : CylinderBackground::kEachSide, &fits,
                      filament ? nullptr : cylinder_structure_px, memory);
-    lamp_aside = CylindersFoundALamp(fits, sigma_guess);
-    if (!both_shaded && !lamp_aside) {
-      fits = std::move(per_edge);  // (a strand's: no memory to clear)
+    if (!both_sides && !CylindersFoundALamp(fits, sigma_guess)) {
+      fits = std::move(per_edge);
       cylinder_structure_px[0] = cylinder_structure_px[1] = 0;
+      if (memory) memory->Clear();
     } else {
-      // The cylinders model the side taken as plain: the shaded fit's shift there is no doubt.
-      shading_doubt_px[0] = shading_doubt_px[1] = 0;
       if (memory) {
         memory->left_u0_px = lines.left_u0;
         memory->right_u0_px = lines.right_u0;
@@ -715,6 +712,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     // Under a lamp off to one side the per-edge step on the far rim, which does not model its
     // dark strip, takes a blur that is no PSF's (0.6 px against the lit rim's 1.1, a lamp 25° off
     // a 95 px strand): no comparison.
+    const bool lamp_aside = CylindersFoundALamp(fits, m->blur_px);
     const int shaded_sides = (shade[0] == 1) + (shade[1] == 1);
     const EdgeModels models = shaded_sides == 0   ? EdgeModels::kBothPlain
                               : shaded_sides == 2 ? EdgeModels::kBothShaded
