@@ -224,18 +224,6 @@ TEST(AdversarialTest, AStrandLitFromOneSideIsMeasuredToItsDarkRim) {
   }
 }
 
-TEST(AdversarialTest, AStrandShadedOnOneSideByALampIsMeasuredAsACylinder) {
-  // A lit 39 px strand under a lamp 44° off: its far rim is flat out to the terminator, 5.4 px
-  // inside, so that side was fitted as a plain step beside the other's shaded one, and no
-  // cylinder was fitted: 0.34-0.38 px wide at sigma 0.09, valid in one frame of four (0.38 px
-  // without noise). Now refitted as cylinders, which find the lamp's strip.
-  ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kPlain, 2806));
-  // A colour camera's flat strand whose demosaicing made one side look shaded: its cylinders find
-  // no lamp (a strip of 0.6 blurs), and its per-edge fits stand (as cylinders, 0.47 px narrow at
-  // sigma 0.14, valid).
-  ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kBayer, 21));
-}
-
 TEST(AdversarialTest, LightSlopingAcrossAFlatStrandIsNoStepBesideAnEdge) {
   // Lit from one side, a flat strand's level falls across it: its two edges read different
   // levels inside it with nothing beside either. The level's trend across the strand's middle

@@ -32,11 +32,9 @@ constexpr double kMaxRefusedTemplates = 0.25;
 // How far the tip may lie from where it was placed along the axis: set by the nozzle's face on
 // both sides of the strand, or inferred from the outline (tip.h).
 constexpr double kTipSigmaWidths = 0.25;  // an unconfirmed tip's doubt, in widths
-// A lamp off to one side: the lit cylinders' dark strip inside the far rim (cylinder_fit.h) deeper
-// than this many blurs. It explains a strand shaded on one side only (that side's rim flat out to
-// the terminator), and leaves that rim's per-edge blur no PSF's (BlurMismatchDoubtPx not taken).
-// (A colour camera's demosaicing made a flat strand's cylinders find strips of 0.6 blurs.)
-constexpr double kLampAsideBlurs = 1.0;
+// A lamp off to one side whose dark strip inside the far rim (cylinder_fit.h) is deeper than this
+// many blurs leaves that rim's per-edge blur no PSF's (BlurMismatchDoubtPx not taken).
+constexpr double kLampAsideBlurs = 0.25;
 // Curvature of the width along the band: more than 1 px of sag, bending like a disc (|w''|/2 above
 // 0.25/w, i.e. a chord of a circle less than 4 widths in radius), by more than 3σ of the calipers'
 // own scatter about it.
@@ -64,15 +62,6 @@ constexpr double kMinMedianShadingF = 2.7;
 bool ShadingEvident(const std::vector<double>& f, bool strand) {
   return ShadingEvidenceSigmas(f) > 6.0 && (!strand || Median(f) > kMinMedianShadingF);
 }
-// Whether a band's lit cylinders found a lamp off to one side: their dark strip inside the far rim
-// (CaliperFit::terminator_px) deeper than kLampAsideBlurs, over the calipers that fitted.
-bool CylindersFoundALamp(const std::vector<CaliperFit>& fits, double blur_px) {
-  std::vector<double> strip_px;
-  for (const CaliperFit& cf : fits)
-    if (cf.left.converged && cf.right.converged) strip_px.push_back(cf.terminator_px);
-  return !strip_px.empty() && Median(strip_px) > kLampAsideBlurs * blur_px;
-}
-
 // A fit's residual sum of squares.
 double Rss(const EdgeFit& fit) { return fit.rms * fit.rms * fit.samples; }
 
@@ -448,13 +437,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   // Only on an object the per-edge fits already saw as one (enough consistent calipers): a wrong
   // pair (an edge and a shading step, filament and idler) must not become one by a richer model.
   // Then on every caliper: a knurl or gear tooth that spoils one edge's window spoils the
-  // cylinder's less, which uses both edges and the interior. A strand shaded on one side only is
-  // one too: under a lamp off to one side its far rim is flat out to the terminator, and that
-  // side's step was taken as plain (seed 2806, lamp 44° off a 39 px strand: 0.38 px wide at σ 0.09
-  // without noise, per edge; 0.02 px as a cylinder with the terminator's strip). A filament's
-  // stretch keeps both sides' rule (its tracked templates start from these fits).
-  const bool lit_cylinder =
-      filament ? shade[0] == 1 && shade[1] == 1 : shade[0] == 1 || shade[1] == 1;
+  // cylinder's less, which uses both edges and the interior.
   if (from_memory) {
     const EdgeLines lines = FitEdgeLines(fits, band_s0, opt.caliper_spacing_px);
     if (lines.calipers >= 2) {
@@ -464,13 +447,8 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     }
     // The model's doubt is the scene's, as the full measurement found it.
     cylinder_doubt_px = memory->cylinder_doubt_px;
-  } else if (lit_cylinder && g.left_sign == -g.right_sign && per_edge_consistent >= min_used) {
-    // A strand shaded on one side only is a cylinder only where the cylinders find the lamp that
-    // explains it (a colour camera's demosaicing makes one side of a flat strand look shaded:
-    // Bayer seeds 21 and 22 came out 0.37-0.47 px off as cylinders, valid).
-    const bool both_sides = shade[0] == 1 && shade[1] == 1;
-    std::vector<CaliperFit> per_edge;
-    if (!both_sides) per_edge = fits;
+  } else if (shade[0] == 1 && shade[1] == 1 && g.left_sign == -g.right_sign &&
+             per_edge_consistent >= min_used) {
     EdgeLines lines;
     lines.left_u0 = left_guess;
     lines.right_u0 = right_guess;
@@ -478,36 +456,30 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     RefitAsCylinders(img, f, clip, band_s0, opt.caliper_spacing_px, lines, sigma_guess,
                      filament ? CylinderBackground::kOneLine : CylinderBackground::kEachSide, &fits,
                      filament ? nullptr : cylinder_structure_px, memory);
-    if (!both_sides && !CylindersFoundALamp(fits, sigma_guess)) {
-      fits = std::move(per_edge);
-      cylinder_structure_px[0] = cylinder_structure_px[1] = 0;
-      if (memory) memory->Clear();
-    } else {
-      if (memory) {
-        memory->left_u0_px = lines.left_u0;
-        memory->right_u0_px = lines.right_u0;
-        memory->slope = lines.slope;
-        memory->sigma_px = sigma_guess;
-      }
-      lines = FitEdgeLines(fits, band_s0, opt.caliper_spacing_px);
-      if (lines.calipers >= 2) {
-        // Two models of the same silhouette: each within its blur of it where it holds. Beyond
-        // that, one of them is wrong (a stripe the cylinder traded its blur against), and which
-        // one the frame cannot tell: half the excess counts as one σ, as the shading's does.
-        const double sc = 0.5 * (band_s0 + band_s1);
-        const auto excess = [&](double cylinder_u0, double per_edge_u0) {
-          const double apart =
-              std::abs((cylinder_u0 + lines.slope * sc) - (per_edge_u0 + slope_guess * sc));
-          return std::max(0.0, apart - sigma_guess);
-        };
-        cylinder_doubt_px =
-            0.5 * (excess(lines.left_u0, left_guess) + excess(lines.right_u0, right_guess));
-        left_guess = lines.left_u0;
-        right_guess = lines.right_u0;
-        slope_guess = lines.slope;
-      }
-      if (memory) memory->cylinder_doubt_px = cylinder_doubt_px;
+    if (memory) {
+      memory->left_u0_px = lines.left_u0;
+      memory->right_u0_px = lines.right_u0;
+      memory->slope = lines.slope;
+      memory->sigma_px = sigma_guess;
     }
+    lines = FitEdgeLines(fits, band_s0, opt.caliper_spacing_px);
+    if (lines.calipers >= 2) {
+      // Two models of the same silhouette: each within its blur of it where it holds. Beyond
+      // that, one of them is wrong (a stripe the cylinder traded its blur against), and which
+      // one the frame cannot tell: half the excess counts as one σ, as the shading's does.
+      const double sc = 0.5 * (band_s0 + band_s1);
+      const auto excess = [&](double cylinder_u0, double per_edge_u0) {
+        const double apart =
+            std::abs((cylinder_u0 + lines.slope * sc) - (per_edge_u0 + slope_guess * sc));
+        return std::max(0.0, apart - sigma_guess);
+      };
+      cylinder_doubt_px =
+          0.5 * (excess(lines.left_u0, left_guess) + excess(lines.right_u0, right_guess));
+      left_guess = lines.left_u0;
+      right_guess = lines.right_u0;
+      slope_guess = lines.slope;
+    }
+    if (memory) memory->cylinder_doubt_px = cylinder_doubt_px;
   } else if (memory) {
     memory->Clear();  // not lit cylinders this time: nothing to track
   }
@@ -709,10 +681,15 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       doubt.inner_level_px =
           InnerLevelDoubtPx(img, f, band_s0, opt.caliper_spacing_px, fits, own_edges, m->blur_px);
     }
-    // Under a lamp off to one side the per-edge step on the far rim, which does not model its
-    // dark strip, takes a blur that is no PSF's (0.6 px against the lit rim's 1.1, a lamp 25° off
-    // a 95 px strand): no comparison.
-    const bool lamp_aside = CylindersFoundALamp(fits, m->blur_px);
+    // A lamp's dark strip by one rim deeper than kLampAsideBlurs: the per-edge shaded step on
+    // that side, which does not model it, takes a blur that is no PSF's (0.6 px against the lit
+    // rim's 1.1, a lamp 25° off a 95 px strand): no comparison. (A lamp-lit strand whose dark
+    // side was taken as plain has no cylinder, and no strip: the one-shaded allowance holds.)
+    std::vector<double> terminator_px;
+    for (int k = 0; k < n_cal; ++k)
+      if (m->calipers[k].inlier) terminator_px.push_back(fits[k].terminator_px);
+    const bool lamp_aside =
+        !terminator_px.empty() && Median(terminator_px) > kLampAsideBlurs * m->blur_px;
     const int shaded_sides = (shade[0] == 1) + (shade[1] == 1);
     const EdgeModels models = shaded_sides == 0   ? EdgeModels::kBothPlain
                               : shaded_sides == 2 ? EdgeModels::kBothShaded
