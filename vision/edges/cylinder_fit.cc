@@ -95,38 +95,57 @@ int TerminatorNodes(double k, double l, double radius, double sigma) {
   return std::clamp(static_cast<int>(std::ceil(2 * depth_px / sigma)) + 2, 4, 128);
 }
 
-// At u over `nodes` midpoints, or false where there is none (no nodes, or u beyond the blur's
-// reach of the strip).
-bool TerminatorFillAt(double u, double k, double l, double centre, double radius, double sigma,
-                      int nodes, TerminatorFill* out) {
-  if (nodes <= 0 || !(k > 0) || l == 0) return false;
-  const double cos_theta = k / std::hypot(k, l);
-  // Light toward +u (l > 0) leaves the left rim (x = −1) dark.
-  const double x0 = l > 0 ? -1.0 : cos_theta, x1 = l > 0 ? -cos_theta : 1.0;
-  const double u0 = centre + radius * x0, u1 = centre + radius * x1;
-  if (u < u0 - 6 * sigma || u > u1 + 6 * sigma) return false;
-  const int n = nodes;
-  const double dx = (x1 - x0) / n, du = radius * dx, inv_s = 1.0 / sigma;
-  TerminatorFill f;
-  double sum_cxz = 0;
-  for (int i = 0; i < n; ++i) {
-    const double x = x0 + (i + 0.5) * dx;
-    const double root = std::sqrt(std::max(0.0, 1 - x * x));
-    const double c = -(k * root + l * x);
-    if (c <= 0) continue;
-    const double z = (u - centre - radius * x) * inv_s;
-    const double g = fitcore::kInvSqrt2Pi * std::exp(-0.5 * z * z) * inv_s * du;
-    f.value += c * g;
-    f.d_k -= root * g;
-    f.d_l -= x * g;
-    f.d_centre += c * g * z * inv_s;
-    sum_cxz += c * g * x * z * inv_s;
-    f.d_sigma += c * g * (z * z - 1) * inv_s;
+// The strip at one parameter vector, over `nodes` midpoints: what does not depend on u (each
+// node's place, root and clamp), taken once for all the groups of an evaluation.
+class TerminatorStrip {
+ public:
+  TerminatorStrip(double k, double l, double centre, double radius, double sigma, int nodes)
+      : centre_(centre), radius_(radius), sigma_(sigma), inv_s_(1.0 / sigma) {
+    if (nodes <= 0 || !(k > 0) || l == 0) return;
+    const double cos_theta = k / std::hypot(k, l);
+    // Light toward +u (l > 0) leaves the left rim (x = −1) dark.
+    const double x0 = l > 0 ? -1.0 : cos_theta, x1 = l > 0 ? -cos_theta : 1.0;
+    u0_ = centre + radius * x0;
+    u1_ = centre + radius * x1;
+    const double dx = (x1 - x0) / nodes;
+    du_ = radius * dx;
+    for (int i = 0; i < nodes; ++i) {
+      const double x = x0 + (i + 0.5) * dx;
+      const double root = std::sqrt(std::max(0.0, 1 - x * x));
+      const double c = -(k * root + l * x);
+      if (c > 0) nodes_.push_back({x, radius * x, root, c});
+    }
+    present_ = true;
   }
-  f.d_radius = f.value / radius + sum_cxz;
-  *out = f;
-  return true;
-}
+  // The fill at u, or false where there is none (no strip, or u beyond the blur's reach of it).
+  bool At(double u, TerminatorFill* out) const {
+    if (!present_ || u < u0_ - 6 * sigma_ || u > u1_ + 6 * sigma_) return false;
+    TerminatorFill f;
+    double sum_cxz = 0;
+    for (const Node& n : nodes_) {
+      const double z = (u - centre_ - n.rx) * inv_s_;
+      const double g = fitcore::kInvSqrt2Pi * std::exp(-0.5 * z * z) * inv_s_ * du_;
+      f.value += n.c * g;
+      f.d_k -= n.root * g;
+      f.d_l -= n.x * g;
+      f.d_centre += n.c * g * z * inv_s_;
+      sum_cxz += n.c * g * n.x * z * inv_s_;
+      f.d_sigma += n.c * g * (z * z - 1) * inv_s_;
+    }
+    f.d_radius = f.value / radius_ + sum_cxz;
+    *out = f;
+    return true;
+  }
+
+ private:
+  struct Node {
+    double x, rx, root, c;  // x, R·x, √(1 − x²), the clamp's part
+  };
+  double centre_, radius_, sigma_, inv_s_;
+  double u0_ = 0, u1_ = 0, du_ = 0;
+  bool present_ = false;
+  std::vector<Node> nodes_;
+};
 
 // The model at u, its Jacobian row j and its slope across u: the object's shapes and each side's
 // level depend on u − centre, and each side's line moves with u besides. With a line each side (a
@@ -134,7 +153,7 @@ bool TerminatorFillAt(double u, double k, double l, double centre, double radius
 // which have none (cylinder_track.h).
 template <int kBg>
 inline double Model(double u, const Vec<Layout<kBg>::kN>& p, double u_ref,
-                    const fitcore::BlurredSqrt& root, int terminator_nodes, double* j,
+                    const fitcore::BlurredSqrt& root, const TerminatorStrip& strip, double* j,
                     double* slope) {
   using L = Layout<kBg>;
   Shapes sh;
@@ -152,8 +171,7 @@ inline double Model(double u, const Vec<Layout<kBg>::kN>& p, double u_ref,
     j[L::kC + q] = dq;
   }
   TerminatorFill fill;
-  if (TerminatorFillAt(u, p[L::kK], p[L::kL], p[L::kC], p[L::kR], p[L::kS], terminator_nodes,
-                       &fill)) {
+  if (strip.At(u, &fill)) {
     value += fill.value;
     j[L::kK] += fill.d_k;
     j[L::kL] += fill.d_l;
@@ -222,14 +240,18 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   // The terminator's fill's nodes (0: none): in the second run, where the first put the light
   // within reach (above).
   int terminator_nodes = 0;
+  // The fill's strip at q (none while terminator_nodes is 0).
+  const auto strip_at = [&](const Vec<kN>& q) {
+    return TerminatorStrip(q[kK], q[kL], q[kC], q[kR], q[kS], terminator_nodes);
+  };
   const auto residuals_at = [&](const Vec<kN>& q) {
+    const TerminatorStrip strip = strip_at(q);
     slopes.resize(groups.size());
     int k = 0;
     for (size_t g = 0; g < groups.size(); ++g) {
       double j[kN];
       double& slope = slopes[g];
-      const double model =
-          Model<kBg>(groups.mean_u_px[g], q, u_ref, root, terminator_nodes, j, &slope);
+      const double model = Model<kBg>(groups.mean_u_px[g], q, u_ref, root, strip, j, &slope);
       for (const int end = groups.end[g]; k < end; ++k) {
         const int i = groups.pixels[k];
         residuals[i] = model + slope * groups.offset_px[k] - samples[i].value;
@@ -263,13 +285,13 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   double cauchy_scale = 0;
   fitcore::NormalSystem<kN> normal(groups.size());
   const auto evaluate = [&](const Vec<kN>& q, Mat<kN>* jtj, Vec<kN>* jtr) {
+    const TerminatorStrip strip = strip_at(q);
     double cost = 0;
     const double cs = kCauchyC * cauchy_scale, inv_cs2 = cs > 0 ? 1.0 / (cs * cs) : 0.0;
     int k = 0;
     for (size_t g = 0; g < groups.size(); ++g) {
       double j[kN], unused_slope;
-      const double model =
-          Model<kBg>(groups.mean_u_px[g], q, u_ref, root, terminator_nodes, j, &unused_slope);
+      const double model = Model<kBg>(groups.mean_u_px[g], q, u_ref, root, strip, j, &unused_slope);
       const double slope = slopes[g];
       double w_sum = 0, wr_sum = 0;
       for (const int end = groups.end[g]; k < end; ++k) {
