@@ -13,6 +13,8 @@ namespace clogscope::vision {
 namespace {
 
 constexpr double kMinSigmaPx = 0.15;
+// Where the linearised move samples the window: fine against any blur the fits allow.
+constexpr double kLinearMoveStepPx = 0.25;
 using fitcore::BlurredSqrt;
 using fitcore::Mat;
 using fitcore::StepShape;
@@ -450,6 +452,28 @@ EdgeFit FitTwoSlopeStep(const std::vector<EdgeSample>& samples, double edge_gues
       FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 10, TwoSlopeStepModel(), &solved);
   fit.slope_change_per_px = solved[kK];
   return fit;
+}
+
+double PlainStepMovePerSlopeChange(double step, double sigma_px, double below_px, double above_px) {
+  // One Gauss–Newton step of the plain step from the truth toward the profile with the two-slope
+  // model's ramp of unit k added (TwoSlopeStepModel's own column): the move to first order, which
+  // is all there is where the move is a small part of the blur.
+  Vec<StepModel::kN> p;
+  p << 0.0, 0.0, step, 0.0, sigma_px;
+  Mat<StepModel::kN> jtj = Mat<StepModel::kN>::Zero();
+  Vec<StepModel::kN> jtr = Vec<StepModel::kN>::Zero();
+  double value, j[StepModel::kN];
+  for (double u = -below_px; u <= above_px; u += kLinearMoveStepPx) {
+    StepModel()(u, u, p.data(), &value, j);
+    const Eigen::Map<const Vec<StepModel::kN>> column(j);
+    const double z = u / sigma_px;
+    double f, df;
+    StepShape(z, &f, &df);
+    jtj.noalias() += column * column.transpose();
+    jtr += column * (sigma_px * (z * f + df));
+  }
+  const Vec<StepModel::kN> delta = jtj.ldlt().solve(jtr);
+  return std::isfinite(delta[kE]) ? delta[kE] : 0.0;
 }
 
 double EdgeModelValue(const EdgeFit& fit, double u_px) {

@@ -62,6 +62,12 @@ EdgeFit FitTwoSlopeStep(const std::vector<EdgeSample>& samples, double edge_gues
 EdgeFit FitPeakedStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
                       double sigma_guess_px, double u_ref);
 
+// How far FitBlurredStep over [−below_px, above_px] puts the edge of a step of `step` (signed:
+// value at +u less value at −u) and blur sigma_px (EdgeFit::sigma_px) whose +u side slopes by
+// one grey level per px more than its −u side (FitTwoSlopeStep's slope change): px per grey
+// level per px, to first order (the plain step's single slope between the two).
+double PlainStepMovePerSlopeChange(double step, double sigma_px, double below_px, double above_px);
+
 // The fitted model's value at u (FitBlurredStep, FitShadedStep, FitTwoSlopeStep results).
 double EdgeModelValue(const EdgeFit& fit, double u_px);
 

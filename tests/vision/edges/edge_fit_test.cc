@@ -6,6 +6,8 @@
 #include <cmath>
 #include <iostream>
 #include <random>
+#include <utility>
+#include <vector>
 
 #include "synthetic/edge_profile.h"
 #include "tests/running_stats.h"
@@ -268,6 +270,37 @@ TEST(EdgeFitTest, TooFewSamplesOrNoStepDoNotConverge) {
   EXPECT_FALSE(FitBlurredStep(few, 1, 1.5, 1).converged);
   // Samples on one side of the guess only: no plateau to start from.
   EXPECT_FALSE(FitBlurredStep(Samples(0, 1.5, 40, 200, 1, &rng, 3, 10), 0.0, 1.5, 0.0).converged);
+}
+
+TEST(EdgeFitTest, ThePlainStepsMoveBetweenTwoSlopesIsFoundToFirstOrder) {
+  // A step whose two sides slope apart, drawn by the two-slope model without noise; the plain
+  // step fitted to it (the full nonlinear fit) against the first-order move, for either sign of
+  // the step and of the slope change, blurs of 0.8 and 2.5 px, even and uneven windows.
+  for (const double step : {120.0, -60.0}) {
+    for (const double sigma_px : {0.8, 2.5}) {
+      for (const double change : {0.6, -1.5}) {
+        for (const auto& [below_px, above_px] : {std::pair{8.0, 8.0}, std::pair{14.0, 8.0}}) {
+          EdgeFit truth;
+          truth.sigma_px = sigma_px;
+          truth.step = step;
+          truth.base = 80;
+          truth.slope_per_px = 0.3;
+          truth.slope_change_per_px = change;
+          std::vector<EdgeSample> profile;
+          for (double u = -below_px; u <= above_px; u += 0.1)
+            profile.push_back(
+                {static_cast<float>(u), static_cast<float>(EdgeModelValue(truth, u))});
+          const EdgeFit plain = FitBlurredStep(profile, 0.0, sigma_px, 0.0);
+          ASSERT_TRUE(plain.converged);
+          ASSERT_GT(std::abs(plain.edge_px), 0.01) << "the slopes should move the plain step";
+          EXPECT_NEAR(PlainStepMovePerSlopeChange(step, sigma_px, below_px, above_px) * change,
+                      plain.edge_px, 0.05 * std::abs(plain.edge_px) + 0.002)
+              << "step " << step << ", blur " << sigma_px << ", change " << change << ", window "
+              << below_px << "/" << above_px;
+        }
+      }
+    }
+  }
 }
 
 }  // namespace
