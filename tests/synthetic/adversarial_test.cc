@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "tests/synthetic/adversarial_test_util.h"
 
@@ -257,19 +258,28 @@ TEST(AdversarialTest, ACompressedColourFrameIsMeasuredInLuma) {
   // A Bayer camera's frames through JPEG q49 (4:2:0; matrix seed 102 of the unseen set): the
   // strand is found in red, its strongest channel, where the half-resolution chroma blurs the
   // edges to 2.2 px against luma's 1.8. Measured in red, frames 2 and 3 came out 0.30–0.34 px
-  // narrow at σ 0.09, valid. Luma, the codec's full-resolution channel, holds.
+  // narrow at σ 0.09, valid. Luma, the codec's full-resolution channel, holds; where its textured
+  // ground's slope by the edges makes it too doubtful to be valid, red, whose edges are blurrier,
+  // carries that doubt too. So no width is confidently wrong, and every one given is within 3σ
+  // of the truth at a σ that says something (at most three times what a valid width may carry).
   const AdversarialScene p = RandomAdversarialScene(TroubleClass::kBayer, 102);
   ASSERT_EQ(p.codec, Codec::kJpeg);
   AdversarialTruth t;
-  int valid = 0;
+  int given = 0;
   for (const vision::StrandMeasurement& m : MeasuredMatrixFrames(p, &t)) {
-    if (!m.valid()) continue;
-    ++valid;
-    EXPECT_LE(std::abs(m.width_px - t.width_px), WrongTolerancePx(t.width_px))
-        << m.width_px << " ± " << m.width_sigma_px << " px, truth " << t.width_px << ": "
-        << Describe(p);
+    if (!m.gave_width()) continue;
+    ++given;
+    const double error_px = std::abs(m.width_px - t.width_px);
+    const std::string what = std::string(vision::FrameStatusName(m.status)) + " " +
+                             std::to_string(m.width_px) + " ± " +
+                             std::to_string(m.width_sigma_px) + " px: " + Describe(p);
+    if (m.valid()) {
+      EXPECT_LE(error_px, WrongTolerancePx(t.width_px)) << what;
+    }
+    EXPECT_LE(error_px, 3 * m.width_sigma_px) << what;
+    EXPECT_LE(m.width_sigma_px, 3 * vision::MaxValidSigmaPx({}, m.width_px)) << what;
   }
-  EXPECT_GE(valid, 2) << Describe(p);
+  EXPECT_GE(given, 3) << Describe(p);
 }
 
 TEST(AdversarialTest, ALitCylinderThatTradedItsBlurForAStripeIsNotTrusted) {

@@ -77,7 +77,9 @@ struct CaliperEdge {
 //   reaching further into the background, on background_side: −1 toward −u, +1 toward +u), the
 //   edge is moved by what the two-slope step says (shift_px, along u) and only that move's own σ
 //   is left as doubt; where it is not one slope, the whole move is doubt; below the evidence, the
-//   part of the move the noise cannot explain.
+//   part of the move the noise cannot explain. And where the edge was not moved, the doubt from
+//   the slopes read along the band well past the window (FarSlopeDoubtPx, far_slopes.h; the
+//   object's no further than object_reach_px), if larger.
 struct BandEdgeDoubt {
   double structure_px = 0;  // the shared residual structure's σ
   double two_slope_px = 0;  // the two-slope step's move (or its σ where the edge was moved)
@@ -90,6 +92,6 @@ inline constexpr double kTwoSlopeEvidence = 25.0;
 // Zero with fewer than two calipers.
 BandEdgeDoubt JudgeBandEdge(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
                             const std::vector<CaliperEdge>& edges, double below_px, double above_px,
-                            int background_side);
+                            int background_side, double object_reach_px);
 
 }  // namespace clogscope::vision

@@ -13,6 +13,7 @@
 #include "vision/edges/caliper_samples.h"
 #include "vision/edges/cylinder_fit.h"
 #include "vision/edges/edge_fit.h"
+#include "vision/edges/far_slopes.h"
 #include "vision/edges/residual_structure.h"
 #include "vision/edges/straight_run.h"
 #include "vision/scene/caliper_cylinders.h"
@@ -137,7 +138,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   // How far inside a side's window may reach and stop short of an edge inside the object by the
   // blur (sigma_guess as it stands).
   const auto short_of_inner_edge = [&](int side) {
-    return inner_edge_px[side] - 2.5 * sigma_guess - 1.0;
+    return inner_edge_px[side] - BlurredStepReachPx(sigma_guess);
   };
   // An edge inside a dark silhouette (a glossy strand's stripe) so close that a window stopping
   // short of it cannot hold the silhouette's inner flank (2 blurs and a px; such frames had no
@@ -712,8 +713,10 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       }
       // About each caliper's fitted edge: the window's reach either side of it.
       const Window w = window(side, 0.0, outer, inner);
+      // The object's slope is read short of an edge inside it, and of its middle.
+      const double object_reach_px = std::min(0.45 * width0, short_of_inner_edge(side));
       const BandEdgeDoubt judged =
-          JudgeBandEdge(img, f, clip, edges, -w.u0, w.u1, side == 0 ? -1 : 1);
+          JudgeBandEdge(img, f, clip, edges, -w.u0, w.u1, side == 0 ? -1 : 1, object_reach_px);
       edge_shift_px[side] = judged.shift_px;
       doubt.structure_px = std::hypot(doubt.structure_px,
                                       std::hypot(judged.structure_px, cylinder_structure_px[side]));

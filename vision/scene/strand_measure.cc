@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <iterator>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
@@ -21,12 +22,36 @@ constexpr double kMinFallbackScoreRatio = 0.5;  // of the chosen pair's score
 // A second guess must be clearly strand-like: weak short pairs are what clutter makes.
 constexpr double kMinFallbackScoreFactor = 3.0;    // times the scene's minimum score
 constexpr double kStraightPartMarginCalipers = 6;  // tracking a filament: calipers beside its part
+// A colour channel's edges this much blurrier than luma's: half-resolution chroma mixed in.
+constexpr double kChromaBlurRatio = 1.15;
 
 // Statuses of one channel's measurement that another channel of the same pair may not share:
 // its noise, its blur, its sampling. Not those by which the calipers refuse the pair
 // (RejectsPair): luma must not bring back a pair judged not to be the strand.
 bool LumaMayMeasure(FrameStatus s) {
   return s == FrameStatus::kValid || s == FrameStatus::kImprecise;
+}
+
+// The parts of a width's doubt about the edge model and the scene (all of WidthDoubt's but the
+// calipers' spread, a channel's own noise), each named for a user.
+struct NamedDoubtPart {
+  const char* what;
+  double WidthDoubt::*part;
+};
+constexpr NamedDoubtPart kModelDoubtParts[] = {
+    {"shading too weak to decide", &WidthDoubt::shading_px},
+    {"the lit cylinders against the per-edge fits", &WidthDoubt::cylinder_px},
+    {"the tip's place along a changing width", &WidthDoubt::tip_px},
+    {"residual structure the calipers share", &WidthDoubt::structure_px},
+    {"a background sloping to the edge", &WidthDoubt::two_slope_px},
+    {"calipers missing from a changing width", &WidthDoubt::missing_px},
+    {"the object's level differing at its two edges", &WidthDoubt::inner_level_px},
+    {"one edge blurred more than the other", &WidthDoubt::edge_blur_px}};
+
+// Each model part of `from`'s doubt where larger than *to's.
+void TakeLargerModelDoubt(const WidthDoubt& from, WidthDoubt* to) {
+  for (const NamedDoubtPart& p : kModelDoubtParts)
+    to->*p.part = std::max(to->*p.part, from.*p.part);
 }
 
 // Statuses that say the pair was not the strand, rather than that the frame is poor.
@@ -207,13 +232,28 @@ StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOption
   // single colour channel mixes in (red came out 0.3 px narrow where luma and green held, at 2
   // to 3σ); a Bayer camera's luma is mostly green, sampled twice as densely as red or blue. The
   // channel that found the strand is measured only where luma cannot be: an orange strand on a
-  // blue ground shows no luma edge.
+  // blue ground shows no luma edge. Where luma's width is too doubtful to be valid and the
+  // channel's edges are blurrier than luma's by kChromaBlurRatio (half-resolution chroma mixed
+  // in), what luma doubts of the scene (its background's slope, the edge model) holds for the
+  // channel too: each such part is the larger of the two (a Bayer strand on a textured ground
+  // through JPEG: red 0.34 px narrow at σ 0.09, its edges 1.25 times as blurred as luma's, whose
+  // background slopes by the edges by 0.15 px). (A colour strand on a coloured ground, as sharp
+  // in red as in luma, is shaded otherwise in luma: red is the better measure there.) Where
+  // neither is valid, luma's width and doubt are the frame's.
   if (channels.size() > 1 && scene.channel != 0 && scene.chosen >= 0 && LumaMayMeasure(m.status)) {
     StrandMeasurement luma =
         MeasureInScene(channels[0], data_max, FrameStatus::kValid, "", scene.geometry, roi, opt);
-    if (luma.valid()) {
+    if (luma.valid() || (luma.gave_width() && !m.valid())) {
       scene.measured_channel = 0;
       m = std::move(luma);
+    } else if (luma.gave_width() && m.blur_px > kChromaBlurRatio * luma.blur_px) {
+      TakeLargerModelDoubt(luma.doubt, &m.doubt);
+      CombineSigmas(&m);
+      JudgePrecision(opt, &m);
+      if (!m.valid()) {
+        scene.measured_channel = 0;
+        m = std::move(luma);
+      }
     }
   }
   // A colour channel clipped at the strand's edges flattens their profile and biases the fit:
@@ -306,20 +346,17 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
 
 namespace {
 // Every part of a width's σ, each named for a user: the spread first, then the model's parts in
-// WidthDoubt's order, then the codec's. The one list the σ is combined from and shown as.
+// WidthDoubt's order (kModelDoubtParts), then the codec's. The one list the σ is combined from
+// and shown as.
 constexpr size_t kSpreadPart = 0, kDoubtParts = 10;
+static_assert(std::size(kModelDoubtParts) + 2 == kDoubtParts);
 std::array<DoubtPart, kDoubtParts> AllDoubtParts(const StrandMeasurement& m) {
-  const WidthDoubt& d = m.doubt;
-  return {{{"the calipers' spread", d.spread_px},
-           {"shading too weak to decide", d.shading_px},
-           {"the lit cylinders against the per-edge fits", d.cylinder_px},
-           {"the tip's place along a changing width", d.tip_px},
-           {"residual structure the calipers share", d.structure_px},
-           {"a background sloping to the edge", d.two_slope_px},
-           {"calipers missing from a changing width", d.missing_px},
-           {"the object's level differing at its two edges", d.inner_level_px},
-           {"one edge blurred more than the other", d.edge_blur_px},
-           {"the codec", m.codec_sigma_px}}};
+  std::array<DoubtPart, kDoubtParts> parts;
+  parts[kSpreadPart] = {"the calipers' spread", m.doubt.spread_px};
+  size_t k = kSpreadPart + 1;
+  for (const NamedDoubtPart& p : kModelDoubtParts) parts[k++] = {p.what, m.doubt.*p.part};
+  parts[k] = {"the codec", m.codec_sigma_px};
+  return parts;
 }
 }  // namespace
 

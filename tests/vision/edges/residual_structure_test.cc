@@ -61,11 +61,14 @@ struct GradedEdge {
   int background_side = +1;
   std::vector<CaliperEdge> calipers;
   double mean_edge_u = 0;
-  GradedEdge(double gradient, double curvature, bool mirrored)
-      : background_side(mirrored ? -1 : +1) {
+  double window_px = 12.0;  // each caliper's fit, and the band's judging, this far either side
+  GradedEdge(double gradient, double curvature, bool mirrored, double noise_sigma = 1.0,
+             uint32_t seed = 11, double background = 200.0, double window = 12.0,
+             double hair_at_px = 0.0)
+      : background_side(mirrored ? -1 : +1), window_px(window) {
     image.create(60, 200, CV_16U);
-    std::mt19937 rng(11);
-    std::normal_distribution<double> noise(0, 1.0);
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> noise(0, noise_sigma);
     std::vector<double> column(image.cols);
     for (int x = 0; x < image.cols; ++x) {
       double sum = 0, weight = 0;
@@ -74,7 +77,10 @@ struct GradedEdge {
         const double w = 0.5 * (std::erf((x + 0.5 - t) / (std::sqrt(2.0) * kBlur)) -
                                 std::erf((x - 0.5 - t) / (std::sqrt(2.0) * kBlur)));
         const double d = background_side * (t - kEdgeX);  // into the background
-        sum += w * (d < 0 ? 60.0 : 200.0 + gradient * d + curvature * d * d);
+        // A dark hair 3 px wide, hair_at_px into the background (none at 0).
+        const double hair =
+            hair_at_px > 0 ? 100.0 * std::exp(-0.5 * std::pow((d - hair_at_px) / 1.5, 2)) : 0.0;
+        sum += w * (d < 0 ? 60.0 : background + gradient * d + curvature * d * d - hair);
         weight += w;
       }
       column[x] = sum / weight;
@@ -90,7 +96,8 @@ struct GradedEdge {
     const double e0 = kEdgeX - axis.ox;
     for (int k = 0; k < 10; ++k) {
       const double s0 = 4.0 * k, s1 = s0 + 4.0;
-      if (!GatherEdgeSamples(img, axis, s0, s1, e0 - 12, e0 + 12, clip, &samples)) continue;
+      if (!GatherEdgeSamples(img, axis, s0, s1, e0 - window_px, e0 + window_px, clip, &samples))
+        continue;
       const EdgeFit fit = FitBlurredStep(samples, e0, 2.0, e0);
       if (!fit.converged) continue;
       calipers.push_back({s0, s1, fit});
@@ -101,7 +108,8 @@ struct GradedEdge {
   double TruthU() const { return kEdgeX - axis.ox; }
   BandEdgeDoubt Judge(int side) const {
     const GreyImage img{image, true};
-    return JudgeBandEdge(img, axis, ClipLevels{0, 65535}, calipers, 12.0, 12.0, side);
+    return JudgeBandEdge(img, axis, ClipLevels{0, 65535}, calipers, window_px, window_px, side,
+                         3.0 * window_px);
   }
 };
 
@@ -137,6 +145,54 @@ TEST(JudgeBandEdgeTest, ACurvedBackgroundIsNotMovedButDoubted) {
   const BandEdgeDoubt judged = scene.Judge(scene.background_side);
   EXPECT_EQ(judged.shift_px, 0.0) << "bias " << bias;
   EXPECT_GT(judged.doubt_px(), 0.5 * std::abs(bias)) << "bias " << bias;
+}
+
+TEST(JudgeBandEdgeTest, ABackgroundSlopeTheWindowCannotSeeIsDoubtedFromBeyondIt) {
+  // A 40-level step whose background rises 0.6 grey levels per px away from it, under noise of 8,
+  // windows of 10 px: the plain steps lie 0.16–0.45 px off, and the window's pooled profile can
+  // rarely tell its two slopes from the noise (a doubt of 0.04 px or none in 8 of these 12
+  // scenes). The slopes read along the band past it can: the doubt is half the bias or more in
+  // each, about the bias on average and not twice it. A flat background under the same noise is
+  // doubted little.
+  double ratio_sum = 0, flat_sum = 0;
+  int scenes = 0;
+  for (const bool mirrored : {false, true}) {
+    for (const uint32_t seed : {1u, 2u, 3u, 4u, 5u, 6u}) {
+      const GradedEdge scene(0.6, 0.0, mirrored, 8.0, seed, 100.0, 10.0);
+      ASSERT_GE(scene.calipers.size(), 5u) << "mirrored " << mirrored << ", seed " << seed;
+      const double bias = scene.mean_edge_u - scene.TruthU();
+      ASSERT_GT(std::abs(bias), 0.15) << "mirrored " << mirrored << ", seed " << seed;
+      const BandEdgeDoubt judged = scene.Judge(scene.background_side);
+      EXPECT_EQ(judged.shift_px, 0.0) << "mirrored " << mirrored << ", seed " << seed;
+      EXPECT_GT(judged.doubt_px(), 0.5 * std::abs(bias))
+          << "mirrored " << mirrored << ", seed " << seed;
+      ratio_sum += judged.doubt_px() / std::abs(bias);
+      const GradedEdge flat(0.0, 0.0, mirrored, 8.0, seed, 100.0, 10.0);
+      flat_sum += flat.Judge(flat.background_side).doubt_px();
+      ++scenes;
+    }
+  }
+  EXPECT_GT(ratio_sum / scenes, 0.8);
+  EXPECT_LT(ratio_sum / scenes, 1.6);
+  EXPECT_LT(flat_sum / scenes, 0.1);
+}
+
+TEST(JudgeBandEdgeTest, AHairFartherOutIsNotTheBackgroundsSlope) {
+  // A flat background with a dark hair 26 px beyond the edge (the reach the slopes are read over
+  // is three windows of 10 px): read to the hair, the background would slope by several grey
+  // levels per px toward the edge; read short of it, it is flat. The edge is where it was, and
+  // doubted no more than without the hair.
+  for (const bool mirrored : {false, true}) {
+    for (const uint32_t seed : {1u, 2u, 3u}) {
+      const GradedEdge hair(0.0, 0.0, mirrored, 8.0, seed, 100.0, 10.0, 26.0);
+      const GradedEdge bare(0.0, 0.0, mirrored, 8.0, seed, 100.0, 10.0);
+      ASSERT_GE(hair.calipers.size(), 5u) << "mirrored " << mirrored << ", seed " << seed;
+      const BandEdgeDoubt judged = hair.Judge(hair.background_side);
+      EXPECT_EQ(judged.shift_px, 0.0) << "mirrored " << mirrored << ", seed " << seed;
+      EXPECT_LE(judged.doubt_px(), bare.Judge(bare.background_side).doubt_px() + 0.05)
+          << "mirrored " << mirrored << ", seed " << seed;
+    }
+  }
 }
 
 TEST(JudgeBandEdgeTest, AFlatBackgroundLeavesTheEdgeInPlace) {
