@@ -39,6 +39,10 @@ struct EdgeFit {
   double inner_far_px = std::numeric_limits<double>::infinity();
 };
 
+// The blurred step's reach from its edge: kBlurredStepBlurs of its sigma_px and a px.
+inline constexpr double kBlurredStepBlurs = 2.5;
+inline double BlurredStepReachPx(double sigma_px) { return kBlurredStepBlurs * sigma_px + 1.0; }
+
 // The PSF's sigma in a fitted step's width, px: sigma_px less the pixel footprint, whose variance
 // across any straight edge is 1/12 px² whatever its tilt.
 inline double PsfSigmaPx(const EdgeFit& fit) {

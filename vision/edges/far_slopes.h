@@ -34,8 +34,4 @@ FarSlopes JudgeFarSlopes(const GreyImage& img, const AxisFrame& f, const ClipLev
                          int background_side, double object_reach_px, double blur_px,
                          double noise_sigma);
 
-// The blurred step's reach from its edge: kBlurredStepBlurs blurs and a px (edge_fit.h's sigma).
-inline constexpr double kBlurredStepBlurs = 2.5;
-inline double BlurredStepReachPx(double sigma_px) { return kBlurredStepBlurs * sigma_px + 1.0; }
-
 }  // namespace clogscope::vision

@@ -78,7 +78,7 @@ struct CaliperEdge {
 //   edge is moved by what the two-slope step says (shift_px, along u) and only that move's own σ
 //   is left as doubt; where it is not one slope, the whole move is doubt; below the evidence, the
 //   part of the move the noise cannot explain. And where the edge was not moved, the doubt from
-//   the slopes read along the band well past the window (FarSlopeDoubtPx, far_slopes.h; the
+//   the slopes read along the band well past the window (JudgeFarSlopes, far_slopes.h; the
 //   object's no further than object_reach_px), if larger.
 struct BandEdgeDoubt {
   double structure_px = 0;  // the shared residual structure's σ

@@ -13,7 +13,6 @@
 #include "vision/edges/caliper_samples.h"
 #include "vision/edges/cylinder_fit.h"
 #include "vision/edges/edge_fit.h"
-#include "vision/edges/far_slopes.h"
 #include "vision/edges/residual_structure.h"
 #include "vision/edges/straight_run.h"
 #include "vision/scene/caliper_cylinders.h"

@@ -97,8 +97,11 @@ struct StrandGeometry {
 struct SceneResult {
   FrameStatus status = FrameStatus::kNoStrand;  // kValid when a pair was chosen
   std::string detail;                           // why not, naming the best candidate
-  int channel = 0;            // which of the prepared channels the chosen pair was found in
-  int measured_channel = 0;   // which one measured it (luma where it can: strand_measure.h)
+  int channel = 0;           // which of the prepared channels the chosen pair was found in
+  int measured_channel = 0;  // which one measured it (luma where it can: strand_measure.h)
+  // The colour channel that measured it carries luma's doubt about the scene, which only both
+  // channels measured together give: each frame is found afresh (StrandTracker).
+  bool channel_doubts_luma = false;
   double gradient_noise = 0;  // grey levels per px
   std::vector<EdgeSegment> edges;
   std::vector<PairCandidate> candidates;  // best first

@@ -253,6 +253,8 @@ StrandMeasurement FindAndMeasure(const cv::Mat& frame, const StrandMeasureOption
       if (!m.valid()) {
         scene.measured_channel = 0;
         m = std::move(luma);
+      } else {
+        scene.channel_doubts_luma = true;
       }
     }
   }

@@ -72,7 +72,11 @@ StrandMeasurement StrandTracker::Detect(const cv::Mat& frame) {
   short_straight_frames_ = 0;
   SceneResult scene;
   StrandMeasurement m = FindAndMeasure(frame, options_, &scene);
-  if (m.valid()) Remember(scene, m, frame.size());
+  // (A channel that carries luma's doubt is not followed alone: Follow measures one channel.)
+  if (m.valid() && !scene.channel_doubts_luma)
+    Remember(scene, m, frame.size());
+  else if (scene.channel_doubts_luma)
+    tracking_ = false;
   return m;
 }
 

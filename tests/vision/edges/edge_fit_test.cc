@@ -275,9 +275,10 @@ TEST(EdgeFitTest, TooFewSamplesOrNoStepDoNotConverge) {
 TEST(EdgeFitTest, ThePlainStepsMoveBetweenTwoSlopesIsFoundToFirstOrder) {
   // A step whose two sides slope apart, drawn by the two-slope model without noise; the plain
   // step fitted to it (the full nonlinear fit) against the first-order move, for either sign of
-  // the step and of the slope change, blurs of 0.8 and 2.5 px, even and uneven windows.
+  // the step and of the slope change, blurs of 0.35 (a sharp edge: the pixel alone) to 2.5 px,
+  // even and uneven windows.
   for (const double step : {120.0, -60.0}) {
-    for (const double sigma_px : {0.8, 2.5}) {
+    for (const double sigma_px : {0.35, 0.8, 2.5}) {
       for (const double change : {0.6, -1.5}) {
         for (const auto& [below_px, above_px] : {std::pair{8.0, 8.0}, std::pair{14.0, 8.0}}) {
           EdgeFit truth;
