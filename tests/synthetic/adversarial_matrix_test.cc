@@ -60,13 +60,15 @@ TEST(AdversarialMatrixTest, FewConfidentlyWrongWidthsAndNoneWithoutAStrand) {
   const ClassSummary& swell = r.classes[static_cast<int>(TroubleClass::kDieSwell)];
   EXPECT_LE(swell.wrong, 0.02 * swell.frames);
   // A swell relaxing through the band whose tip neither the nozzle's face nor the object's own
-  // end fixes, or whose top caliper found no edge, is imprecise (53 % valid measured: the four
+  // end fixes, or whose top caliper found no edge, is imprecise (49 % valid measured since the
+  // slopes read past each edge's window are doubted, 2026-11-30: seed 7's four frames, 0.34–0.39
+  // of the tolerance wide at σ 0.04–0.05, are imprecise at σ 0.17–0.23; 53 % before: the four
   // frames of seed 12, a 31 px strand through H.264 within 0.01 px, carry a codec σ of 0.08 px
   // since the second pass codes a steady run, and are imprecise at σ 0.10-0.11; 57 % before,
   // while a lone key frame's second pass refused 59 of 60 frames of the default strand through
   // x264's defaults; 44 % before the object's end was read, 95 % before the tip's doubt counted,
   // 10 % of them wrong).
-  EXPECT_GE(swell.valid, 0.5 * swell.frames);
+  EXPECT_GE(swell.valid, 0.45 * swell.frames);
   const ClassSummary& lens = r.classes[static_cast<int>(TroubleClass::kBacklitLens)];
   EXPECT_GE(lens.valid, 0.8 * lens.frames);
   // The σ covers the error, and no more: (width − truth)/σ over every width given (valid or
