@@ -122,15 +122,21 @@ MatrixResult RunAdversarialMatrix(const MatrixOptions& o) {
   return out;
 }
 
-vision::StrandMeasurement MeasureAdversarialFrame(const cv::Mat& frame,
-                                                  const AdversarialScene& scene,
-                                                  const ClipFacts& clip) {
+vision::StrandMeasureOptions AdversarialMeasureOptions(const AdversarialScene& scene,
+                                                       const ClipFacts& clip) {
   vision::StrandMeasureOptions o;
   o.luma_range = clip.luma_range;
   const vision::BandPx band =
       vision::DefaultBand(vision::MeasureTarget::kStrand, scene.scale_um_per_px);
   o.band_start_px = band.start_px;
   o.band_height_px = band.height_px;
+  return o;
+}
+
+vision::StrandMeasurement MeasureAdversarialFrame(const cv::Mat& frame,
+                                                  const AdversarialScene& scene,
+                                                  const ClipFacts& clip) {
+  const vision::StrandMeasureOptions o = AdversarialMeasureOptions(scene, clip);
   vision::StrandMeasurement m = vision::MeasureStrand(frame, o);
   // Each frame stands alone: its own check.
   if (clip.encoder.found) vision::CodecDoubt(clip.encoder, 1).Apply(frame, o, &m);

@@ -70,9 +70,13 @@ struct MatrixResult {
 
 MatrixResult RunAdversarialMatrix(const MatrixOptions& options);
 
-// How the matrix measures a frame of a scene: the default options with the reference band (50 µm
-// below the tip, 150 µm long) at the scene's scale; a width from an x264 clip (`encoder` found)
-// with the codec's doubt, as `measure` gives it (codec_doubt.h); in the clip's luma range.
+// The options the matrix measures a scene's frames with: the defaults with the reference band
+// (50 µm below the tip, 150 µm long) at the scene's scale, in the clip's luma range.
+vision::StrandMeasureOptions AdversarialMeasureOptions(const AdversarialScene& scene,
+                                                       const ClipFacts& clip);
+
+// How the matrix measures a frame of a scene: with AdversarialMeasureOptions; a width from an
+// x264 clip (`encoder` found) with the codec's doubt, as `measure` gives it (codec_doubt.h).
 vision::StrandMeasurement MeasureAdversarialFrame(const cv::Mat& frame,
                                                   const AdversarialScene& scene,
                                                   const ClipFacts& clip = {});

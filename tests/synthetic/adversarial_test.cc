@@ -294,12 +294,7 @@ TEST(AdversarialTest, AColourChannelThatCarriesLumasDoubtIsNotFollowedAlone) {
   AdversarialTruth t;
   ClipFacts clip;
   const std::vector<cv::Mat> frames = RenderAdversarial(p, 4, Scratch().string(), &t, &clip);
-  vision::StrandMeasureOptions o;
-  o.luma_range = clip.luma_range;
-  const vision::BandPx band =
-      vision::DefaultBand(vision::MeasureTarget::kStrand, p.scale_um_per_px);
-  o.band_start_px = band.start_px;
-  o.band_height_px = band.height_px;
+  const vision::StrandMeasureOptions o = AdversarialMeasureOptions(p, clip);
   vision::StrandTracker tracker(o);
   int carried = 0;
   for (size_t i = 0; i < frames.size(); ++i) {
