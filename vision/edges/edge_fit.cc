@@ -458,17 +458,18 @@ double PlainStepMovePerSlopeChange(double step, double sigma_px, double below_px
   // One Gauss–Newton step of the plain step from the truth toward the profile with the two-slope
   // model's ramp of unit k added (TwoSlopeStepModel's own column): the move to first order, which
   // is all there is where the move is a small part of the blur.
-  Vec<StepModel::kN> p;
-  p << 0.0, 0.0, step, 0.0, sigma_px;
+  // (StepModel's columns at p = (0, 0, step, 0, sigma_px), from the one shape they share with the
+  // ramp.)
+  const double inv_s = 1.0 / sigma_px;
   Mat<StepModel::kN> jtj = Mat<StepModel::kN>::Zero();
   Vec<StepModel::kN> jtr = Vec<StepModel::kN>::Zero();
-  double value, j[StepModel::kN];
+  double j[StepModel::kN];
   for (double u = -below_px; u <= above_px; u += kLinearMoveStepPx) {
-    StepModel()(u, u, p.data(), &value, j);
-    const Eigen::Map<const Vec<StepModel::kN>> column(j);
-    const double z = u / sigma_px;
+    const double z = u * inv_s;
     double f, df;
     StepShape(z, &f, &df);
+    StepColumns(u, f, -step * df * inv_s, z, j);
+    const Eigen::Map<const Vec<StepModel::kN>> column(j);
     jtj.noalias() += column * column.transpose();
     jtr += column * (sigma_px * (z * f + df));
   }

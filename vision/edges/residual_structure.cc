@@ -148,10 +148,11 @@ BandEdgeDoubt JudgeBandEdge(const GreyImage& img, const AxisFrame& f, const Clip
   EdgeStructureDoubt doubt(std::max(below_px, above_px));
   PooledProfile pooled(below_px, above_px);
   std::vector<EdgeSample> samples;
-  std::vector<double> blur;
+  std::vector<double> blur, rms;
   bool plain = true;
   for (const CaliperEdge& c : edges) {
     const EdgeFit& e = c.fit;
+    rms.push_back(e.rms);  // every caliper's, as the far slopes pool every caliper
     const double u0 = e.edge_px - below_px, u1 = e.edge_px + above_px;
     if (!GatherEdgeSamples(img, f, c.s0_px, c.s1_px, u0, u1, clip, &samples)) continue;
     for (const EdgeSample& smp : samples) {
@@ -184,8 +185,6 @@ BandEdgeDoubt JudgeBandEdge(const GreyImage& img, const AxisFrame& f, const Clip
     // −0.40 ± 0.05 against −0.37 without the noise, both edges 0.1 px outward), and tell better
     // whether the background is one slope. A sample's noise: the edge fits' residuals (their
     // misfit too, which only makes a curve harder to tell from it).
-    std::vector<double> rms;
-    for (const CaliperEdge& c : edges) rms.push_back(c.fit.rms);
     const FarSlopes far = JudgeFarSlopes(img, f, clip, edges, below_px, above_px, background_side,
                                          object_reach_px, sigma, Median(rms));
     // The move is the slope change's, which the gain measures in its own σ: the move's σ is the

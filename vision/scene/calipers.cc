@@ -26,6 +26,9 @@ namespace {
 // A side is shaded only when its edge also moves out by more than this under the shading model.
 constexpr double kMinShadingShiftPx = 0.1;
 constexpr int kReferenceCalipers = 5;  // outside the band, for the occlusion check
+// Edges inside the object are looked for this share of its width in from each side; the object's
+// own slope is read no deeper.
+constexpr double kInnerEdgeShare = 0.45;
 // Tracking from templates: more of the band's calipers than this refusing theirs (the scene
 // changed) and the frame is measured as the first was.
 constexpr double kMaxRefusedTemplates = 0.25;
@@ -131,7 +134,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     const double mid = 0.5 * (band_s0 + band_s1);
     const double e = (side == 0 ? left_guess : right_guess) + slope_guess * mid;
     inner_edge_px[side] = InnerEdgeDistance(img, f, band_s0, band_s1, e, side == 0 ? 1 : -1,
-                                            std::min(0.45 * width0, 40.0), min_contrast,
+                                            std::min(kInnerEdgeShare * width0, 40.0), min_contrast,
                                             &inner_far_px[side], std::min(0.9 * width0, 60.0));
   }
   // How far inside a side's window may reach and stop short of an edge inside the object by the
@@ -713,7 +716,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       // About each caliper's fitted edge: the window's reach either side of it.
       const Window w = window(side, 0.0, outer, inner);
       // The object's slope is read short of an edge inside it, and of its middle.
-      const double object_reach_px = std::min(0.45 * width0, short_of_inner_edge(side));
+      const double object_reach_px = std::min(kInnerEdgeShare * width0, short_of_inner_edge(side));
       const BandEdgeDoubt judged =
           JudgeBandEdge(img, f, clip, edges, -w.u0, w.u1, side == 0 ? -1 : 1, object_reach_px);
       edge_shift_px[side] = judged.shift_px;
