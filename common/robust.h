@@ -21,22 +21,28 @@ inline double Median(std::vector<double> v) {
   return m;
 }
 
-// Median(v) of values given as counts: counts[k] of them equal k. In a pass over the counts, not a
-// selection over the values (a frame's 50 000 noise samples, each a small integer).
-inline double MedianOfCounts(const std::vector<int>& counts) {
-  long long n = 0;
-  for (int c : counts) n += c;
+// Median(v) of values given as counts: count_at(k) of them equal k, for k < levels, n of them in
+// all. In a pass over the counts up to the median, not a selection over the values (a frame's
+// 50 000 noise samples, each a small integer, whose median is a few levels up).
+template <typename CountAt>
+double MedianOfCounts(size_t levels, long long n, CountAt count_at) {
   if (n == 0) return 0;
   // The values at ranks n/2 (upper middle) and, for an even count, n/2 − 1 (lower middle).
   const long long upper = n / 2, lower = n % 2 == 0 ? upper - 1 : upper;
   long long seen = 0;
   double lower_value = -1;
-  for (size_t k = 0; k < counts.size(); ++k) {
-    seen += counts[k];
+  for (size_t k = 0; k < levels; ++k) {
+    seen += count_at(k);
     if (lower_value < 0 && seen > lower) lower_value = static_cast<double>(k);
     if (seen > upper) return 0.5 * (lower_value + static_cast<double>(k));
   }
-  return lower_value;  // not reached: seen ends at n > upper
+  return lower_value;  // not reached when the counts hold n values
+}
+
+inline double MedianOfCounts(const std::vector<int>& counts) {
+  long long n = 0;
+  for (int c : counts) n += c;
+  return MedianOfCounts(counts.size(), n, [&](size_t k) { return counts[k]; });
 }
 
 // The middle value, the upper of the two middle ones for an even count (no mean of them: always a

@@ -304,23 +304,38 @@ Detection DetectEdgePoints(const cv::Mat& channel, const SceneOptions& o) {
   constexpr int kLevels = 16 * 255 + 1, kLanes = 4;  // lanes: no wait on the last count's store
   std::vector<double> lap;
   std::vector<int> lane_counts(whole_levels ? kLanes * kLevels : 0, 0);
+  long long counted = 0;
   std::vector<float> response(img.cols, 0.0f);
   for (int y = std::max(1, d.row_step / 2); y + 1 < img.rows; y += d.row_step) {
     if (whole_levels)
       NoiseMaskRow<uint8_t>(img, y, response.data());
     else
       NoiseMaskRow<float>(img, y, response.data());
-    for (int x = 1, lane = 0; x + 1 < img.cols; x += 2, lane = (lane + 1) % kLanes) {
-      if (whole_levels)
-        ++lane_counts[lane * kLevels + static_cast<int>(response[x])];  // a whole number
-      else
-        lap.push_back(response[x]);
+    // Every other inner column (x = 1, 3, …, x + 1 < cols); on 8-bit data four at a time, one
+    // to a lane. The responses are whole numbers.
+    int x = 1;
+    if (whole_levels) {
+      int* const c = lane_counts.data();
+      for (; x + 7 < img.cols; x += 8) {
+        ++c[static_cast<int>(response[x])];
+        ++c[kLevels + static_cast<int>(response[x + 2])];
+        ++c[2 * kLevels + static_cast<int>(response[x + 4])];
+        ++c[3 * kLevels + static_cast<int>(response[x + 6])];
+      }
+      for (; x + 1 < img.cols; x += 2) ++c[static_cast<int>(response[x])];
+      counted += (img.cols - 1) / 2;
+    } else {
+      for (; x + 1 < img.cols; x += 2) lap.push_back(response[x]);
     }
   }
-  std::vector<int> lap_counts(whole_levels ? kLevels : 0, 0);
-  for (size_t k = 0; k < lane_counts.size(); ++k) lap_counts[k % kLevels] += lane_counts[k];
+  static_assert(kLanes == 4, "the loop above and the sum below name each lane");
+  const auto lanes_at = [&](size_t k) {
+    return lane_counts[k] + lane_counts[kLevels + k] + lane_counts[2 * kLevels + k] +
+           lane_counts[3 * kLevels + k];
+  };
   const double pixel_noise =
-      (whole_levels ? MedianOfCounts(lap_counts) : Median(std::move(lap))) / (0.6745 * 6.0);
+      (whole_levels ? MedianOfCounts(kLevels, counted, lanes_at) : Median(std::move(lap))) /
+      (0.6745 * 6.0);
   d.noise = std::max(0.433 * pixel_noise, o.min_contrast / 60.0);
   // An edge of the weakest accepted step at the largest blur still rises above this.
   const float threshold = static_cast<float>(std::max(5.0 * d.noise, o.min_contrast / 8.0));
