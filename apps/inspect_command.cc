@@ -157,9 +157,12 @@ InspectReport InspectInput(const InspectCommandOptions& o) {
         m.tip_y_px, m.band_start_px, m.band_end_px, m.calipers_used, m.calipers_total, m.blur_px,
         m.contrast, m.shading_left ? "shaded" : "plain", m.shading_right ? "shaded" : "plain");
     if (rep.target == vision::MeasureTarget::kStrand) {
-      const int face = rep.scene.geometry.tip_face_sides;
+      const vision::StrandGeometry& g = rep.scene.geometry;
+      const int face = g.tip_face_sides;
       t += fmt::format("  tip: {}{}; swell ratio {:.2f} (widest below the tip over the width)\n",
-                       face == 2   ? "on the nozzle's face, which shows on both sides"
+                       face == 2   ? fmt::format("on the nozzle's face, which shows on both sides "
+                                                   "(stepping by up to {:.0f} grey levels)",
+                                                 g.tip_face_step)
                        : face == 1 ? "on the nozzle's face, which shows on one side"
                                    : "where the edges end (the nozzle's face does not show)",
                        m.tip_sigma_px >= 0

@@ -30,6 +30,21 @@ constexpr double kSameEdgePx = 1.5;  // two pairs' edges this close at mid-stret
 bool Parallel(const PairCandidate& a, const PairCandidate& b) {
   return std::abs(a.axis.dx * b.axis.dy - a.axis.dy * b.axis.dx) < kParallelSine;
 }
+// Whether the nozzle's face shows on both sides of a pair clearly enough that its absence beside
+// another object says that object does not hang from it: a reading of it steps by
+// kDecisiveFaceContrast of the least contrast searched for. A face read only just above that
+// least contrast may be found beside one object and missed beside the next, and may not be the
+// face at all: a background's slope taken for part of a step (a nozzle 8 grey levels below the
+// background, read at 16-21 beside a 12 px hair from its face and not at all beside the 137 px
+// strand that hung from it, chose the hair in one frame of four).
+constexpr double kDecisiveFaceContrast = 1.5;
+bool HangsFromFace(const StrandGeometry& g, const SceneOptions& o) {
+  return g.tip_face_sides == 2 && g.tip_face_step >= kDecisiveFaceContrast * o.min_contrast;
+}
+// The face read beside a pair, on one side or faintly on both, but not decisively.
+bool FaceReadInPart(const StrandGeometry& g, const SceneOptions& o) {
+  return g.tip_face_sides >= 1 && !HangsFromFace(g, o);
+}
 // A rival that scores less than this share of the best is no strand, even where the tip does not
 // decide: the short pairs of clutter discs and blobs that held up scored 7-24 % of the strand's
 // in the robustness scenes, while a long hair may score as well as the strand.
@@ -595,6 +610,7 @@ bool FollowPair(const GreyImage& img, const SceneOptions& o, const PairCandidate
     if (tip_traced) s_origin = trace.s_tip_px;
     g->tip_width_px = trace.found ? trace.widest_px : c.width_px;
     g->tip_face_sides = trace.found ? trace.face_sides : 0;
+    g->tip_face_step = trace.found ? trace.face_step : 0;
     g->tip_sigma_px = tip_traced ? trace.tip_sigma_px : -1;
   } else {
     // Where both edges are still there; but when one edge's walk stops at an object while the
@@ -662,10 +678,11 @@ PairContest ContestPairs(const PairCandidate& b, const StrandGeometry& bg, const
   // does a strand whose face noise hid on one side (a 91 px strand lost so to an 8 px hair from
   // the corner, in one of four frames). The better-scoring pair read so is never outranked by
   // the face; a weaker one that could not rival it (CouldRival) is.
-  if (o.target == MeasureTarget::kStrand && (bg.tip_face_sides == 2) != (cg.tip_face_sides == 2)) {
-    if (bg.tip_face_sides == 1 || (cg.tip_face_sides == 1 && CouldRival(b, c)))
+  const bool b_at_face = HangsFromFace(bg, o), c_at_face = HangsFromFace(cg, o);
+  if (o.target == MeasureTarget::kStrand && b_at_face != c_at_face) {
+    if (FaceReadInPart(bg, o) || (FaceReadInPart(cg, o) && CouldRival(b, c)))
       return PairContest::kFaceOnOneSide;
-    return bg.tip_face_sides == 2 ? PairContest::kFirstAtFace : PairContest::kSecondAtFace;
+    return b_at_face ? PairContest::kFirstAtFace : PairContest::kSecondAtFace;
   }
   // Two parallel objects side by side, closer than either is wide, that the tip did not tell
   // apart: one strand whose stripe matches the background, or a strand and its neighbour.
@@ -675,8 +692,7 @@ PairContest ContestPairs(const PairCandidate& b, const StrandGeometry& bg, const
   // Neither at the face: which object is the strand the frame does not say, if the other could
   // be one. (Scores once chose a 10 px hair over an 83 px strand whose nozzle was at the
   // background's level.)
-  if (o.target == MeasureTarget::kStrand && bg.tip_face_sides != 2 && cg.tip_face_sides != 2 &&
-      CouldRival(b, c))
+  if (o.target == MeasureTarget::kStrand && !b_at_face && !c_at_face && CouldRival(b, c))
     return PairContest::kNeitherAtFace;
   return c.score >= o.ambiguity_ratio * b.score ? PairContest::kSimilarScore
                                                 : PairContest::kOutscored;
@@ -687,11 +703,11 @@ std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const P
   return fmt::format(contest == PairContest::kSideBySide
                          ? "two strand-like objects side by side: {} and {}"
                      : contest == PairContest::kNeitherAtFace
-                         ? "two strand-like objects, neither hanging from the nozzle's face: {} "
-                           "and {}"
+                         ? "two strand-like objects, neither hanging clearly from the nozzle's "
+                           "face: {} and {}"
                      : contest == PairContest::kFaceOnOneSide
-                         ? "two strand-like objects, the nozzle's face read on one side only of "
-                           "one of them: {} and {}"
+                         ? "two strand-like objects, the nozzle's face read on one side only, or "
+                           "faintly, beside one of them: {} and {}"
                          : "two strand-like pairs of similar score: {} and {}",
                      Describe(b), Describe(c));
 }
@@ -760,7 +776,7 @@ std::string SplitDetail(const SceneResult& r, int index) {
 // px wide, and would have cost 4 more valid frames for no wrong one.)
 std::string UnheldRivalDetail(const SceneResult& r, int index, const StrandGeometry& g,
                               const SceneOptions& o) {
-  if (g.tip_face_sides == 2) return "";
+  if (HangsFromFace(g, o)) return "";
   const PairCandidate& b = r.candidates[index];
   const StrandGeometry unknown_tip;
   for (const PairCandidate& c : r.candidates) {

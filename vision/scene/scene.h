@@ -81,6 +81,7 @@ struct StrandGeometry {
   // Strand: the widest width between the tip and the straight part (die swell), px.
   double tip_width_px = 0;
   int tip_face_sides = 0;    // strand: on how many sides the nozzle's face shows at the tip (tip.h)
+  double tip_face_step = 0;  // strand, face on both sides: its strongest reading's |step| (tip.h)
   double tip_sigma_px = -1;  // strand: the tip's doubt along the axis; < 0 unconfirmed (tip.h)
   bool precise = false;      // edge lines from fitted calipers (tracking), not from the gradient
   // Edge model per side: −1 decide from the calipers, 0 plain blurred step, 1 shaded (tracking

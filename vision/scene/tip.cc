@@ -298,6 +298,10 @@ TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0,
         for (const LineReading& r : side)
           if (!one || std::abs(r.s_px - s_guess) < std::abs(one->s_px - s_guess)) one = &r;
     t.face_sides = face.found ? 2 : one ? 1 : 0;
+    t.face_step = 0;
+    if (face.found)
+      for (const auto& side : faces)
+        for (const LineReading& r : side) t.face_step = std::max(t.face_step, std::abs(r.step));
     if (end.found) {
       // Confirmed by the face beside it, or alone (the nozzle at the background's level).
       const bool confirmed = face.found || one;

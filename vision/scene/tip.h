@@ -9,7 +9,7 @@ namespace clogscope::vision {
 // it) leaves those lines before the nozzle, and the walk would put the tip where the edges become
 // parallel. Following each edge up as a curve finds where the object's outline ends at the nozzle.
 struct TipTrace {
-  bool found = false;    // both edges followed up to a common end
+  bool found = false;  // both edges followed up to a common end
   // Neither edge ended where it was followed (as far as twice the width, or to the image's
   // side): the outline curves on above the straight edges, a strand bending above them.
   bool runs_on = false;
@@ -18,6 +18,8 @@ struct TipTrace {
   // On how many sides of the strand the nozzle's face shows (0–2): a strand hangs from the face,
   // with the nozzle on both sides; a hair behind a nozzle's flank ends at it on one side at most.
   int face_sides = 0;
+  // Where the face shows on both sides: the largest |step| among its readings, grey levels.
+  double face_step = 0;
   // The doubt about s_tip_px where the nozzle's face on both sides or the object's own end (where
   // the nozzle's level differs from the strand's) fixed it; < 0 where only the followed edges or
   // a face on one side did.

@@ -112,6 +112,7 @@ bool StrandTracker::Follow(const cv::Mat& frame, StrandMeasurement* out) {
     const auto take_tip = [&] {
       g.tip_sigma_px = now.tip_sigma_px;
       g.tip_face_sides = now.tip_face_sides;
+      g.tip_face_step = now.tip_face_step;
       g.tip_width_px = now.tip_width_px;
     };
     if (std::abs(tip_shift) > kTipHysteresisPx) {

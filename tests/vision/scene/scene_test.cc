@@ -100,7 +100,8 @@ TEST(SceneTest, TwoStrandsNeitherAtAVisibleFaceAreAmbiguousWhateverTheirScores) 
   cv::max(a, b, both);
   const SceneResult r = Find(both);
   EXPECT_EQ(r.status, FrameStatus::kAmbiguous) << r.detail;
-  EXPECT_NE(r.detail.find("neither hanging from the nozzle's face"), std::string::npos) << r.detail;
+  EXPECT_NE(r.detail.find("neither hanging clearly from the nozzle's face"), std::string::npos)
+      << r.detail;
   // The thread alone is found: the rule is about rivals, not about faint nozzles.
   FrameTruth t;
   const SceneResult alone = Find(RenderFrame(p, 0, &t));
