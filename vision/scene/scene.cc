@@ -32,11 +32,8 @@ bool Parallel(const PairCandidate& a, const PairCandidate& b) {
 }
 // Whether the nozzle's face shows on both sides of a pair clearly enough that its absence beside
 // another object says that object does not hang from it: a reading of it steps by
-// kDecisiveFaceContrast of the least contrast searched for. A face read only just above that
-// least contrast may be found beside one object and missed beside the next, and may not be the
-// face at all: a background's slope taken for part of a step (a nozzle 8 grey levels below the
-// background, read at 16-21 beside a 12 px hair from its face and not at all beside the 137 px
-// strand that hung from it, chose the hair in one frame of four).
+// kDecisiveFaceContrast times the least contrast searched for. One just above that least contrast
+// may be missed beside the next object, or be a background's slope taken for part of a step.
 constexpr double kDecisiveFaceContrast = 1.5;
 bool HangsFromFace(const StrandGeometry& g, const SceneOptions& o) {
   return g.tip_face_sides == 2 && g.tip_face_step >= kDecisiveFaceContrast * o.min_contrast;
@@ -763,7 +760,7 @@ std::string SplitDetail(const SceneResult& r, int index) {
 }
 
 // A wider strand-like pair that did not hold up as the strand is out as the strand, but not as
-// the reason to doubt a narrower one that does not hang from the nozzle's face on both sides: a
+// the reason to doubt a narrower one that does not hang clearly from the nozzle's face: a
 // strand lit from one side whose shaded edge is faint reads so. Beside a 14 px hair from the
 // face's corner (measured alone, valid at sigma 0.04, where the strand is 111 px), such a strand's
 // pair had no tip in line (its faint edge faded before the nozzle) or scored below the minimum
@@ -791,7 +788,7 @@ std::string UnheldRivalDetail(const SceneResult& r, int index, const StrandGeome
     if (as_strand.polarity == Polarity::kMixed) as_strand.polarity = b.polarity;
     if (!Ambiguous(ContestPairs(b, g, as_strand, unknown_tip, o))) continue;
     return fmt::format(
-        "{} does not hang from the nozzle's face on both sides, and a wider strand-like object "
+        "{} does not hang clearly from the nozzle's face, and a wider strand-like object "
         "did not hold up as a pair ({}, {}, an edge {:.0f} px long: {}): which is the strand the "
         "frame does not say",
         Describe(b), Describe(c), PolarityName(c.polarity), c.long_edge_px, c.why);

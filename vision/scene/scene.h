@@ -80,8 +80,9 @@ struct StrandGeometry {
   bool has_tip = false;
   // Strand: the widest width between the tip and the straight part (die swell), px.
   double tip_width_px = 0;
-  int tip_face_sides = 0;    // strand: on how many sides the nozzle's face shows at the tip (tip.h)
-  double tip_face_step = 0;  // strand, face on both sides: its strongest reading's |step| (tip.h)
+  int tip_face_sides = 0;  // strand: on how many sides the nozzle's face shows at the tip (tip.h)
+  // Strand, face on both sides: its strongest reading's |step|, grey levels (tip.h).
+  double tip_face_step = 0;
   double tip_sigma_px = -1;  // strand: the tip's doubt along the axis; < 0 unconfirmed (tip.h)
   bool precise = false;      // edge lines from fitted calipers (tracking), not from the gradient
   // Edge model per side: −1 decide from the calipers, 0 plain blurred step, 1 shaded (tracking
@@ -115,10 +116,11 @@ struct SceneResult {
 
 // How a second pair that held up (c, followed as cg) stands against the first (b, bg):
 // kNotRivals: not two separate objects of one polarity (a stripe inside, a gap beside);
-// kFirstAtFace / kSecondAtFace: the tip decides — only that one hangs from the nozzle's face;
+// kFirstAtFace / kSecondAtFace: the tip decides — only that one hangs clearly from the nozzle's
+// face (on both sides, stepping by 1.5 times the least contrast somewhere: HangsFromFace);
 // kSideBySide: parallel and closer than either is wide (one strand with a stripe at the
 // background's level, or two strands): ambiguous whatever the scores;
-// kNeitherAtFace: a strand's target, neither hangs from the nozzle's face (on both sides), and c
+// kNeitherAtFace: a strand's target, neither hangs clearly from the nozzle's face, and c
 // could be the strand (it scores at least half as well as b, or is wider than b and one of its
 // edges longer than it is wide): the tip does not decide, and a score (contrast, length) does
 // not tell a strand from a hair or another strand: ambiguous;
@@ -129,7 +131,7 @@ enum class PairContest {
   kSecondAtFace,
   kSideBySide,
   kNeitherAtFace,
-  kFaceOnOneSide,  // one at the face on both sides, the other on one: not decided by the face
+  kFaceOnOneSide,  // one clearly at the face, the other on one side or faintly: not decided so
   kSimilarScore,
   kOutscored
 };
@@ -150,7 +152,7 @@ std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const P
 //   only for the background showing inside it (kSpansObjects), whose other edge is nearer than
 //   `index` is wide and which scores at least half as well (one strand split by a stripe at the
 //   background's level, or a strand beside another object);
-// - for a strand not at the nozzle's face on both sides, a wider pair that did not hold up (no tip
+// - for a strand not clearly at the nozzle's face, a wider pair that did not hold up (no tip
 //   in line, or a score below the minimum) would be a rival by ContestPairs were its tip one not
 //   at the face and, if mixed, its polarity `index`'s (a strand whose shaded edge is faint,
 //   beside a hair).

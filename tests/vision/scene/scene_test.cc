@@ -109,6 +109,42 @@ TEST(SceneTest, TwoStrandsNeitherAtAVisibleFaceAreAmbiguousWhateverTheirScores) 
   EXPECT_NEAR(alone.geometry.width_px, t.width_px, 1.0);
 }
 
+// The nozzle's face read on both sides of one object decides between two strand-like objects only
+// where some reading steps by 1.5 times the least contrast searched for: one just above that
+// least contrast may be missed beside the other object, or be a background's slope taken for a
+// step. Two vertical objects 300 px apart, the hair scoring better.
+TEST(SceneTest, OnlyAClearFaceDecidesBetweenTwoStrandLikeObjects) {
+  SceneOptions o;
+  o.target = MeasureTarget::kStrand;
+  o.min_contrast = 20;
+  PairCandidate strand;
+  strand.left = 0;
+  strand.right = 1;
+  strand.axis = {400, 100, 0, 1};
+  strand.left_u0 = -50;
+  strand.right_u0 = 50;
+  strand.width_px = 100;
+  strand.length_px = strand.long_edge_px = 300;
+  strand.score = 400;
+  strand.polarity = Polarity::kBrightOnDark;
+  PairCandidate hair = strand;
+  hair.left = 2;
+  hair.right = 3;
+  hair.axis.ox = 700;
+  hair.left_u0 = -5;
+  hair.right_u0 = 5;
+  hair.width_px = 10;
+  hair.score = 450;
+  StrandGeometry clear, faint, none;
+  clear.tip_face_sides = faint.tip_face_sides = 2;
+  clear.tip_face_step = 1.6 * o.min_contrast;
+  faint.tip_face_step = 1.4 * o.min_contrast;
+  EXPECT_EQ(ContestPairs(hair, clear, strand, none, o), PairContest::kFirstAtFace);
+  EXPECT_EQ(ContestPairs(hair, none, strand, clear, o), PairContest::kSecondAtFace);
+  EXPECT_EQ(ContestPairs(hair, faint, strand, none, o), PairContest::kNeitherAtFace);
+  EXPECT_EQ(ContestPairs(hair, faint, strand, clear, o), PairContest::kFaceOnOneSide);
+}
+
 TEST(SceneTest, TargetsDecideWhatATipMeans) {
   SceneParams p;
   p.nozzle = false;  // a filament through the whole frame
