@@ -17,6 +17,8 @@ constexpr double kMinReachPx = 20.0;       // how far out the outside is looked 
 constexpr double kNearPx = 3.0;            // the background's level: this far beyond the blur
 constexpr double kMaxObjectLike = 0.4;     // of one side's outside samples
 constexpr double kMaxLevelMismatch = 1.0;  // of the object's contrast
+// A thin object's level is read along its middle where each edge is this many blurs away.
+constexpr double kThinLevelBlurs = 2.0;
 // Another edge just outside a silhouette: looked for this far from it (blurs, and px).
 constexpr double kOutsideEdgeBlurs = 2.5, kOutsideEdgePx = 4.0;
 // One edge's residuals this many times the other's, and by this many grey levels.
@@ -47,12 +49,20 @@ SelfCheck CheckOutsideIsBackground(const GreyImage& img, const AxisFrame& f, dou
   SelfCheck out;
   const double width = right_u0 - left_u0;
   const double gap = 3.0 * blur_px + 2.0;
-  if (width < 2 * gap + 2) return out;  // too thin to read an inside level
-  // The object's level just inside both edges.
-  std::vector<double> inside = Strip(img, f, s0, s1, left_u0, slope, gap, +1, 2.0);
-  const std::vector<double> inside_r = Strip(img, f, s0, s1, right_u0, slope, gap, -1, 2.0);
-  inside.insert(inside.end(), inside_r.begin(), inside_r.end());
-  if (inside.size() < 2) return out;
+  // The object's level just inside both edges; an object too thin for that, along its middle
+  // where its edges' blur has reached its level (a stripe 8 px wide by a dark strand's rim, taken
+  // for the object, had been let through unchecked).
+  std::vector<double> inside;
+  const bool thin = width < 2 * gap + 2;
+  if (!thin) {
+    inside = Strip(img, f, s0, s1, left_u0, slope, gap, +1, 2.0);
+    const std::vector<double> inside_r = Strip(img, f, s0, s1, right_u0, slope, gap, -1, 2.0);
+    inside.insert(inside.end(), inside_r.begin(), inside_r.end());
+  } else if (width >= 2 * kThinLevelBlurs * blur_px) {
+    const double middle = 0.5 * width;
+    inside = Strip(img, f, s0, s1, left_u0, slope, middle - 0.5, +1, 1.0);
+  }
+  if (inside.size() < 2) return out;  // too thin to read an inside level
   const double object = Median(inside);
   // As far out as the edge fits' windows and what pulls them reach.
   const double reach = kMinReachPx + 3.0 * blur_px;
@@ -79,7 +89,14 @@ SelfCheck CheckOutsideIsBackground(const GreyImage& img, const AxisFrame& f, dou
       return out;
     }
   }
-  const double contrast = std::abs(object - 0.5 * (background[0] + background[1]));
+  // A thin object's against the nearer of the two: a background does not change by more than
+  // that over a few px, and outsides so far apart are one background and another object (a dark
+  // strand beside the bright stripe at its rim, 59 grey levels below the background on the
+  // stripe's other side, the stripe 50 above it). (Across a wide strand a background's gradient
+  // may: 22 grey levels across 180 px, the strand 21 below the darker side.)
+  const double contrast =
+      thin ? std::min(std::abs(object - background[0]), std::abs(object - background[1]))
+           : std::abs(object - 0.5 * (background[0] + background[1]));
   if (std::abs(background[0] - background[1]) > kMaxLevelMismatch * contrast) {
     out.passed = false;
     out.why = fmt::format(

@@ -21,7 +21,8 @@ struct SelfCheck {
 // in axis frame f) beyond the edge's blur, over 20 px + 3 blurs, each px of distance the median
 // over the band's rows: fails when more than 40 % of one side's distances sit nearer the object's
 // level than that side's background, or when the two sides' backgrounds differ by more than the
-// object's contrast.
+// object's contrast. An object too thin to read its level 3 blurs and 2 px inside its edges is
+// read along its middle, where 4 blurs wide or more, and its contrast is against the nearer side.
 SelfCheck CheckOutsideIsBackground(const GreyImage& img, const AxisFrame& f, double s0, double s1,
                                    double left_u0, double right_u0, double slope, double blur_px);
 
