@@ -17,7 +17,7 @@ constexpr double kMinReachPx = 20.0;       // how far out the outside is looked 
 constexpr double kNearPx = 3.0;            // the background's level: this far beyond the blur
 constexpr double kMaxObjectLike = 0.4;     // of one side's outside samples
 constexpr double kMaxLevelMismatch = 1.0;  // of the object's contrast
-// A thin object's level is read along its middle where each edge is this many blurs away.
+// A thin object's level is read along its middle where that is this many blurs from each edge.
 constexpr double kThinLevelBlurs = 2.0;
 // Another edge just outside a silhouette: looked for this far from it (blurs, and px).
 constexpr double kOutsideEdgeBlurs = 2.5, kOutsideEdgePx = 4.0;
@@ -50,8 +50,8 @@ SelfCheck CheckOutsideIsBackground(const GreyImage& img, const AxisFrame& f, dou
   const double width = right_u0 - left_u0;
   const double gap = 3.0 * blur_px + 2.0;
   // The object's level just inside both edges; an object too thin for that, along its middle
-  // where its edges' blur has reached its level (a stripe 8 px wide by a dark strand's rim, taken
-  // for the object, had been let through unchecked).
+  // where its edges' blur has reached its level (a stripe at a dark strand's rim, taken for the
+  // object, went unchecked: AdversarialTest.AStripeAtADarkStrandsRimIsNotTheObject).
   std::vector<double> inside;
   const bool thin = width < 2 * gap + 2;
   if (!thin) {
@@ -89,11 +89,11 @@ SelfCheck CheckOutsideIsBackground(const GreyImage& img, const AxisFrame& f, dou
       return out;
     }
   }
-  // A thin object's against the nearer of the two: a background does not change by more than
-  // that over a few px, and outsides so far apart are one background and another object (a dark
-  // strand beside the bright stripe at its rim, 59 grey levels below the background on the
-  // stripe's other side, the stripe 50 above it). (Across a wide strand a background's gradient
-  // may: 22 grey levels across 180 px, the strand 21 below the darker side.)
+  // A thin object's against the nearer of the two: across the 20-30 px between its outsides a
+  // background seldom changes by more than that, and outsides so far apart are one background
+  // and another object (a dark strand beside the bright stripe at its rim). Across a wide strand
+  // a background's gradient may (22 grey levels across 180 px, the strand 21 below the darker
+  // side), and there the mean counts.
   const double contrast =
       thin ? std::min(std::abs(object - background[0]), std::abs(object - background[1]))
            : std::abs(object - 0.5 * (background[0] + background[1]));
