@@ -759,6 +759,22 @@ std::string SplitDetail(const SceneResult& r, int index) {
   return "";
 }
 
+// A pair inside a wider one of its kind, which then did not hold up for want of a tip in line
+// only: a strand lit from one side whose faint shaded edge faded before the nozzle (the edges
+// ending 23 px apart), and inside it its bright stripe's edge paired with its far edge, which
+// hangs from the face (83.4 px at sigma 0.04, where the strand is 161.8). The wider pair may be
+// the strand.
+std::string InsideUnheldDetail(const SceneResult& r, int index) {
+  const PairCandidate& b = r.candidates[index];
+  if (b.reinstated_from < 0) return "";
+  const PairCandidate& c = r.candidates[b.reinstated_from];
+  if (c.verdict != PairVerdict::kNoTip) return "";
+  return fmt::format(
+      "{} lies inside a wider strand-like pair whose tip was not found ({}: {}): the strand may "
+      "be the wider one",
+      Describe(b), Describe(c), c.why);
+}
+
 // A wider strand-like pair that did not hold up as the strand is out as the strand, but not as
 // the reason to doubt a narrower one that does not hang clearly from the nozzle's face: a
 // strand lit from one side whose shaded edge is faint reads so. Beside a 14 px hair from the
@@ -802,6 +818,7 @@ std::string ChoiceDoubtDetail(const SceneResult& r, int index, const StrandGeome
   std::string why = FlankedDetail(r, index);
   if (!why.empty() || o.target != MeasureTarget::kStrand) return why;
   why = SplitDetail(r, index);
+  if (why.empty()) why = InsideUnheldDetail(r, index);
   if (why.empty()) why = UnheldRivalDetail(r, index, g, o);
   return why;
 }
@@ -838,6 +855,7 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
       for (auto& inner : r.candidates) {
         if (inner.suppressed_by != i) continue;
         inner.suppressed_by = -1;
+        inner.reinstated_from = i;
         inner.Judge(PairVerdict::kNotExamined);
         reinstated = true;
       }
