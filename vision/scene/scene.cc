@@ -759,20 +759,23 @@ std::string SplitDetail(const SceneResult& r, int index) {
   return "";
 }
 
-// A pair inside a wider one of its kind, which then did not hold up for want of a tip in line
-// only: a strand lit from one side whose faint shaded edge faded before the nozzle (the edges
-// ending 23 px apart), and inside it its bright stripe's edge paired with its far edge, which
+// A pair inside a wider one (or inside one inside it), which then did not hold up for want of a
+// tip in line only: a strand lit from one side whose faint shaded edge faded before the nozzle (the
+// edges ending 23 px apart), and inside it its bright stripe's edge paired with its far edge, which
 // hangs from the face (83.4 px at sigma 0.04, where the strand is 161.8). The wider pair may be
 // the strand.
 std::string InsideUnheldDetail(const SceneResult& r, int index) {
   const PairCandidate& b = r.candidates[index];
-  if (b.reinstated_from < 0) return "";
-  const PairCandidate& c = r.candidates[b.reinstated_from];
-  if (c.verdict != PairVerdict::kNoTip) return "";
-  return fmt::format(
-      "{} lies inside a wider strand-like pair whose tip was not found ({}: {}): the strand may "
-      "be the wider one",
-      Describe(b), Describe(c), c.why);
+  // Each wider than the last: the chain ends.
+  for (int w = b.reinstated_from; w >= 0; w = r.candidates[w].reinstated_from) {
+    const PairCandidate& c = r.candidates[w];
+    if (c.verdict != PairVerdict::kNoTip) continue;
+    return fmt::format(
+        "{} lies inside a wider strand-like pair whose tip was not found ({}: {}): the strand "
+        "may be the wider one",
+        Describe(b), Describe(c), c.why);
+  }
+  return "";
 }
 
 // A wider strand-like pair that did not hold up as the strand is out as the strand, but not as

@@ -68,7 +68,8 @@ struct PairCandidate {
   // Sets the verdict and its words: `words`, or the verdict's own when it carries no numbers.
   void Judge(PairVerdict v, std::string words = {});
   int suppressed_by = -1;  // the wider pair it lies inside (index into the candidates), if any
-  // The wider pair it lay inside, which then did not hold up (its suppression lifted), if any.
+  // The wider pair it lay inside, which then did not hold up (its suppression lifted; index into
+  // the candidates), if any.
   int reinstated_from = -1;
 };
 
@@ -154,9 +155,9 @@ std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const P
 //   only for the background showing inside it (kSpansObjects), whose other edge is nearer than
 //   `index` is wide and which scores at least half as well (one strand split by a stripe at the
 //   background's level, or a strand beside another object);
-// - it lay inside a wider pair of its kind (SuppressNested) that then did not hold up for want of
-//   a tip in line only (a strand whose faint shaded edge fades before the nozzle, around its
-//   stripe);
+// - it lay inside a wider pair (SuppressNested), or inside one inside it, that then did not hold
+//   up for want of a tip in line only (a strand whose faint shaded edge fades before the nozzle,
+//   around its stripe);
 // - for a strand not clearly at the nozzle's face, a wider pair that did not hold up (no tip
 //   in line, or a score below the minimum) would be a rival by ContestPairs were its tip one not
 //   at the face and, if mixed, its polarity `index`'s (a strand whose shaded edge is faint,
