@@ -159,10 +159,16 @@ InspectReport InspectInput(const InspectCommandOptions& o) {
     if (rep.target == vision::MeasureTarget::kStrand) {
       const vision::StrandGeometry& g = rep.scene.geometry;
       const int face = g.tip_face_sides;
+      const bool decides = vision::HangsFromFace(
+          g, vision::SceneOptionsFor(ForTarget(strand, rep.target, o.band_given), data_max));
       t += fmt::format("  tip: {}{}; swell ratio {:.2f} (widest below the tip over the width)\n",
                        face == 2   ? fmt::format("on the nozzle's face, which shows on both sides "
-                                                   "(stepping by up to {:.0f} grey levels)",
-                                                 g.tip_face_step)
+                                                   "(stepping by up to {:.0f} grey levels: {})",
+                                                 g.tip_face_step,
+                                               decides ? "clear enough to tell it from "
+                                                           "another object"
+                                                         : "too faint to tell it from another "
+                                                           "object")
                        : face == 1 ? "on the nozzle's face, which shows on one side"
                                    : "where the edges end (the nozzle's face does not show)",
                        m.tip_sigma_px >= 0

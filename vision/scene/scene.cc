@@ -14,6 +14,19 @@
 #include "vision/scene/tip.h"
 
 namespace clogscope::vision {
+
+// Whether the nozzle's face shows on both sides of a pair clearly enough that its absence beside
+// another object says that object does not hang from it: a reading of it steps by
+// kDecisiveFaceContrast times the least contrast searched for. One just above that least contrast
+// may be missed beside the next object, or be a background's slope taken for part of a step.
+namespace {
+constexpr double kDecisiveFaceContrast = 1.5;
+}  // namespace
+
+bool HangsFromFace(const StrandGeometry& g, const SceneOptions& o) {
+  return g.tip_face_sides == 2 && g.tip_face_step >= kDecisiveFaceContrast * o.min_contrast;
+}
+
 namespace {
 
 constexpr int kMaxCandidates = 40;       // pairs kept after scoring
@@ -29,14 +42,6 @@ constexpr double kSameEdgePx = 1.5;  // two pairs' edges this close at mid-stret
 // Whether two pairs' axes are parallel (within kParallelSine).
 bool Parallel(const PairCandidate& a, const PairCandidate& b) {
   return std::abs(a.axis.dx * b.axis.dy - a.axis.dy * b.axis.dx) < kParallelSine;
-}
-// Whether the nozzle's face shows on both sides of a pair clearly enough that its absence beside
-// another object says that object does not hang from it: a reading of it steps by
-// kDecisiveFaceContrast times the least contrast searched for. One just above that least contrast
-// may be missed beside the next object, or be a background's slope taken for part of a step.
-constexpr double kDecisiveFaceContrast = 1.5;
-bool HangsFromFace(const StrandGeometry& g, const SceneOptions& o) {
-  return g.tip_face_sides == 2 && g.tip_face_step >= kDecisiveFaceContrast * o.min_contrast;
 }
 // The face read beside a pair, on one side or faintly on both, but not decisively.
 bool FaceReadInPart(const StrandGeometry& g, const SceneOptions& o) {

@@ -128,6 +128,11 @@ struct SceneResult {
 // edges longer than it is wide): the tip does not decide, and a score (contrast, length) does
 // not tell a strand from a hair or another strand: ambiguous;
 // kSimilarScore: c scores at least ambiguity_ratio of b: ambiguous; kOutscored: b wins.
+// Whether the nozzle's face shows on both sides of a pair followed as `g` clearly enough to tell
+// it from another strand-like object: some reading of it steps by 1.5 times the least contrast
+// searched for (options.min_contrast).
+bool HangsFromFace(const StrandGeometry& g, const SceneOptions& options);
+
 enum class PairContest {
   kNotRivals,
   kFirstAtFace,
