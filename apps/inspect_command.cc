@@ -107,9 +107,11 @@ InspectReport InspectInput(const InspectCommandOptions& o) {
   // Without a target given: a strand below a tip, or else whatever straight stretch is in view.
   std::vector<vision::MeasureTarget> tries = {o.strand.target};
   if (!o.target_given) tries = {vision::MeasureTarget::kStrand, vision::MeasureTarget::kFilament};
+  vision::StrandMeasureOptions measured_with;  // the last target's, the one reported
   for (const auto t : tries) {
     rep.target = t;
-    rep.measurement = vision::FindAndMeasure(img, ForTarget(strand, t, o.band_given), &rep.scene);
+    measured_with = ForTarget(strand, t, o.band_given);
+    rep.measurement = vision::FindAndMeasure(img, measured_with, &rep.scene);
     if (rep.scene.status != vision::FrameStatus::kNoTip) break;
   }
   const vision::StrandMeasurement& m = rep.measurement;
@@ -159,8 +161,8 @@ InspectReport InspectInput(const InspectCommandOptions& o) {
     if (rep.target == vision::MeasureTarget::kStrand) {
       const vision::StrandGeometry& g = rep.scene.geometry;
       const int face = g.tip_face_sides;
-      const bool decides = vision::HangsFromFace(
-          g, vision::SceneOptionsFor(ForTarget(strand, rep.target, o.band_given), data_max));
+      const bool decides =
+          vision::HangsFromFace(g, vision::SceneOptionsFor(measured_with, data_max));
       t += fmt::format("  tip: {}{}; swell ratio {:.2f} (widest below the tip over the width)\n",
                        face == 2   ? fmt::format("on the nozzle's face, which shows on both sides "
                                                    "(stepping by up to {:.0f} grey levels: {})",

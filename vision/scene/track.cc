@@ -73,10 +73,10 @@ StrandMeasurement StrandTracker::Detect(const cv::Mat& frame) {
   SceneResult scene;
   StrandMeasurement m = FindAndMeasure(frame, options_, &scene);
   // (A channel that carries luma's doubt is not followed alone: Follow measures one channel.)
-  if (m.valid() && !scene.channel_doubts_luma)
-    Remember(scene, m, frame.size());
-  else if (scene.channel_doubts_luma)
+  if (scene.channel_doubts_luma)
     tracking_ = false;
+  else if (m.valid())
+    Remember(scene, m, frame.size());
   return m;
 }
 
