@@ -35,6 +35,12 @@ constexpr double kMaxRefusedTemplates = 0.25;
 // How far the tip may lie from where it was placed along the axis: set by the nozzle's face on
 // both sides of the strand, or inferred from the outline (tip.h).
 constexpr double kTipSigmaWidths = 0.25;  // an unconfirmed tip's doubt, in widths
+// Where such a tip's doubt alone is above this share of the width, the band's place is unknown.
+// The doubt extends the band's slope in a straight line over a quarter of the width, and so
+// understates a swell, whose width grows ever faster toward the face: over the matrix's 26 sets
+// a third of the imprecise widths whose tip doubt was above 1 % of them lay beyond 3σ (a tip
+// 70 px low: 161.1 ± 4.7 px where the band is 183.8), none of the 21 between 0.5 and 1 %.
+constexpr double kMaxUnfixedTipDoubtShare = 0.01;
 // A lamp off to one side whose dark strip inside the far rim (cylinder_fit.h) is deeper than this
 // many blurs leaves that rim's per-edge blur no PSF's (BlurMismatchDoubtPx not taken).
 constexpr double kLampAsideBlurs = 0.25;
@@ -784,6 +790,12 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       }
     }
   }
+  if (!filament && g.tip_sigma_px < 0 && doubt.tip_px > kMaxUnfixedTipDoubtShare * m->width_px)
+    return fail(FrameStatus::kNoTip,
+                fmt::format("no nozzle face or strand end fixed the tip, and the width changes "
+                            "along the band: where the band lies is unknown ({:.1f} ± {:.1f} px "
+                            "and more)",
+                            m->width_px, doubt.tip_px));
   // Self-check (self_check.h): both silhouettes fit about as well.
   if (!filament) {
     std::vector<double> rms[2];

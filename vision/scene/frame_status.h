@@ -9,7 +9,7 @@ enum class FrameStatus {
   kValid,
   kUnreadable,        // the frame could not be decoded
   kNoStrand,          // nothing strand-like in the frame or ROI
-  kNoTip,             // a strand but no nozzle tip above it
+  kNoTip,             // a strand but no nozzle tip above it, or none fixed over a changing width
   kTouchesBorder,     // the strand's edges in the band reach the frame or ROI border
   kBandOutsideFrame,  // the band leaves the frame/ROI or runs into the bed or an obstacle
   kLowContrast,

@@ -297,8 +297,53 @@ std::pair<double, double> Interval(const PairCandidate& c, const AxisFrame& fram
   return {frame.U(xl, yl), frame.U(xr, yr)};
 }
 
-// Marks pairs lying inside a comparable outer pair (a highlight stripe, a clear strand's internal
-// lines): the outer silhouette is the object.
+// A bright pair and a dark one.
+bool OppositeKinds(const PairCandidate& a, const PairCandidate& b) {
+  return (a.polarity == Polarity::kBrightOnDark && b.polarity == Polarity::kDarkOnBright) ||
+         (a.polarity == Polarity::kDarkOnBright && b.polarity == Polarity::kBrightOnDark);
+}
+
+// Whether `inner` lies across the axis inside `outer`, a wider pair, or shares one edge with it
+// and lies inside with the other (half a highlight stripe with the strand's far edge; a shading
+// ridge with the other silhouette).
+bool Contains(const PairCandidate& outer, const PairCandidate& inner) {
+  if (outer.width_px <= inner.width_px + 3.0) return false;
+  const auto [l, r] = Interval(inner, outer.axis);
+  const auto [ol, orr] = Interval(outer, outer.axis);
+  return l >= ol - kSameEdgePx && r <= orr + kSameEdgePx;
+}
+
+// Whether `outer` contains `inner` and is comparable to it, so that the outer silhouette is the
+// object.
+bool Encloses(MeasureTarget target, const PairCandidate& outer, const PairCandidate& inner) {
+  if (!Contains(outer, inner)) return false;
+  // Inside an outer silhouette, edges of its own kind (a shading ridge, a clear strand's
+  // internal lines) or, below a nozzle, of the opposite kind (a bright stripe or a lens's
+  // core in a dark strand) never make the strand, whatever their contrast; a mixed pair
+  // inside, or a mixed outer pair (brighter on one side, darker on the other), is a weaker
+  // case. (Between a filament's gears and idler, a dark gap inside a bright outer pair is
+  // often the better pair: there the opposite kind stays a weaker case.)
+  const bool opposite = target == MeasureTarget::kStrand && OppositeKinds(outer, inner);
+  const bool same_kind = outer.polarity == inner.polarity;
+  return outer.score >= (same_kind || opposite ? 0.3 : 0.8) * inner.score;
+}
+
+// Whether a strand pair `b` may be the inside of the wider pair `c` of the other kind, one that
+// could rival it (a stripe or a lens's core inside a strand whose own pair is faint). Of its own
+// kind, such a pair is as often the strand and a hair beside it, paired across both (over eight
+// sets, 41 valid frames, each right, were doubted so).
+bool MayBeInsideOf(const PairCandidate& b, const PairCandidate& c) {
+  return OppositeKinds(b, c) && Contains(c, b) && CouldRival(b, c) && Parallel(b, c);
+}
+
+// Rules out a pair lying inside a wider one, the object.
+void JudgeInsideWider(const PairCandidate& outer, PairCandidate* inner) {
+  inner->Judge(PairVerdict::kInsideWider,
+               fmt::format("inside a wider pair ({:.1f} px)", outer.width_px));
+}
+
+// Marks pairs lying inside a comparable outer pair along half their stretch or more (a highlight
+// stripe, a clear strand's internal lines): the outer silhouette is the object.
 void SuppressNested(MeasureTarget target, std::vector<PairCandidate>* cands) {
   auto& c = *cands;
   for (size_t i = 0; i < c.size(); ++i) {
@@ -306,31 +351,11 @@ void SuppressNested(MeasureTarget target, std::vector<PairCandidate>* cands) {
       if (i == j || c[j].verdict != PairVerdict::kNotExamined ||
           c[i].verdict != PairVerdict::kNotExamined)
         continue;
-      if (c[i].width_px <= c[j].width_px + 3.0) continue;
-      // Inside, or sharing one edge and inside with the other (half a highlight stripe with the
-      // strand's far edge; a shading ridge with the other silhouette).
-      const auto [l, r] = Interval(c[j], c[i].axis);
-      const auto [ol, orr] = Interval(c[i], c[i].axis);
-      if (l < ol - kSameEdgePx || r > orr + kSameEdgePx) continue;
       const double sj = c[i].axis.S(c[j].axis.ox, c[j].axis.oy);
       const double overlap = std::min(sj + c[j].length_px, c[i].length_px) - std::max(sj, 0.0);
-      if (overlap < 0.5 * c[j].length_px) continue;
-      // Inside an outer silhouette, edges of its own kind (a shading ridge, a clear strand's
-      // internal lines) or, below a nozzle, of the opposite kind (a bright stripe or a lens's
-      // core in a dark strand) never make the strand, whatever their contrast; a mixed pair
-      // inside, or a mixed outer pair (brighter on one side, darker on the other), is a weaker
-      // case. (Between a filament's gears and idler, a dark gap inside a bright outer pair is
-      // often the better pair: there the opposite kind stays a weaker case.)
-      const bool opposite =
-          target == MeasureTarget::kStrand &&
-          ((c[i].polarity == Polarity::kBrightOnDark && c[j].polarity == Polarity::kDarkOnBright) ||
-           (c[i].polarity == Polarity::kDarkOnBright && c[j].polarity == Polarity::kBrightOnDark));
-      const bool same_kind = c[i].polarity == c[j].polarity;
-      if (c[i].score >= (same_kind || opposite ? 0.3 : 0.8) * c[j].score) {
-        c[j].Judge(PairVerdict::kInsideWider,
-                   fmt::format("inside a wider pair ({:.1f} px)", c[i].width_px));
-        c[j].suppressed_by = static_cast<int>(i);
-      }
+      if (overlap < 0.5 * c[j].length_px || !Encloses(target, c[i], c[j])) continue;
+      JudgeInsideWider(c[i], &c[j]);
+      c[j].suppressed_by = static_cast<int>(i);
     }
   }
 }
@@ -600,7 +625,7 @@ bool FollowPair(const GreyImage& img, const SceneOptions& o, const PairCandidate
     }
     // A nozzle face ends both edges together (a strand hanging up to ~8° off the nozzle axis).
     const double mismatch = std::abs(up_l.s - up_r.s);
-    if (!trace.found && mismatch > std::max(4.0, 0.14 * c.width_px)) {
+    if (!trace.found && mismatch > MaxTipMismatchPx(c.width_px)) {
       *failure = PairVerdict::kNoTip;
       *why = fmt::format("the edges end {:.0f} px apart: no common nozzle tip", mismatch);
       return false;
@@ -771,16 +796,34 @@ std::string SplitDetail(const SceneResult& r, int index) {
 // the strand.
 std::string InsideUnheldDetail(const SceneResult& r, int index) {
   const PairCandidate& b = r.candidates[index];
-  // Each wider than the last: the chain ends.
-  for (int w = b.reinstated_from; w >= 0; w = r.candidates[w].reinstated_from) {
-    const PairCandidate& c = r.candidates[w];
-    if (c.verdict != PairVerdict::kNoTip) continue;
+  const auto wider_may_be_strand = [&](const PairCandidate& c) {
     return fmt::format(
         "{} lies inside a wider strand-like pair whose tip was not found ({}: {}): the strand "
         "may be the wider one",
         Describe(b), Describe(c), c.why);
+  };
+  // Each wider than the last: the chain ends.
+  for (int w = b.reinstated_from; w >= 0; w = r.candidates[w].reinstated_from) {
+    const PairCandidate& c = r.candidates[w];
+    if (c.verdict == PairVerdict::kNoTip) return wider_may_be_strand(c);
   }
+  // Or inside one that had no tip in line, though too weak or too short to rule it out first
+  // (MayBeInsideOf): a dark 45 px strand under noise of 10 grey levels, its faint edges ending
+  // 41 px apart, and inside it a bright stripe hanging from the face (12.8 px at σ 0.5). The face
+  // read beside a pair inside another is the other's inside, not the background.
+  for (const PairCandidate& c : r.candidates)
+    if (c.verdict == PairVerdict::kNoTip && MayBeInsideOf(b, c)) return wider_may_be_strand(c);
   return "";
+}
+
+// Whether an edge of `c` lies on one of `b`'s edge lines: across b's axis, each pair's edges
+// read at its own mid-stretch.
+bool OnAnEdgeLineOf(const PairCandidate& b, const PairCandidate& c) {
+  const auto [bl, br] = Interval(b, b.axis);
+  const auto [cl, cr] = Interval(c, b.axis);
+  for (const double e : {cl, cr})
+    if (std::abs(e - bl) <= kSameEdgePx || std::abs(e - br) <= kSameEdgePx) return true;
+  return false;
 }
 
 // A wider strand-like pair that did not hold up as the strand is out as the strand, but not as
@@ -805,17 +848,27 @@ std::string UnheldRivalDetail(const SceneResult& r, int index, const StrandGeome
     // cluttered view it stops before the faint ones, and they do not count: counting every pair
     // below the minimum made 4 more valid frames of ten matrices ambiguous, each on a mixed pair
     // of a long edge (a hair's, a strand's) and a short one of texture.
-    if ((c.verdict != PairVerdict::kNoTip && c.verdict != PairVerdict::kScoreBelow) ||
+    // And a mixed pair that held up, but as no rival for its polarity (ContestPairs): the same
+    // strand once its faint edge was followed to the nozzle (seed 709 at strand level 60: the
+    // hair alone, 14.5 px at σ 0.04 where the strand is 111.4). Weighed like the others, its tip
+    // unknown. Not one whose edge lies on the narrower one's own edge line, paired with texture
+    // beyond it (a 180 px mixed pair beside an 87 px strand: three valid frames of eight sets
+    // made ambiguous).
+    const bool mixed_held = c.verdict == PairVerdict::kOutscored &&
+                            c.polarity == Polarity::kMixed && !OnAnEdgeLineOf(b, c);
+    if ((c.verdict != PairVerdict::kNoTip && c.verdict != PairVerdict::kScoreBelow &&
+         !mixed_held) ||
         c.width_px <= b.width_px)
       continue;
     PairCandidate as_strand = c;
     if (as_strand.polarity == Polarity::kMixed) as_strand.polarity = b.polarity;
     if (!Ambiguous(ContestPairs(b, g, as_strand, unknown_tip, o))) continue;
     return fmt::format(
-        "{} does not hang clearly from the nozzle's face, and a wider strand-like object "
-        "did not hold up as a pair ({}, {}, an edge {:.0f} px long: {}): which is the strand the "
-        "frame does not say",
-        Describe(b), Describe(c), PolarityName(c.polarity), c.long_edge_px, c.why);
+        "{} does not hang clearly from the nozzle's face, and a wider strand-like object {} ({}, "
+        "{}, an edge {:.0f} px long{}{}): which is the strand the frame does not say",
+        Describe(b), mixed_held ? "held up only as a mixed pair" : "did not hold up as a pair",
+        Describe(c), PolarityName(c.polarity), c.long_edge_px, mixed_held ? "" : ": ",
+        mixed_held ? "" : c.why);
   }
   return "";
 }
@@ -878,6 +931,41 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
     }
     // A second pair that holds up: ambiguous when it is a separate object of similar score.
     const PairCandidate& b = r.candidates[r.chosen];
+    // Or the wider silhouette of the other kind the chosen one lies inside (MayBeInsideOf). Its
+    // detected stretch was too short to rule the chosen one out (SuppressNested): a dark strand
+    // whose far edge showed along its lower half only, and inside it a bright stripe hanging
+    // from the face (14.0 px at σ 0.19 where the strand is 179.9). A comparable one hanging from
+    // the same tip is the object. One too weak to be it outright, or whose tip lies elsewhere,
+    // could still be the strand (a faint 45 px strand under noise of 10 grey levels around its
+    // bright stripe, 12.8 px at σ 0.5): the face read beside a pair inside another is the
+    // other's inside, not the background, and does not decide.
+    if (o.target == MeasureTarget::kStrand && MayBeInsideOf(b, c)) {
+      const bool same_tip =
+          std::abs(r.geometry.axis.S(g.axis.ox, g.axis.oy)) <= MaxTipMismatchPx(c.width_px);
+      if (!same_tip || !Encloses(o.target, c, b)) {
+        c.Judge(PairVerdict::kAsLikely, "as likely as the chosen pair");
+        r.status = FrameStatus::kAmbiguous;
+        r.detail = fmt::format(
+            "{} lies inside a wider strand-like pair that also holds up, {}: the strand may be "
+            "the wider one",
+            Describe(b), Describe(c));
+        return;
+      }
+      JudgeInsideWider(c, &r.candidates[r.chosen]);
+      r.chosen = i;
+      r.geometry = g;
+      c.Judge(PairVerdict::kChosen);
+      // The pairs the inner one outscored, weighed again against the strand.
+      for (const auto& [k, kg] : r.runners_up) {
+        const PairContest again = ContestPairs(c, g, r.candidates[k], kg, o);
+        if (!Ambiguous(again)) continue;
+        r.candidates[k].Judge(PairVerdict::kAsLikely, "as likely as the chosen pair");
+        r.status = FrameStatus::kAmbiguous;
+        r.detail = AmbiguityDetail(again, c, r.candidates[k]);
+        return;
+      }
+      continue;
+    }
     const PairContest contest = ContestPairs(b, r.geometry, c, g, o);
     if (contest == PairContest::kSecondAtFace) {
       r.candidates[r.chosen].Judge(PairVerdict::kNotAtFace);

@@ -13,7 +13,11 @@ constexpr double kOffsetPx = 2.0;  // contrast is read this far either side of t
 constexpr double kSearchPx = 3.0;  // how far an edge may move from where it was heading, per px
 constexpr double kSearchStepPx = 0.25;
 constexpr int kWeakSteps = 3;      // an edge ends after this many weak px in a row
-constexpr double kInsidePx = 4.0;  // the object's level is read this far inside its edge
+constexpr double kInsidePx = 4.0;  // the object's level is read from this far inside its edge
+constexpr int kInsideSpanPx = 5;   // ... over this many px further in (at most)
+// Where the following starts, the edge is looked for this share of the width either side of the
+// straight line (at least kSearchPx, at most twice it).
+constexpr double kStartSearchWidths = 0.05;
 
 struct Curve {
   double s_end = 0;       // the last strong s
@@ -21,42 +25,72 @@ struct Curve {
   bool ended = false;     // the edge weakened or the object's level changed (else it ran on)
 };
 
-// The object's level just inside an edge (object_side: +1 the object lies at +u).
+// The object's level inside an edge (object_side: +1 the object lies at +u): the mean of
+// `inside_px` px from kInsidePx in.
 bool InsideLevel(const GreyImage& img, const AxisFrame& a, double s, double u, int object_side,
-                 double* level) {
-  const double ui = u + object_side * kInsidePx;
-  const double x = a.ImageX(s, ui), y = a.ImageY(s, ui);
-  if (!img.InsideForBilinear(x, y)) return false;
-  *level = img.Bilinear(x, y);
+                 int inside_px, double* level) {
+  double sum = 0;
+  for (int k = 0; k < inside_px; ++k) {
+    const double ui = u + object_side * (kInsidePx + k);
+    const double x = a.ImageX(s, ui), y = a.ImageY(s, ui);
+    if (!img.InsideForBilinear(x, y)) return false;
+    sum += img.Bilinear(x, y);
+  }
+  *level = sum / inside_px;
+  return true;
+}
+
+// The u within ±reach_px of `heading` where the edge's contrast across is largest (its contrast
+// in *contrast); false where a reading leaves the image.
+bool StrongestNear(const GreyImage& img, const AxisFrame& a, double s, double heading,
+                   double reach_px, int sign, double* u, double* contrast) {
+  *contrast = -1e30;
+  for (double du = -reach_px; du <= reach_px + 1e-9; du += kSearchStepPx) {
+    double c;
+    if (!ContrastAcross(img, a, s, heading + du, sign, kOffsetPx, &c)) return false;
+    if (c > *contrast) {
+      *contrast = c;
+      *u = heading + du;
+    }
+  }
   return true;
 }
 
 Curve Follow(const GreyImage& img, const AxisFrame& a, double u_start, double slope, int sign,
-             int object_side, double ref, double s_from, double max_steps) {
+             int object_side, double ref, double s_from, double max_steps, double width_px) {
   Curve out;
   out.s_end = s_from;
   double u = u_start, velocity = -slope;  // du per px going up
   int weak = 0;
   double strong_c = ref, first_weak_c = 0;
+  // The straight line fitted over the whole stretch lies inside a swell's curving outline where
+  // the following starts (4 px inside a 45 % swell, 90 px below the face). The level read inside
+  // the line there was 8 px inside the outline, where a lit strand is brighter than 4 px inside
+  // it (by 12 grey levels under ambient 0.63): once the following reached the outline, the
+  // level seemed to change and the edge ended. The following starts from the edge where it is.
+  // (Where no edge as strong as half its usual contrast lies within reach, or the reach leaves
+  // the image, from the line.)
+  const double start_reach_px =
+      std::clamp(kStartSearchWidths * width_px, kSearchPx, 2.0 * kSearchPx);
+  double start_u, start_c;
+  if (StrongestNear(img, a, s_from, u_start, start_reach_px, sign, &start_u, &start_c) &&
+      start_c >= 0.5 * ref)
+    u = start_u;
   // The strand's own level inside the edge: where it changes, the edge belongs to another
   // object (the nozzle's outline carries on from the strand's when the nozzle, like the strand,
-  // is darker or brighter than the background).
+  // is darker or brighter than the background). A mean across a few px: one px's noise (11 grey
+  // levels under JPEG) crossed 0.3 of the edge's contrast three px in a row along a follow of
+  // 90 px. No further than the strand's middle.
+  const int inside_px = std::clamp(static_cast<int>(0.5 * width_px - kInsidePx), 1, kInsideSpanPx);
   double inside_ref = 0;
-  if (!InsideLevel(img, a, s_from, u_start, object_side, &inside_ref)) return out;
+  if (!InsideLevel(img, a, s_from, u, object_side, inside_px, &inside_ref)) return out;
   for (int i = 1; i <= max_steps; ++i) {
     const double s = s_from - i;
     const double heading = u + velocity;
-    double best_u = heading, best_c = -1e30;
-    for (double du = -kSearchPx; du <= kSearchPx + 1e-9; du += kSearchStepPx) {
-      double c;
-      if (!ContrastAcross(img, a, s, heading + du, sign, kOffsetPx, &c)) return out;
-      if (c > best_c) {
-        best_c = c;
-        best_u = heading + du;
-      }
-    }
+    double best_u = heading, best_c;
+    if (!StrongestNear(img, a, s, heading, kSearchPx, sign, &best_u, &best_c)) return out;
     double inside = inside_ref;
-    InsideLevel(img, a, s, best_u, object_side, &inside);
+    InsideLevel(img, a, s, best_u, object_side, inside_px, &inside);
     if (best_c < 0.5 * ref || std::abs(inside - inside_ref) > 0.3 * ref) {
       if (weak == 0) first_weak_c = best_c;
       if (++weak >= kWeakSteps) {
@@ -250,15 +284,15 @@ TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0,
   TipTrace t;
   const double width = right_u0 - left_u0;
   const double max_steps = std::max(20.0, 2.0 * width);
-  const Curve l =
-      Follow(img, a, left_u0 + slope * s_from, slope, left_sign, +1, ref_l, s_from, max_steps);
-  const Curve r =
-      Follow(img, a, right_u0 + slope * s_from, slope, right_sign, -1, ref_r, s_from, max_steps);
+  const Curve l = Follow(img, a, left_u0 + slope * s_from, slope, left_sign, +1, ref_l, s_from,
+                         max_steps, width);
+  const Curve r = Follow(img, a, right_u0 + slope * s_from, slope, right_sign, -1, ref_r, s_from,
+                         max_steps, width);
   // An outline that runs on as far as it was followed (or out of the image) has no end here.
   t.runs_on = !l.ended && !r.ended;
   if (t.runs_on) return t;
   // A nozzle face ends both edges together; a hair or a flank that one edge ran into does not.
-  if (std::abs(l.s_end - r.s_end) > std::max(4.0, 0.14 * width)) return t;
+  if (std::abs(l.s_end - r.s_end) > MaxTipMismatchPx(width)) return t;
   t.found = true;
   t.s_tip_px = 0.5 * (l.s_end + r.s_end);
   t.widest_px = width;

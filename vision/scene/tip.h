@@ -1,5 +1,7 @@
 #pragma once
 
+#include <algorithm>
+
 #include "vision/edges/grey_image.h"
 
 namespace clogscope::vision {
@@ -25,6 +27,10 @@ struct TipTrace {
   // a face on one side did.
   double tip_sigma_px = -1;
 };
+
+// How far apart along the axis two ends of one strand's outline may lie and still be one tip:
+// a nozzle's face ends both edges together, square to a strand hanging up to ~8° off its axis.
+inline double MaxTipMismatchPx(double width_px) { return std::max(4.0, 0.14 * width_px); }
 
 // Follows the edges u = left_u0 + slope·s and right_u0 + slope·s of axis frame `a` upward (−s)
 // from s_from, each re-found every px within ±3 px of where its curve is heading, until its
