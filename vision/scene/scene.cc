@@ -328,12 +328,17 @@ bool Encloses(MeasureTarget target, const PairCandidate& outer, const PairCandid
   return outer.score >= (same_kind || opposite ? 0.3 : 0.8) * inner.score;
 }
 
+// Whether `b` lies inside `c`, parallel to it, and `c` could rival it as the strand.
+bool InsideARival(const PairCandidate& b, const PairCandidate& c) {
+  return Contains(c, b) && CouldRival(b, c) && Parallel(b, c);
+}
+
 // Whether a strand pair `b` may be the inside of the wider pair `c` of the other kind, one that
 // could rival it (a stripe or a lens's core inside a strand whose own pair is faint). Of its own
 // kind, such a pair is as often the strand and a hair beside it, paired across both (over eight
 // sets, 41 valid frames, each right, were doubted so).
 bool MayBeInsideOf(const PairCandidate& b, const PairCandidate& c) {
-  return OppositeKinds(b, c) && Contains(c, b) && CouldRival(b, c) && Parallel(b, c);
+  return OppositeKinds(b, c) && InsideARival(b, c);
 }
 
 // Rules out a pair lying inside a wider one, the object.
@@ -886,6 +891,13 @@ std::string ChoiceDoubtDetail(const SceneResult& r, int index, const StrandGeome
 
 namespace {
 
+// The frame is ambiguous: `rival` is as likely as the chosen pair, for the reason `detail`.
+void AsLikely(PairCandidate* rival, std::string detail, SceneResult* r) {
+  rival->Judge(PairVerdict::kAsLikely, "as likely as the chosen pair");
+  r->status = FrameStatus::kAmbiguous;
+  r->detail = std::move(detail);
+}
+
 // Follows the best candidates of one channel on its full-resolution image; the first that holds
 // up is chosen (or the frame is ambiguous, or nothing holds up: r.status says which, and why).
 void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* result) {
@@ -940,12 +952,11 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
     // bright stripe, 12.8 px at σ 0.5): the face read beside a pair inside another is the
     // other's inside, not the background, and does not decide.
     const auto inside_the_wider = [&] {
-      c.Judge(PairVerdict::kAsLikely, "as likely as the chosen pair");
-      r.status = FrameStatus::kAmbiguous;
-      r.detail = fmt::format(
-          "{} lies inside a wider strand-like pair that also holds up, {}: the strand may be the "
-          "wider one",
-          Describe(b), Describe(c));
+      AsLikely(&c,
+               fmt::format("{} lies inside a wider strand-like pair that also holds up, {}: the "
+                           "strand may be the wider one",
+                           Describe(b), Describe(c)),
+               &r);
     };
     // One of its own kind, too, where it hangs clearly from the face as a strand does and lies
     // clear of both its edges: a lit strand whose faint shaded rims scored 13 % of its bright
@@ -954,8 +965,8 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
     // edge line, the strand's edge paired with a lamp's spot beyond its other (8 right valid
     // frames of 26 sets).
     if (o.target == MeasureTarget::kStrand && c.polarity == b.polarity &&
-        c.polarity != Polarity::kMixed && Contains(c, b) && !OnAnEdgeLineOf(b, c) &&
-        CouldRival(b, c) && Parallel(b, c) && HangsFromFace(g, o)) {
+        c.polarity != Polarity::kMixed && InsideARival(b, c) && !OnAnEdgeLineOf(b, c) &&
+        HangsFromFace(g, o)) {
       inside_the_wider();
       return;
     }
@@ -974,9 +985,7 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
       for (const auto& [k, kg] : r.runners_up) {
         const PairContest again = ContestPairs(c, g, r.candidates[k], kg, o);
         if (!Ambiguous(again)) continue;
-        r.candidates[k].Judge(PairVerdict::kAsLikely, "as likely as the chosen pair");
-        r.status = FrameStatus::kAmbiguous;
-        r.detail = AmbiguityDetail(again, c, r.candidates[k]);
+        AsLikely(&r.candidates[k], AmbiguityDetail(again, c, r.candidates[k]), &r);
         return;
       }
       continue;
@@ -995,9 +1004,7 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
       continue;
     }
     if (Ambiguous(contest)) {
-      c.Judge(PairVerdict::kAsLikely, "as likely as the chosen pair");
-      r.status = FrameStatus::kAmbiguous;
-      r.detail = AmbiguityDetail(contest, b, c);
+      AsLikely(&c, AmbiguityDetail(contest, b, c), &r);
       return;
     }
     c.Judge(PairVerdict::kOutscored,
