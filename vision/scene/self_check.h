@@ -34,6 +34,20 @@ SelfCheck CheckNoEdgeJustOutside(const GreyImage& img, const AxisFrame& f, doubl
                                  double left_u0, double right_u0, double slope, double blur_px,
                                  double min_step);
 
+// Reads the band's inside across u, from 3 blurs and 2 px inside one edge to as far inside the
+// other (each px the median over the band's rows, as above), against the background read just
+// outside both edges (a straight line between the two: a background's gradient), the object's
+// contrast the larger of the two ends' (nothing judged below min_step): fails when a run of it
+// at the background's level has the object's body on one side and, on the other, only a thin
+// part on the same side of the background that nowhere reaches half the contrast. That is the
+// background between two objects, a hair beside the strand paired with it, too thin and blurred
+// for the search's coarse scale to see the gap (and thick or sharp enough for its blurred tail to
+// reach past 3 blurs and 2 px inside its edge). With the body on both sides the run may be a
+// stripe inside one object: not judged here.
+SelfCheck CheckInsideIsOneObject(const GreyImage& img, const AxisFrame& f, double s0, double s1,
+                                 double left_u0, double right_u0, double slope, double blur_px,
+                                 double min_step);
+
 // The calipers' residual RMS of each edge's fit (grey levels): fails when one edge's median is
 // more than twice the other's and more than 1.5 grey levels above it (the noise is the frame's on
 // both sides).

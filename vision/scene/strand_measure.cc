@@ -334,6 +334,10 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
         CheckOutsideIsBackground(img, g.axis, m.band_start_px, m.band_end_px, m.left_u0_px,
                                  m.right_u0_px, m.edge_slope, m.blur_px);
     if (check.passed)
+      check = CheckInsideIsOneObject(img, g.axis, m.band_start_px, m.band_end_px, m.left_u0_px,
+                                     m.right_u0_px, m.edge_slope, m.blur_px,
+                                     MinContrastLevel(opt, data_max));
+    if (check.passed)
       check = CheckNoEdgeJustOutside(img, g.axis, m.band_start_px, m.band_end_px, m.left_u0_px,
                                      m.right_u0_px, m.edge_slope, m.blur_px,
                                      MinContrastLevel(opt, data_max));
