@@ -157,7 +157,14 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   // on with the new windows and model; once taken, for good. Windows stopping short of a lens's
   // core 11.5 px inside at a blur of 2.7 px held 1.4 blurs of the rim, and each edge came out
   // 0.09 px outward (decided at 2.7, 0.015 px). (Not, after the first guess, for a narrow stripe,
-  // next: a 29 px strand's 5 px stripe at a blur of 2.5 px left no caliper with both edges.)
+  // next: a 29 px strand's 5 px stripe at a blur of 2.5 px left no caliper with both edges. But a
+  // core across the middle, whose far side lies past it, is, with the inner step alone: the
+  // window stops at the middle, where the far side's blur may still reach (2 blurs from it in a
+  // 32 px lens: a window short of that blur held too little of the core to fit it at all, and
+  // one to the middle is within 0.05 px without noise). Windows left short of a 32 px
+  // lens's core 10 px inside, at a fitted blur of 2.7 px, held one blur of the rim, and the width
+  // came out 0.4 px wide in three frames of four, valid at sigma 0.06-0.08. At the first
+  // guess such a core already in reach is still taken as a stripe: not looked at.)
   // A stripe so narrow that such a window would reach its far side's blur too: the window takes
   // in the whole stripe, a box of the same blur.
   bool inner_step[2] = {false, false}, inner_stripe[2] = {false, false};
@@ -168,6 +175,16 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     *stripe = *step && std::isfinite(inner_far_px[side]) &&
               inner_far_px[side] - 2.5 * sigma_guess - 1.0 <
                   inner_edge_px[side] + 2.5 * sigma_guess + 2.0;
+  };
+  // A core across the middle: both its sides a blur or more from it, and kMinCoreBlurs wide (a
+  // lens's core, 11-12.5 px in 32-35 px lenses at blurs of 2.7-2.9 px; a narrow stripe by the
+  // middle, 3 px in a dark 27 px strand at a blur of 2.5 px and read 6.5 px wide, is no plateau
+  // to fit: that strand's calipers found no edges so).
+  constexpr double kMinCoreBlurs = 3.0;
+  const auto core_across_middle = [&](int side) {
+    return inner_edge_px[side] < 0.5 * width0 - sigma_guess &&
+           inner_far_px[side] > 0.5 * width0 + sigma_guess &&
+           inner_far_px[side] - inner_edge_px[side] >= kMinCoreBlurs * sigma_guess;
   };
   for (int side = 0; side < 2; ++side) {
     inner_reach(side, &inner_step[side], &inner_stripe[side]);
@@ -360,7 +377,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     for (int side = 0; side < 2 && redecide; ++side) {
       bool step, stripe;
       inner_reach(side, &step, &stripe);
-      if (inner_step[side] || !step || stripe) continue;
+      if (inner_step[side] || !step || (stripe && !core_across_middle(side))) continue;
       inner_step[side] = now_inner_step = true;
       shade[side] = 0;
     }
