@@ -92,6 +92,16 @@ TEST(AdversarialTest, ALensCoreAcrossTheMiddleIsFittedWithItsRim) {
   }
 }
 
+TEST(AdversarialTest, ACoreTooNarrowToFitIsLeftAsItWas) {
+  // Where a core's near step cannot be fitted at the middle, the windows stay short of it: a
+  // 34 px lens whose 8 px core lies 13 px inside at a blur of 2.4 px (4 px of it within reach of
+  // the middle: no caliper found both edges with it), and a dark 27 px strand whose 3 px stripe,
+  // blurred to 6.5 px, lies by the middle (no plateau to fit). Both were valid and right, and
+  // became `occluded` when their cores were fitted.
+  ExpectMatrixFramesValidAndRight(RandomAdversarialScene(TroubleClass::kBacklitLens, 7103));
+  ExpectMatrixFramesValidAndRight(RandomAdversarialScene(TroubleClass::kSpecularStripe, 4012));
+}
+
 // A tip in doubt leaves the mean of a changing width in doubt: such a frame may be refused as
 // imprecise, with a σ that covers its error (checked here). False: the frame is to be judged.
 bool RefusedAsImprecise(const vision::StrandMeasurement& m, const AdversarialTruth& t,

@@ -246,6 +246,17 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   // the fitted blur; a badly blurred frame needs a few widenings before its fit sees the whole
   // edge.
   constexpr int kMaxPasses = 4;
+  // A core across the middle is tried once, as the only change for a pass, and kept unless too
+  // few calipers fit both edges with it for a width (its plateau may be too narrow for the window
+  // that stops at the middle: a 34 px lens's 8 px core, 4 px of it in reach at a blur of 2.4 px,
+  // left no caliper with both edges): what the pass before it fitted, and how.
+  struct CoreTrial {
+    bool tried = false, pending = false;
+    std::vector<CaliperFit> fits;
+    double left_guess = 0, right_guess = 0, slope_guess = 0, sigma_guess = 0;
+    int shade[2] = {0, 0}, total_samples = 0, total_saturated = 0, consistent = 0;
+    bool inner_step[2] = {false, false}, border = false;
+  } core;
   for (int pass = 0; pass < kMaxPasses && !from_memory; ++pass) {
     double outer = std::max(6.5, 3.0 * sigma_guess + 2.5);
     // A guess from the scene (a gradient peak) lies inside a shaded silhouette by a few px: the
@@ -348,6 +359,20 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
         (side == 0 ? cf.left : cf.right) = side == 0 ? cf.left_shaded : cf.right_shaded;
     }
     const EdgeLines lines = FitEdgeLines(fits, band_s0, opt.caliper_spacing_px);
+    if (core.pending) {
+      core.pending = false;
+      if (lines.calipers < std::min<double>(core.consistent, min_used)) {
+        fits = core.fits;
+        left_guess = core.left_guess, right_guess = core.right_guess;
+        slope_guess = core.slope_guess, sigma_guess = core.sigma_guess;
+        total_samples = core.total_samples, total_saturated = core.total_saturated;
+        border = core.border;
+        per_edge_consistent = core.consistent;
+        for (int side = 0; side < 2; ++side)
+          shade[side] = core.shade[side], inner_step[side] = core.inner_step[side];
+        break;
+      }
+    }
     per_edge_consistent = lines.calipers;
     if (lines.calipers < 2) {
       // No edge fitted: perhaps blur far wider than the window. Widen and look again.
@@ -373,11 +398,28 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     sigma_guess = widen ? std::max(new_sigma, 0.6 * outer) : new_sigma;
     // At the blur fitted (not at a widened guess), while a pass remains to use it.
     const bool redecide = pass + 1 < kMaxPasses && !widen;
+    bool core_now[2] = {false, false};
+    for (int side = 0; side < 2 && redecide && !core.tried && !recentre; ++side) {
+      bool step, stripe;
+      inner_reach(side, &step, &stripe);
+      core_now[side] = !inner_step[side] && step && stripe && core_across_middle(side);
+    }
+    if (core_now[0] || core_now[1]) {
+      core.tried = core.pending = true;
+      core.fits = fits;
+      core.left_guess = left_guess, core.right_guess = right_guess;
+      core.slope_guess = slope_guess, core.sigma_guess = sigma_guess;
+      core.total_samples = total_samples, core.total_saturated = total_saturated;
+      core.border = border;
+      core.consistent = lines.calipers;
+      for (int side = 0; side < 2; ++side)
+        core.shade[side] = shade[side], core.inner_step[side] = inner_step[side];
+    }
     bool now_inner_step = false;
     for (int side = 0; side < 2 && redecide; ++side) {
       bool step, stripe;
       inner_reach(side, &step, &stripe);
-      if (inner_step[side] || !step || (stripe && !core_across_middle(side))) continue;
+      if (inner_step[side] || !step || (stripe && !core_now[side])) continue;
       inner_step[side] = now_inner_step = true;
       shade[side] = 0;
     }
