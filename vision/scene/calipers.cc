@@ -398,11 +398,11 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     sigma_guess = widen ? std::max(new_sigma, 0.6 * outer) : new_sigma;
     // At the blur fitted (not at a widened guess), while a pass remains to use it.
     const bool redecide = pass + 1 < kMaxPasses && !widen;
-    bool core_now[2] = {false, false};
-    for (int side = 0; side < 2 && redecide && !core.tried && !recentre; ++side) {
-      bool step, stripe;
-      inner_reach(side, &step, &stripe);
-      core_now[side] = !inner_step[side] && step && stripe && core_across_middle(side);
+    bool step[2] = {false, false}, stripe[2] = {false, false}, core_now[2] = {false, false};
+    for (int side = 0; side < 2 && redecide; ++side) {
+      inner_reach(side, &step[side], &stripe[side]);
+      core_now[side] = !core.tried && !recentre && !inner_step[side] && step[side] &&
+                       stripe[side] && core_across_middle(side);
     }
     if (core_now[0] || core_now[1]) {
       core.tried = core.pending = true;
@@ -417,9 +417,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
     }
     bool now_inner_step = false;
     for (int side = 0; side < 2 && redecide; ++side) {
-      bool step, stripe;
-      inner_reach(side, &step, &stripe);
-      if (inner_step[side] || !step || (stripe && !core_now[side])) continue;
+      if (inner_step[side] || !step[side] || (stripe[side] && !core_now[side])) continue;
       inner_step[side] = now_inner_step = true;
       shade[side] = 0;
     }

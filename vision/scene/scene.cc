@@ -303,6 +303,11 @@ bool OppositeKinds(const PairCandidate& a, const PairCandidate& b) {
          (a.polarity == Polarity::kDarkOnBright && b.polarity == Polarity::kBrightOnDark);
 }
 
+// Whether two pairs are both bright on dark or both dark on bright (not mixed).
+bool SameKind(const PairCandidate& a, const PairCandidate& b) {
+  return a.polarity == b.polarity && a.polarity != Polarity::kMixed;
+}
+
 // Whether `inner` lies across the axis inside `outer`, a wider pair, or shares one edge with it
 // and lies inside with the other (half a highlight stripe with the strand's far edge; a shading
 // ridge with the other silhouette).
@@ -964,9 +969,8 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
     // not hang so is as often the strand and a hair beside it, paired across both; one on its
     // edge line, the strand's edge paired with a lamp's spot beyond its other (8 right valid
     // frames of 26 sets).
-    if (o.target == MeasureTarget::kStrand && c.polarity == b.polarity &&
-        c.polarity != Polarity::kMixed && InsideARival(b, c) && !OnAnEdgeLineOf(b, c) &&
-        HangsFromFace(g, o)) {
+    if (o.target == MeasureTarget::kStrand && SameKind(b, c) && InsideARival(b, c) &&
+        !OnAnEdgeLineOf(b, c) && HangsFromFace(g, o)) {
       inside_the_wider();
       return;
     }

@@ -53,6 +53,16 @@ std::vector<double> Strip(const GreyImage& img, const AxisFrame& f, double s0, d
 
 double InsetPx(double blur_px) { return kInsetBlurs * blur_px + kInsetPx; }
 
+// The background's level just outside the edge at u0 + slope·s (`dir` outward), from inset_px
+// over kNearPx; false where the frame's border leaves too little of it.
+bool NearBackground(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
+                    double slope, double inset_px, double dir, double* level) {
+  const std::vector<double> near = Strip(img, f, s0, s1, u0, slope, inset_px, dir, kNearPx);
+  if (near.size() < 2) return false;
+  *level = Median(near);
+  return true;
+}
+
 }  // namespace
 
 SelfCheck CheckOutsideIsBackground(const GreyImage& img, const AxisFrame& f, double s0, double s1,
@@ -80,10 +90,10 @@ SelfCheck CheckOutsideIsBackground(const GreyImage& img, const AxisFrame& f, dou
   double background[2];
   for (int side = 0; side < 2; ++side) {
     const double u0 = side == 0 ? left_u0 : right_u0, dir = side == 0 ? -1.0 : 1.0;
-    const std::vector<double> near = Strip(img, f, s0, s1, u0, slope, gap, dir, kNearPx);
     const std::vector<double> far = Strip(img, f, s0, s1, u0, slope, gap, dir, reach);
-    if (near.size() < 2 || far.size() < 10) return out;  // the frame's border: not judged here
-    background[side] = Median(near);
+    // The frame's border: not judged here.
+    if (!NearBackground(img, f, s0, s1, u0, slope, gap, dir, &background[side]) || far.size() < 10)
+      return out;
     const double step = std::abs(object - background[side]);
     if (step <= 0) continue;
     long object_like = 0;
@@ -129,17 +139,16 @@ SelfCheck CheckInsideIsOneObject(const GreyImage& img, const AxisFrame& f, doubl
   if (!(width_px >= 2 * inset_px + gap_run_px + 2)) return out;
   const std::vector<double> inside =
       Strip(img, f, s0, s1, left_u0, slope, inset_px, +1, width_px - 2 * inset_px);
-  const std::vector<double> near_l = Strip(img, f, s0, s1, left_u0, slope, inset_px, -1, kNearPx);
-  const std::vector<double> near_r = Strip(img, f, s0, s1, right_u0, slope, inset_px, +1, kNearPx);
   const int n = static_cast<int>(inside.size());
+  double bg_l, bg_r;
   // Strip drops a distance the frame's border cuts: then its px no longer map to distances.
-  if (near_l.size() < 2 || near_r.size() < 2 ||
+  if (!NearBackground(img, f, s0, s1, left_u0, slope, inset_px, -1, &bg_l) ||
+      !NearBackground(img, f, s0, s1, right_u0, slope, inset_px, +1, &bg_r) ||
       n != static_cast<int>(std::floor(width_px - 2 * inset_px)) + 1)
     return out;
   // The background's levels where they were read, the middle of each near strip, and a straight
   // line between them (a gradient); inside[k] lies inset_px + k px inside the left edge.
   const double at_l = -(inset_px + 0.5 * kNearPx), at_r = width_px + inset_px + 0.5 * kNearPx;
-  const double bg_l = Median(near_l), bg_r = Median(near_r);
   const auto background = [&](int k) {
     return bg_l + (bg_r - bg_l) * (inset_px + k - at_l) / (at_r - at_l);
   };
