@@ -130,6 +130,15 @@ TEST(AdversarialTest, AStripeWithTheStrandsOutlineJustOutsideItIsNotTheStrand) {
   ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kSpecularStripe, 523));
 }
 
+TEST(AdversarialTest, AStripeOnALitStrandWhosePairFailedIsNotTheObject) {
+  // A lit 86 px strand, the lamp 33° off: its lit side 75 grey levels on a background of 20, its
+  // shaded side falling to 45, and a 9.5 px stripe 140 levels above it. The strand's own pair
+  // faded along its shaded edge (too weak, or no tip in line), and the stripe stood alone: 9.3 px,
+  // valid at sigma 0.09-0.10 in two frames of four. Read outward from the stripe, both sides step
+  // on to the background's level: it lies on a wider object.
+  ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kSpecularStripe, 7710));
+}
+
 TEST(AdversarialTest, AStripeAtADarkStrandsRimIsNotTheObject) {
   // A dark 46 px strand (50 grey levels on a background of 112) whose bright stripe, 9 px wide
   // and 45 above the background, lies at its left rim: the stripe was measured as a bright

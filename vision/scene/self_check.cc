@@ -30,6 +30,16 @@ constexpr double kOutsideEdgeBlurs = 2.5, kOutsideEdgePx = 4.0;
 // kGapLevelShare of it. (A narrow stripe at the background's level, blurred, peaks there: a dark
 // 41 px strand's stripe 8 px inside its edge read so over 3-4 px at a blur of 1.6 px.)
 constexpr double kGapLevelBand = 0.25, kGapLevelShare = 0.1, kMinGapPx = 3.0, kMinGapBlurs = 3.0;
+// A wider object around the silhouette: each side's outside read on to kWiderReachWidths times its
+// width, for a step of at least the least contrast to a farther level that holds over two plateaus
+// of kPlateauBlurs blurs (and kMinPlateauPx px) each, sharp as an edge (from a quarter to three
+// quarters of it within kSharpBlurs blurs and kSharpPx px), the two sides' farther levels within
+// kFarLevelMismatch of the smaller step.
+constexpr double kWiderReachWidths = 12.0, kPlateauBlurs = 3.0, kMinPlateauPx = 6.0;
+constexpr double kSharpBlurs = 3.0, kSharpPx = 4.0, kFarLevelMismatch = 0.5;
+// Its edge parallel to the object's: in the band's two halves within kParallelBlurs blurs and
+// kParallelPx px of one distance.
+constexpr double kParallelBlurs = 1.0, kParallelPx = 2.0;
 // One edge's residuals this many times the other's, and by this many grey levels.
 constexpr double kMaxResidualRatio = 2.0, kMinResidualExcess = 1.5;
 
@@ -61,6 +71,45 @@ bool NearBackground(const GreyImage& img, const AxisFrame& f, double s0, double 
   if (near.size() < 2) return false;
   *level = Median(near);
   return true;
+}
+
+// A step in `strip` (read outward from the near background, at level `near`) to a farther level
+// that holds (kPlateauBlurs), sharp as an edge (kSharpBlurs): the farther level and where its
+// step lies, or false.
+struct StepBeyond {
+  double level = 0, distance_px = 0;
+};
+bool FindStepBeyond(const std::vector<double>& strip, double near, double blur_px, double min_step,
+                    StepBeyond* out) {
+  const int plateau = static_cast<int>(std::ceil(std::max(kMinPlateauPx, kPlateauBlurs * blur_px)));
+  const int n = static_cast<int>(strip.size());
+  const auto median_of = [&](int from) {
+    return Median(std::vector<double>(strip.begin() + from, strip.begin() + from + plateau));
+  };
+  for (int i = 0; i + 2 * plateau <= n; ++i) {
+    const double first = median_of(i) - near;
+    if (std::abs(first) < min_step) continue;
+    // Past the step, a plateau on the same side at least as far: not a thin object (a hair).
+    const double far = median_of(i + plateau);
+    const double step = far - near;
+    if (std::abs(step) < min_step || step * first <= 0) continue;
+    // Where the outside crosses three quarters of the step, 3 px running means, and the last
+    // place before it below a quarter: a background's slow fall (a vignette) is no edge.
+    const auto share = [&](int j) {
+      const double mean =
+          (strip[std::max(j - 1, 0)] + strip[j] + strip[std::min(j + 1, n - 1)]) / 3;
+      return (mean - near) / step;
+    };
+    int j75 = 0;
+    while (j75 < i + 2 * plateau - 1 && share(j75) < 0.75) ++j75;
+    int j25 = j75;
+    while (j25 > 0 && share(j25) >= 0.25) --j25;
+    if (j75 - j25 > kSharpBlurs * blur_px + kSharpPx) return false;
+    out->level = far;
+    out->distance_px = 0.5 * (j25 + j75);
+    return true;
+  }
+  return false;
 }
 
 }  // namespace
@@ -216,6 +265,69 @@ SelfCheck CheckNoEdgeJustOutside(const GreyImage& img, const AxisFrame& f, doubl
       return out;
     }
   }
+  return out;
+}
+
+SelfCheck CheckNotOnAWiderObject(const GreyImage& img, const AxisFrame& f, double s0, double s1,
+                                 double left_u0, double right_u0, double slope, double blur_px,
+                                 double min_step) {
+  SelfCheck out;
+  const double width_px = right_u0 - left_u0;
+  const double inset_px = InsetPx(blur_px);
+  if (!(width_px > 0)) return out;
+  // Which side of its outside the object lies: along its middle, however thin (blurred, it still
+  // departs that way).
+  const std::vector<double> middle =
+      Strip(img, f, s0, s1, left_u0, slope, 0.5 * width_px - 0.5, +1, 1.0);
+  if (middle.size() < 2) return out;
+  const double object = Median(middle);
+  const double reach_px = std::max(kMinReachPx, kWiderReachWidths * width_px);
+  double near[2];
+  StepBeyond beyond[2];
+  for (int side = 0; side < 2; ++side) {
+    const double u0 = side == 0 ? left_u0 : right_u0, dir = side == 0 ? -1.0 : 1.0;
+    if (!NearBackground(img, f, s0, s1, u0, slope, inset_px, dir, &near[side])) return out;
+    const std::vector<double> strip = Strip(img, f, s0, s1, u0, slope, inset_px, dir, reach_px);
+    if (!FindStepBeyond(strip, near[side], blur_px, min_step, &beyond[side])) return out;
+  }
+  const double step_l = beyond[0].level - near[0], step_r = beyond[1].level - near[1];
+  // The near levels on one side of the farther ones, which are one background.
+  if (step_l * step_r <= 0 || std::abs(beyond[0].level - beyond[1].level) >
+                                  kFarLevelMismatch * std::min(std::abs(step_l), std::abs(step_r)))
+    return out;
+  // A dark object on a bright field ringed by dark is a silhouette on a backlight's disc (or in a
+  // microscope's vignette): not judged. A bright one on a lit body (a highlight on a lit strand),
+  // or on a dark body against a bright background (on a dark strand), is a stripe; as is a dark
+  // one on a body darker than the background.
+  const bool object_dark = object < 0.5 * (near[0] + near[1]);
+  if (object_dark && step_l < 0) return out;
+  // An edge parallel to the object's, on at least one side: in each half of the band, at the same
+  // distance. (A background's texture brighter around a strand steps where its blobs end, 18 px
+  // out over part of the band and elsewhere over the rest. A lit strand's shaded edge may fade in
+  // one half.)
+  const double mid = 0.5 * (s0 + s1);
+  bool parallel = false;
+  for (int side = 0; side < 2 && !parallel; ++side) {
+    const double u0 = side == 0 ? left_u0 : right_u0, dir = side == 0 ? -1.0 : 1.0;
+    StepBeyond half[2];
+    bool found = true;
+    for (int h = 0; h < 2 && found; ++h) {
+      const std::vector<double> part =
+          Strip(img, f, h == 0 ? s0 : mid, h == 0 ? mid : s1, u0, slope, inset_px, dir, reach_px);
+      found = FindStepBeyond(part, near[side], blur_px, min_step, &half[h]) &&
+              (half[h].level - near[side]) * (beyond[side].level - near[side]) > 0;
+    }
+    parallel = found && std::abs(half[0].distance_px - half[1].distance_px) <=
+                            std::max(kParallelPx, kParallelBlurs * blur_px);
+  }
+  if (!parallel) return out;
+  out.passed = false;
+  out.why = fmt::format(
+      "it lies on a wider object: outside both its edges the level ({:.0f} and {:.0f} grey "
+      "levels) steps on to the background's ({:.0f} and {:.0f}) {:.0f} and {:.0f} px out (a "
+      "stripe inside the strand measured as the object)",
+      near[0], near[1], beyond[0].level, beyond[1].level, inset_px + beyond[0].distance_px,
+      inset_px + beyond[1].distance_px);
   return out;
 }
 

@@ -337,6 +337,12 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
       check = CheckInsideIsOneObject(img, g.axis, m.band_start_px, m.band_end_px, m.left_u0_px,
                                      m.right_u0_px, m.edge_slope, m.blur_px,
                                      MinContrastLevel(opt, data_max));
+    // Reads far out from both edges (up to 12 widths): not on a tracked frame, whose edges follow
+    // a frame that passed it (a width that moves sends the frame afresh).
+    if (check.passed && !g.precise)
+      check = CheckNotOnAWiderObject(img, g.axis, m.band_start_px, m.band_end_px, m.left_u0_px,
+                                     m.right_u0_px, m.edge_slope, m.blur_px,
+                                     MinContrastLevel(opt, data_max));
     if (check.passed)
       check = CheckNoEdgeJustOutside(img, g.axis, m.band_start_px, m.band_end_px, m.left_u0_px,
                                      m.right_u0_px, m.edge_slope, m.blur_px,
