@@ -31,14 +31,17 @@ constexpr double kOutsideEdgeBlurs = 2.5, kOutsideEdgePx = 4.0;
 // 41 px strand's stripe 8 px inside its edge read so over 3-4 px at a blur of 1.6 px.)
 constexpr double kGapLevelBand = 0.25, kGapLevelShare = 0.1, kMinGapPx = 3.0, kMinGapBlurs = 3.0;
 // A wider object around the silhouette: each side's outside read on to kWiderReachWidths times its
-// width, for a step of at least the least contrast to a farther level that holds over two plateaus
-// of kPlateauBlurs blurs (and kMinPlateauPx px) each, sharp as an edge (from a quarter to three
-// quarters of it within kSharpBlurs blurs and kSharpPx px), the two sides' farther levels within
-// kFarLevelMismatch of the smaller step.
+// width (a stripe down to a twelfth of its strand's width; the matrix draws them from a twentieth
+// to 0.3), and kMinReachPx at least, for a step of at least the least contrast to a farther level
+// over two plateaus of the larger of kPlateauBlurs blurs and kMinPlateauPx px, sharp as an edge
+// (from a quarter to three quarters of it within kSharpBlurs blurs plus kSharpPx px), the two
+// sides' farther levels within kFarLevelMismatch of the smaller step. The farther level holds
+// beyond, within kHeldShare of the step, over kMinHeldFraction of the wider object's width.
 constexpr double kWiderReachWidths = 12.0, kPlateauBlurs = 3.0, kMinPlateauPx = 6.0;
 constexpr double kSharpBlurs = 3.0, kSharpPx = 4.0, kFarLevelMismatch = 0.5;
-// Its edge parallel to the object's: in the band's two halves within kParallelBlurs blurs and
-// kParallelPx px of one distance.
+constexpr double kHeldShare = 0.5, kMinHeldFraction = 0.8;
+// Its edge parallel to the object's: in the band's two halves within the larger of kParallelBlurs
+// blurs and kParallelPx px of one distance.
 constexpr double kParallelBlurs = 1.0, kParallelPx = 2.0;
 // One edge's residuals this many times the other's, and by this many grey levels.
 constexpr double kMaxResidualRatio = 2.0, kMinResidualExcess = 1.5;
@@ -74,14 +77,18 @@ bool NearBackground(const GreyImage& img, const AxisFrame& f, double s0, double 
 }
 
 // A step in `strip` (read outward from the near background, at level `near`) to a farther level
-// that holds (kPlateauBlurs), sharp as an edge (kSharpBlurs): the farther level and where its
-// step lies, or false.
+// that holds over a plateau (kPlateauBlurs) past another as far from `near` as the least contrast,
+// sharp as an edge (kSharpBlurs): the farther level and where its step lies, or false. A slow fall
+// first (a background's gradient, a lit strand's shading toward its rim) leaves nothing judged.
 struct StepBeyond {
   double level = 0, distance_px = 0;
 };
+int PlateauPx(double blur_px) {
+  return static_cast<int>(std::ceil(std::max(kMinPlateauPx, kPlateauBlurs * blur_px)));
+}
 bool FindStepBeyond(const std::vector<double>& strip, double near, double blur_px, double min_step,
                     StepBeyond* out) {
-  const int plateau = static_cast<int>(std::ceil(std::max(kMinPlateauPx, kPlateauBlurs * blur_px)));
+  const int plateau = PlateauPx(blur_px);
   const int n = static_cast<int>(strip.size());
   const auto median_of = [&](int from) {
     return Median(std::vector<double>(strip.begin() + from, strip.begin() + from + plateau));
@@ -89,22 +96,23 @@ bool FindStepBeyond(const std::vector<double>& strip, double near, double blur_p
   for (int i = 0; i + 2 * plateau <= n; ++i) {
     const double first = median_of(i) - near;
     if (std::abs(first) < min_step) continue;
-    // Past the step, a plateau on the same side at least as far: not a thin object (a hair).
+    // Past the step, a plateau on the same side and as far: not a thin object (a hair).
     const double far = median_of(i + plateau);
     const double step = far - near;
     if (std::abs(step) < min_step || step * first <= 0) continue;
-    // Where the outside crosses three quarters of the step, 3 px running means, and the last
-    // place before it below a quarter: a background's slow fall (a vignette) is no edge.
+    // Where the outside crosses three quarters of the step (3 px running means), near the
+    // plateaus, and the last place before it below a quarter.
     const auto share = [&](int j) {
       const double mean =
           (strip[std::max(j - 1, 0)] + strip[j] + strip[std::min(j + 1, n - 1)]) / 3;
       return (mean - near) / step;
     };
-    int j75 = 0;
+    int j75 = std::max(0, i - plateau);
     while (j75 < i + 2 * plateau - 1 && share(j75) < 0.75) ++j75;
+    if (share(j75) < 0.75) continue;
     int j25 = j75;
     while (j25 > 0 && share(j25) >= 0.25) --j25;
-    if (j75 - j25 > kSharpBlurs * blur_px + kSharpPx) return false;
+    if (share(j25) >= 0.25 || j75 - j25 > kSharpBlurs * blur_px + kSharpPx) return false;
     out->level = far;
     out->distance_px = 0.5 * (j25 + j75);
     return true;
@@ -270,17 +278,11 @@ SelfCheck CheckNoEdgeJustOutside(const GreyImage& img, const AxisFrame& f, doubl
 
 SelfCheck CheckNotOnAWiderObject(const GreyImage& img, const AxisFrame& f, double s0, double s1,
                                  double left_u0, double right_u0, double slope, double blur_px,
-                                 double min_step) {
+                                 double min_step, bool object_dark) {
   SelfCheck out;
   const double width_px = right_u0 - left_u0;
   const double inset_px = InsetPx(blur_px);
   if (!(width_px > 0)) return out;
-  // Which side of its outside the object lies: along its middle, however thin (blurred, it still
-  // departs that way).
-  const std::vector<double> middle =
-      Strip(img, f, s0, s1, left_u0, slope, 0.5 * width_px - 0.5, +1, 1.0);
-  if (middle.size() < 2) return out;
-  const double object = Median(middle);
   const double reach_px = std::max(kMinReachPx, kWiderReachWidths * width_px);
   double near[2];
   StepBeyond beyond[2];
@@ -299,8 +301,22 @@ SelfCheck CheckNotOnAWiderObject(const GreyImage& img, const AxisFrame& f, doubl
   // microscope's vignette): not judged. A bright one on a lit body (a highlight on a lit strand),
   // or on a dark body against a bright background (on a dark strand), is a stripe; as is a dark
   // one on a body darker than the background.
-  const bool object_dark = object < 0.5 * (near[0] + near[1]);
   if (object_dark && step_l < 0) return out;
+  // The farther level is the background: it holds beyond the step for as wide as the wider object
+  // would be (or to the frame's border). Neighbours of one level on both sides (a bright strand
+  // between two others, on a dark background) end sooner.
+  const int plateau = PlateauPx(blur_px);
+  const double wider_px = width_px + 2 * inset_px + beyond[0].distance_px + beyond[1].distance_px;
+  for (int side = 0; side < 2; ++side) {
+    const double u0 = side == 0 ? left_u0 : right_u0, dir = side == 0 ? -1.0 : 1.0;
+    const std::vector<double> far = Strip(
+        img, f, s0, s1, u0, slope, inset_px + beyond[side].distance_px + plateau, dir, wider_px);
+    if (static_cast<int>(far.size()) < 2 * plateau) return out;
+    const double step = std::abs(beyond[side].level - near[side]);
+    long held = 0;
+    for (double v : far) held += std::abs(v - beyond[side].level) <= kHeldShare * step;
+    if (held < kMinHeldFraction * far.size()) return out;
+  }
   // An edge parallel to the object's, on at least one side: in each half of the band, at the same
   // distance. (A background's texture brighter around a strand steps where its blobs end, 18 px
   // out over part of the band and elsewhere over the rest. A lit strand's shaded edge may fade in

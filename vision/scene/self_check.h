@@ -48,16 +48,17 @@ SelfCheck CheckInsideIsOneObject(const GreyImage& img, const AxisFrame& f, doubl
                                  double left_u0, double right_u0, double slope, double blur_px,
                                  double min_step);
 
-// Reads each side's outside on past the near background, out to 12 times the width (each px the
-// median over the band's rows): fails when both sides step, sharply as an edge, to a farther level
-// that holds, one background's on both sides, with the near levels on one side of it, and on one
-// side at least at one distance in both halves of the band (parallel to the object). Then the
-// silhouette lies on a wider object: a stripe inside the strand measured as the object, the
-// strand's body on both sides of it. A dark object on a bright field ringed by dark (a backlight's
-// disc, a microscope's vignette) is not judged.
+// Reads each side's outside on past the near background, out to 12 times the width (20 px at
+// least; each px the median over the band's rows): fails when both sides step, sharply as an edge,
+// to a farther level that holds beyond for the wider object's width, one background's on both
+// sides, with the near levels on one side of it, and on one side at least at one distance in both
+// halves of the band (parallel to the object). Then the silhouette lies on a wider object: a
+// stripe inside the strand measured as the object, the strand's body on both sides of it.
+// `object_dark`: the silhouette is darker than its outside; one on a bright field ringed by dark
+// (a backlight's disc, a microscope's vignette) is not judged.
 SelfCheck CheckNotOnAWiderObject(const GreyImage& img, const AxisFrame& f, double s0, double s1,
                                  double left_u0, double right_u0, double slope, double blur_px,
-                                 double min_step);
+                                 double min_step, bool object_dark);
 // The calipers' residual RMS of each edge's fit (grey levels): fails when one edge's median is
 // more than twice the other's and more than 1.5 grey levels above it (the noise is the frame's on
 // both sides).

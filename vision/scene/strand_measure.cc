@@ -338,11 +338,12 @@ StrandMeasurement MeasureInScene(const cv::Mat& channel, double data_max, FrameS
                                      m.right_u0_px, m.edge_slope, m.blur_px,
                                      MinContrastLevel(opt, data_max));
     // Reads far out from both edges (up to 12 widths): not on a tracked frame, whose edges follow
-    // a frame that passed it (a width that moves sends the frame afresh).
+    // a frame that passed it (a width that moves from the last frame's by more than max(2 px,
+    // 3 %) sends the frame afresh).
     if (check.passed && !g.precise)
-      check = CheckNotOnAWiderObject(img, g.axis, m.band_start_px, m.band_end_px, m.left_u0_px,
-                                     m.right_u0_px, m.edge_slope, m.blur_px,
-                                     MinContrastLevel(opt, data_max));
+      check = CheckNotOnAWiderObject(
+          img, g.axis, m.band_start_px, m.band_end_px, m.left_u0_px, m.right_u0_px, m.edge_slope,
+          m.blur_px, MinContrastLevel(opt, data_max), g.polarity == Polarity::kDarkOnBright);
     if (check.passed)
       check = CheckNoEdgeJustOutside(img, g.axis, m.band_start_px, m.band_end_px, m.left_u0_px,
                                      m.right_u0_px, m.edge_slope, m.blur_px,

@@ -1,0 +1,84 @@
+// The self-checks on drawn profiles: vertical objects whose levels across x are given, blurred as
+// a lens does, against the geometry they were drawn with.
+#include "vision/scene/self_check.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <utility>
+#include <vector>
+
+namespace clogscope::vision {
+namespace {
+
+constexpr int kWidthPx = 400, kHeightPx = 160;
+constexpr double kCentreX = 200, kBlurPx = 2.0, kMinStep = 15.3;  // 0.06 of 255
+
+// A frame of vertical bands: `background` everywhere, then each (from, to, level) in u = x − 200
+// painted over it in turn, blurred by kBlurPx.
+cv::Mat DrawBands(double background,
+                  const std::vector<std::pair<std::pair<double, double>, double>>& bands) {
+  cv::Mat f(kHeightPx, kWidthPx, CV_32F, cv::Scalar(background));
+  for (int x = 0; x < kWidthPx; ++x) {
+    const double u = x + 0.5 - kCentreX;
+    for (const auto& [span, level] : bands)
+      if (u >= span.first && u < span.second) f.col(x).setTo(level);
+  }
+  cv::GaussianBlur(f, f, cv::Size(), kBlurPx);
+  cv::Mat out;
+  f.convertTo(out, CV_8U);
+  return out;
+}
+
+// The check on an object between u = −5 and +5, over rows 20-140.
+SelfCheck Check(const cv::Mat& frame, bool object_dark) {
+  const GreyImage img{frame, false};
+  const AxisFrame axis{kCentreX, 0, 0, 1};
+  return CheckNotOnAWiderObject(img, axis, 20, 140, -5, 5, 0, kBlurPx, kMinStep, object_dark);
+}
+
+TEST(CheckNotOnAWiderObjectTest, AStripeOnALitStrandLiesOnAWiderObject) {
+  // A lit 86 px strand (75 on a background of 20) and its 10 px stripe (210), measured as the
+  // object.
+  const cv::Mat f = DrawBands(20, {{{-43, 43}, 75}, {{-5, 5}, 210}});
+  const SelfCheck check = Check(f, false);
+  EXPECT_FALSE(check.passed);
+  EXPECT_NE(check.why.find("wider object"), std::string::npos) << check.why;
+  // The same stripe with the strand gone: a bright strand on a dark background.
+  EXPECT_TRUE(Check(DrawBands(20, {{{-5, 5}, 210}}), false).passed);
+}
+
+TEST(CheckNotOnAWiderObjectTest, ABrightStrandBetweenTwoLikeItIsNotOnOne) {
+  // Two neighbours of one level, 23 px wide and 15 px from it on both sides: outward from the
+  // strand the level steps up to theirs, as from a stripe to its strand's body, but the dark
+  // background comes back beyond them.
+  const cv::Mat f = DrawBands(20, {{{-43, -20}, 75}, {{20, 43}, 75}, {{-5, 5}, 210}});
+  EXPECT_TRUE(Check(f, false).passed) << Check(f, false).why;
+}
+
+TEST(CheckNotOnAWiderObjectTest, ADarkStrandOnABacklightRingedByDarkIsNotJudged) {
+  // A dark strand on a bright 86 px field (a backlight's disc, a microscope's vignette) with dark
+  // beyond: judged as a bright object it would lie on a wider one; as a dark one it does not.
+  const cv::Mat f = DrawBands(20, {{{-43, 43}, 200}, {{-5, 5}, 40}});
+  EXPECT_TRUE(Check(f, true).passed) << Check(f, true).why;
+  EXPECT_FALSE(Check(f, false).passed);
+}
+
+TEST(CheckNotOnAWiderObjectTest, ASlowFallIsNoEdge) {
+  // A bright strand whose surroundings fall from 60 to 20 over 60 px on both sides (a lamp's wide
+  // glow, a vignette): no edge steps to the farther level.
+  cv::Mat f(kHeightPx, kWidthPx, CV_32F);
+  for (int x = 0; x < kWidthPx; ++x) {
+    const double d = std::abs(x + 0.5 - kCentreX);
+    f.col(x).setTo(d < 5 ? 210 : std::max(20.0, 60.0 - 40.0 * (d - 10) / 60.0));
+  }
+  cv::GaussianBlur(f, f, cv::Size(), kBlurPx);
+  cv::Mat frame;
+  f.convertTo(frame, CV_8U);
+  EXPECT_TRUE(Check(frame, false).passed) << Check(frame, false).why;
+}
+
+}  // namespace
+}  // namespace clogscope::vision
