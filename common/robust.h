@@ -11,15 +11,18 @@ inline constexpr double kMadToSigma = 1.4826;
 // The standard normal's 97.5 % quantile: a two-sided 95 % interval is ±kZ95 σ.
 inline constexpr double kZ95 = 1.959963984540054;
 
-// Median (the mean of the two middle values for an even count); 0 for no values.
-inline double Median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  const size_t mid = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + mid, v.end());
-  double m = v[mid];
-  if (v.size() % 2 == 0) m = 0.5 * (m + *std::max_element(v.begin(), v.begin() + mid));
+// Median of *v, reordering it (no copy: for a scratch buffer refilled in a loop).
+inline double MedianInPlace(std::vector<double>* v) {
+  if (v->empty()) return 0;
+  const size_t mid = v->size() / 2;
+  std::nth_element(v->begin(), v->begin() + mid, v->end());
+  double m = (*v)[mid];
+  if (v->size() % 2 == 0) m = 0.5 * (m + *std::max_element(v->begin(), v->begin() + mid));
   return m;
 }
+
+// Median (the mean of the two middle values for an even count); 0 for no values.
+inline double Median(std::vector<double> v) { return MedianInPlace(&v); }
 
 // Median(v) of values given as counts: count_at(k) of them equal k, for k < levels, n of them in
 // all. In a pass over the counts up to the median, not a selection over the values (a frame's

@@ -51,6 +51,8 @@ constexpr double kMaxResidualRatio = 2.0, kMinResidualExcess = 1.5;
 std::vector<double> Strip(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
                           double slope, double from, double dir, double length) {
   std::vector<double> out, column;
+  out.reserve(static_cast<size_t>(std::max(0.0, length)) + 1);
+  column.reserve(kRows);
   for (double d = 0; d <= length; d += 1.0) {
     column.clear();
     for (int r = 0; r < kRows; ++r) {
@@ -59,7 +61,9 @@ std::vector<double> Strip(const GreyImage& img, const AxisFrame& f, double s0, d
       const double x = f.ImageX(s, u), y = f.ImageY(s, u);
       if (img.InsideForBilinear(x, y)) column.push_back(img.Bilinear(x, y));
     }
-    if (column.size() >= kRows / 2) out.push_back(Median(column));
+    // Each row's ray leaves the (convex) frame once: none inside, none further out either.
+    if (column.empty() && d > 0) break;
+    if (column.size() >= kRows / 2) out.push_back(MedianInPlace(&column));
   }
   return out;
 }
@@ -90,8 +94,10 @@ bool FindStepBeyond(const std::vector<double>& strip, double near, double blur_p
                     StepBeyond* out) {
   const int plateau = PlateauPx(blur_px);
   const int n = static_cast<int>(strip.size());
+  std::vector<double> window;
   const auto median_of = [&](int from) {
-    return Median(std::vector<double>(strip.begin() + from, strip.begin() + from + plateau));
+    window.assign(strip.begin() + from, strip.begin() + from + plateau);
+    return MedianInPlace(&window);
   };
   for (int i = 0; i + 2 * plateau <= n; ++i) {
     const double first = median_of(i) - near;
