@@ -51,6 +51,8 @@ bool FaceReadInPart(const StrandGeometry& g, const SceneOptions& o) {
 // decide: the short pairs of clutter discs and blobs that held up scored 7-24 % of the strand's
 // in the robustness scenes, while a long hair may score as well as the strand.
 constexpr double kRivalScoreRatio = 0.5;
+// An edge this many times the least contrast is an object's, not a background's texture.
+constexpr double kFadedRivalContrast = 3.0;
 // Whether `c` could be the strand as much as `b` where the tip does not decide. A score ranks by
 // length and contrast, and a strand whose shaded side is faint scores little for it: a 111 px
 // strand (its pair 109 px) scored 18-34 % of a 14 px hair from the nozzle's corner, which was
@@ -295,6 +297,15 @@ std::pair<double, double> Interval(const PairCandidate& c, const AxisFrame& fram
   const double xr = c.axis.ImageX(sm, c.right_u0 + c.edge_slope * sm);
   const double yr = c.axis.ImageY(sm, c.right_u0 + c.edge_slope * sm);
   return {frame.U(xl, yl), frame.U(xr, yr)};
+}
+
+// Two pairs with no edge in common, side by side (across b's axis at mid-stretch).
+bool Disjoint(const PairCandidate& b, const PairCandidate& c) {
+  if (c.left == b.left || c.left == b.right || c.right == b.left || c.right == b.right)
+    return false;
+  const auto [bl, br] = Interval(b, b.axis);
+  const auto [cl, cr] = Interval(c, b.axis);
+  return cr < bl || cl > br;
 }
 
 // A bright pair and a dark one.
@@ -702,13 +713,10 @@ bool RulesOut(PairVerdict v) {
 
 PairContest ContestPairs(const PairCandidate& b, const StrandGeometry& bg, const PairCandidate& c,
                          const StrandGeometry& cg, const SceneOptions& o) {
-  const bool shares =
-      c.left == b.left || c.left == b.right || c.right == b.left || c.right == b.right;
   const auto [bl, br] = Interval(b, b.axis);
   const auto [cl, cr] = Interval(c, b.axis);
-  const bool disjoint = !shares && (cr < bl || cl > br);
   // Two strands in one view look alike; a gap between objects (a mixed pair) is another thing.
-  if (!disjoint || c.polarity != b.polarity) return PairContest::kNotRivals;
+  if (!Disjoint(b, c) || c.polarity != b.polarity) return PairContest::kNotRivals;
   // Two strand-like objects: the one hanging from the nozzle's face (the nozzle on both its
   // sides) is the strand; a hair that ends at a flank, or in the open, is not. But the face read
   // on one side only does not tell a rival apart: a hair from the face's corner reads so, and so
@@ -882,6 +890,29 @@ std::string UnheldRivalDetail(const SceneResult& r, int index, const StrandGeome
   }
   return "";
 }
+// A wider pair of the chosen one's kind, clear of it, that could be the strand and was ruled out
+// only for an edge fading along it while its other edge is an object's (kFadedRivalContrast times
+// the least contrast): a strand lit from one side whose shaded rim sank to the background's level
+// in places. Its tip is unknown, so a narrower pair hanging from the face does not outrank it: a
+// hair from the face beside such a strand was measured alone (stringer 8104, 18.2 px at σ 0.10
+// where the strand is 153.4; in the other frames the strand's pair held up, the hair's did not).
+// Strand-like: its common stretch at least as long as it is wide (a nozzle's flank paired with
+// texture, 38 px long and 62 px wide, is not).
+std::string FadedRivalDetail(const SceneResult& r, int index, const SceneOptions& o) {
+  const PairCandidate& b = r.candidates[index];
+  for (const PairCandidate& c : r.candidates) {
+    if (c.verdict != PairVerdict::kWeakEdges || c.polarity != b.polarity ||
+        c.width_px <= b.width_px || c.length_px < c.width_px || !Disjoint(b, c) ||
+        !CouldRival(b, c) ||
+        std::max(c.left_contrast, c.right_contrast) < kFadedRivalContrast * o.min_contrast)
+      continue;
+    return fmt::format(
+        "a wider strand-like object ({}) was ruled out only for an edge fading along it (edge "
+        "contrast {:.0f}/{:.0f}): it may be the strand rather than {}",
+        Describe(c), c.left_contrast, c.right_contrast, Describe(b));
+  }
+  return "";
+}
 }  // namespace
 
 std::string ChoiceDoubtDetail(const SceneResult& r, int index, const StrandGeometry& g,
@@ -891,6 +922,7 @@ std::string ChoiceDoubtDetail(const SceneResult& r, int index, const StrandGeome
   why = SplitDetail(r, index);
   if (why.empty()) why = InsideUnheldDetail(r, index);
   if (why.empty()) why = UnheldRivalDetail(r, index, g, o);
+  if (why.empty()) why = FadedRivalDetail(r, index, o);
   return why;
 }
 
@@ -924,6 +956,12 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
     StrandGeometry g;
     if (!FollowPair(img, o, c, r.edges[c.left].sign, r.edges[c.right].sign, &g, &c.verdict,
                     &c.why)) {
+      if (c.verdict == PairVerdict::kWeakEdges) {
+        c.left_contrast = ReferenceContrast(img, c.axis, c.left_u0, c.edge_slope,
+                                            r.edges[c.left].sign, c.length_px);
+        c.right_contrast = ReferenceContrast(img, c.axis, c.right_u0, c.edge_slope,
+                                             r.edges[c.right].sign, c.length_px);
+      }
       if (first_reason.empty()) {
         first_reason = c.why;
         first_failure = c.verdict;

@@ -62,6 +62,9 @@ struct PairCandidate {
   double long_edge_px = 0;  // the longer of its edge lines' runs (ExtendPair's, else the seeds')
   double width_px = 0;      // perpendicular separation
   double snr = 0;           // weaker edge's gradient over the gradient noise
+  // Each edge's contrast along the full-resolution image (grey levels), where it was read and
+  // found too weak (kWeakEdges); else 0.
+  double left_contrast = 0, right_contrast = 0;
   double score = 0;
   PairVerdict verdict = PairVerdict::kNotExamined;
   std::string why;  // the verdict in words
