@@ -151,6 +151,18 @@ TEST(AdversarialTest, AStripeAtADarkStrandsRimIsNotTheObject) {
   ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kSpecularStripe, 3623));
 }
 
+TEST(AdversarialTest, AStripeByADarkStrandsRimIsNotTheObjectWhereTheRimHidesInBlur) {
+  // A dark 108.5 px strand (64 grey levels on a background of 107, blur 2.6 px) whose bright
+  // 18 px stripe lies 3 px inside its left rim: the rim hides in the blur, and the stripe was
+  // measured alone, 17.6 px at sigma 0.14-0.57 (`imprecise`) in all four frames. Outside its left
+  // edge lies the background; outside its right edge the strand's body steps on to the
+  // background's level 87 px out.
+  AdversarialTruth t;
+  for (const vision::StrandMeasurement& m :
+       MeasuredMatrixFrames(RandomAdversarialScene(TroubleClass::kSpecularStripe, 8208), &t))
+    EXPECT_EQ(m.status, vision::FrameStatus::kNotSilhouette) << m.width_px << " px " << m.detail;
+}
+
 TEST(AdversarialTest, AHairFromTheFaceBesideAStrandWhoseShadedEdgeFadedIsNotMeasured) {
   // A lit 153 px strand, the lamp 35° off, its shaded side near the background's level on a
   // textured ground (11 grey levels), and a 49 µm hair hanging from the nozzle 179 px beside it.
@@ -158,6 +170,14 @@ TEST(AdversarialTest, AHairFromTheFaceBesideAStrandWhoseShadedEdgeFadedIsNotMeas
   // against 65 on its lit side) and the hair, hanging from the face, was measured alone: 18.2 px
   // at sigma 0.10.
   ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kStringer, 8104));
+}
+
+TEST(AdversarialTest, AStrandAndAHairFarBesideItPairedAcrossBothAreNotOneObject) {
+  // A lit 153 px strand and a 30 µm hair 300 px from its axis, the nozzle at the background's
+  // level, on a background sloping by 0.23 grey levels a px: in one frame the pair of the
+  // strand's far edge and the hair's held up as one object, 381.9 px at sigma 2.2 (`imprecise`),
+  // 218 px of background between them.
+  ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kStringer, 3725));
 }
 
 TEST(AdversarialTest, APairInsideAStrandWhoseFaintEdgeLostItsTipIsNotTheStrand) {

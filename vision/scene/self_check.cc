@@ -30,6 +30,11 @@ constexpr double kOutsideEdgeBlurs = 2.5, kOutsideEdgePx = 4.0;
 // kGapLevelShare of it. (A narrow stripe at the background's level, blurred, peaks there: a dark
 // 41 px strand's stripe 8 px inside its edge read so over 3-4 px at a blur of 1.6 px.)
 constexpr double kGapLevelBand = 0.25, kGapLevelShare = 0.1, kMinGapPx = 3.0, kMinGapBlurs = 3.0;
+// With the object's body on both sides such a run may be a stripe at the background's level (the
+// matrix draws stripes up to 0.3 of the width; a lens's core is about a third) — but not over
+// half the width: a strand and a hair 222 px beside it, paired across both (382 px where the
+// strand is 153, the gap's background sloping with the rest).
+constexpr double kMaxStripeShare = 0.5;
 // A wider object around the silhouette: each side's outside read on to kWiderReachWidths times its
 // width (a stripe down to a twelfth of its strand's width; the matrix draws them from a twentieth
 // to 0.3), and kMinReachPx at least, for a step of at least the least contrast to a farther level
@@ -234,7 +239,7 @@ SelfCheck CheckInsideIsOneObject(const GreyImage& img, const AxisFrame& f, doubl
   // object of its own. (With the body on both sides the run may as well be a stripe at the
   // background's level inside one object: the search judges that, on the whole pair. A lit
   // strand's dark rim strip, shaded to the background's level, lies on the other side of it
-  // from its lit body.)
+  // from its lit body. Over half the width, it is the background between two objects.)
   for (int k = 1; k < n; ++k) {
     if (!background_like(k) || background_like(k - 1)) continue;
     int end = k;
@@ -245,6 +250,16 @@ SelfCheck CheckInsideIsOneObject(const GreyImage& img, const AxisFrame& f, doubl
       bool body_before = false, body_after = false;
       for (int j = 0; j < k; ++j) body_before = body_before || object_like(j);
       for (int j = end; j < n; ++j) body_after = body_after || object_like(j);
+      if (body_before && body_after && extreme(0, k) * extreme(end, n) > 0 &&
+          run >= kMaxStripeShare * width_px) {
+        out.passed = false;
+        out.why = fmt::format(
+            "the background shows inside it: {} px at the background's level {:.0f} px inside "
+            "its left edge, over {:.0f} % of its width (two objects and the background between "
+            "them, measured as one)",
+            run, inset_px + k, 100.0 * run / width_px);
+        return out;
+      }
       if (body_before != body_after && extreme(0, k) * extreme(end, n) > 0) {
         out.passed = false;
         out.why = fmt::format(
@@ -292,22 +307,38 @@ SelfCheck CheckNotOnAWiderObject(const GreyImage& img, const AxisFrame& f, doubl
   const double reach_px = std::max(kMinReachPx, kWiderReachWidths * width_px);
   double near[2];
   StepBeyond beyond[2];
+  bool stepped[2];
   for (int side = 0; side < 2; ++side) {
     const double u0 = side == 0 ? left_u0 : right_u0, dir = side == 0 ? -1.0 : 1.0;
     if (!NearBackground(img, f, s0, s1, u0, slope, inset_px, dir, &near[side])) return out;
     const std::vector<double> strip = Strip(img, f, s0, s1, u0, slope, inset_px, dir, reach_px);
-    if (!FindStepBeyond(strip, near[side], blur_px, min_step, &beyond[side])) return out;
+    stepped[side] = FindStepBeyond(strip, near[side], blur_px, min_step, &beyond[side]);
   }
-  const double step_l = beyond[0].level - near[0], step_r = beyond[1].level - near[1];
-  // The near levels on one side of the farther ones, which are one background.
-  if (step_l * step_r <= 0 || std::abs(beyond[0].level - beyond[1].level) >
-                                  kFarLevelMismatch * std::min(std::abs(step_l), std::abs(step_r)))
-    return out;
+  if (!stepped[0] && !stepped[1]) return out;
+  // The step each side is judged by: its own, or on a side without one the other side's.
+  double step[2];
+  if (stepped[0] && stepped[1]) {
+    step[0] = beyond[0].level - near[0];
+    step[1] = beyond[1].level - near[1];
+    // The near levels on one side of the farther ones, which are one background.
+    if (step[0] * step[1] <= 0 ||
+        std::abs(beyond[0].level - beyond[1].level) >
+            kFarLevelMismatch * std::min(std::abs(step[0]), std::abs(step[1])))
+      return out;
+  } else {
+    // A step on one side only, the other side's near level already the farther one: the wider
+    // object ends just beyond the silhouette there (a stripe by a dark strand's rim, the rim a
+    // blur or two wide: 17.6 px measured where the strand is 108.5).
+    const int a = stepped[0] ? 0 : 1, b = 1 - a;
+    step[a] = step[b] = beyond[a].level - near[a];
+    if (std::abs(near[b] - beyond[a].level) > kFarLevelMismatch * std::abs(step[a])) return out;
+    beyond[b] = {near[b], 0.0};
+  }
   // A dark object on a bright field ringed by dark is a silhouette on a backlight's disc (or in a
   // microscope's vignette): not judged. A bright one on a lit body (a highlight on a lit strand),
   // or on a dark body against a bright background (on a dark strand), is a stripe; as is a dark
   // one on a body darker than the background.
-  if (object_dark && step_l < 0) return out;
+  if (object_dark && step[0] < 0) return out;
   // The farther level is the background: it holds beyond the step for as wide as the wider object
   // would be (or to the frame's border). Neighbours of one level on both sides (a bright strand
   // between two others, on a dark background) end sooner.
@@ -318,9 +349,9 @@ SelfCheck CheckNotOnAWiderObject(const GreyImage& img, const AxisFrame& f, doubl
     const std::vector<double> far = Strip(
         img, f, s0, s1, u0, slope, inset_px + beyond[side].distance_px + plateau, dir, wider_px);
     if (static_cast<int>(far.size()) < 2 * plateau) return out;
-    const double step = std::abs(beyond[side].level - near[side]);
     long held = 0;
-    for (double v : far) held += std::abs(v - beyond[side].level) <= kHeldShare * step;
+    for (double v : far)
+      held += std::abs(v - beyond[side].level) <= kHeldShare * std::abs(step[side]);
     if (held < kMinHeldFraction * far.size()) return out;
   }
   // An edge parallel to the object's, on at least one side: in each half of the band, at the same
@@ -344,12 +375,22 @@ SelfCheck CheckNotOnAWiderObject(const GreyImage& img, const AxisFrame& f, doubl
   }
   if (!parallel) return out;
   out.passed = false;
-  out.why = fmt::format(
-      "it lies on a wider object: outside both its edges the level ({:.0f} and {:.0f} grey "
-      "levels) steps on to the background's ({:.0f} and {:.0f}) {:.0f} and {:.0f} px out (a "
-      "stripe inside the strand measured as the object)",
-      near[0], near[1], beyond[0].level, beyond[1].level, inset_px + beyond[0].distance_px,
-      inset_px + beyond[1].distance_px);
+  if (stepped[0] && stepped[1]) {
+    out.why = fmt::format(
+        "it lies on a wider object: outside both its edges the level ({:.0f} and {:.0f} grey "
+        "levels) steps on to the background's ({:.0f} and {:.0f}) {:.0f} and {:.0f} px out (a "
+        "stripe inside the strand measured as the object)",
+        near[0], near[1], beyond[0].level, beyond[1].level, inset_px + beyond[0].distance_px,
+        inset_px + beyond[1].distance_px);
+  } else {
+    const int a = stepped[0] ? 0 : 1;
+    out.why = fmt::format(
+        "it lies at the side of a wider object: outside its {} edge the level ({:.0f} grey "
+        "levels) steps on to the background's ({:.0f}) {:.0f} px out, which lies just outside "
+        "its {} edge ({:.0f}) (a stripe by the strand's rim measured as the object)",
+        a == 0 ? "left" : "right", near[a], beyond[a].level, inset_px + beyond[a].distance_px,
+        a == 0 ? "right" : "left", near[1 - a]);
+  }
   return out;
 }
 

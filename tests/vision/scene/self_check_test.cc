@@ -66,6 +66,26 @@ TEST(CheckNotOnAWiderObjectTest, ADarkStrandOnABacklightRingedByDarkIsNotJudged)
   EXPECT_FALSE(Check(f, false).passed);
 }
 
+TEST(CheckNotOnAWiderObjectTest, AStripeByADarkStrandsRimLiesAtTheSideOfAWiderObject) {
+  // A dark strand (64 on a background of 107) from u = -8 to 87, its bright 10 px stripe (180) 3 px
+  // inside its left rim, which the blur hides: outside the stripe's left edge lies the
+  // background, outside its right edge the strand's body, stepping on to the background 82 px out.
+  const cv::Mat f = DrawBands(107, {{{-8, 87}, 64}, {{-5, 5}, 180}});
+  const SelfCheck check = Check(f, false);
+  EXPECT_FALSE(check.passed);
+  EXPECT_NE(check.why.find("side of a wider object"), std::string::npos) << check.why;
+  // Without the strand's body: the stripe alone, a bright strand on the background.
+  EXPECT_TRUE(Check(DrawBands(107, {{{-5, 5}, 180}}), false).passed);
+}
+
+TEST(CheckNotOnAWiderObjectTest, AWideObjectBesideTheStrandIsNotOneItLiesOn) {
+  // A bright strand on a dark background (20), and 25 px beside it a wide object of 75 running
+  // to the frame's side: outward from the strand the level steps up to the object's, but the
+  // other side's outside is the background, not the object's level.
+  const cv::Mat f = DrawBands(20, {{{30, 200}, 75}, {{-5, 5}, 210}});
+  EXPECT_TRUE(Check(f, false).passed) << Check(f, false).why;
+}
+
 TEST(CheckNotOnAWiderObjectTest, ASlowFallIsNoEdge) {
   // A bright strand whose surroundings fall from 60 to 20 over 60 px on both sides (a lamp's wide
   // glow, a vignette): no edge steps to the farther level.
@@ -78,6 +98,29 @@ TEST(CheckNotOnAWiderObjectTest, ASlowFallIsNoEdge) {
   cv::Mat frame;
   f.convertTo(frame, CV_8U);
   EXPECT_TRUE(Check(frame, false).passed) << Check(frame, false).why;
+}
+
+// CheckInsideIsOneObject on an object drawn between u = -100 and +100, over rows 20-140.
+SelfCheck CheckInside(const cv::Mat& frame) {
+  const GreyImage img{frame, false};
+  const AxisFrame axis{kCentreX, 0, 0, 1};
+  return CheckInsideIsOneObject(img, axis, 20, 140, -100, 100, 0, kBlurPx, kMinStep);
+}
+
+TEST(CheckInsideIsOneObjectTest, TheBackgroundOverHalfTheWidthIsBetweenTwoObjects) {
+  // A bright 80 px strand and a 10 px hair of its level 110 px beside it, paired across both: the
+  // background between them is 55 % of the pair's width.
+  const cv::Mat f = DrawBands(20, {{{-100, -20}, 120}, {{90, 100}, 120}});
+  const SelfCheck check = CheckInside(f);
+  EXPECT_FALSE(check.passed);
+  EXPECT_NE(check.why.find("two objects"), std::string::npos) << check.why;
+}
+
+TEST(CheckInsideIsOneObjectTest, AStripeAtTheBackgroundsLevelIsNotAGap) {
+  // A bright 200 px strand with a stripe at the background's level over 30 % of its width, in its
+  // middle: the body on both sides, one object.
+  const cv::Mat f = DrawBands(20, {{{-100, 100}, 120}, {{-30, 30}, 20}});
+  EXPECT_TRUE(CheckInside(f).passed) << CheckInside(f).why;
 }
 
 }  // namespace
