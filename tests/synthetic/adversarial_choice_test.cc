@@ -180,6 +180,13 @@ TEST(AdversarialTest, AStrandAndAHairFarBesideItPairedAcrossBothAreNotOneObject)
   ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kStringer, 3725));
 }
 
+TEST(AdversarialTest, ALensWhoseCoreCoversHalfItsWidthIsOneObject) {
+  // A 113 px backlit lens (n 1.40, acceptance 0.35 rad) whose core, at the backlight's level,
+  // covers 51 % of its width: its rims alike (28 px each), it is not two objects with the
+  // background between them. Valid and right in all four frames.
+  ExpectMatrixFramesValidAndRight(RandomAdversarialScene(TroubleClass::kBacklitLens, 9114));
+}
+
 TEST(AdversarialTest, APairInsideAStrandWhoseFaintEdgeLostItsTipIsNotTheStrand) {
   // A 162 px strand lit 37 degrees off (ambient 0.48) on a dark ground: its shaded edge is faint,
   // and a bright stripe lies inside it. In one frame of four the faint edge faded 23 px before

@@ -31,10 +31,11 @@ constexpr double kOutsideEdgeBlurs = 2.5, kOutsideEdgePx = 4.0;
 // 41 px strand's stripe 8 px inside its edge read so over 3-4 px at a blur of 1.6 px.)
 constexpr double kGapLevelBand = 0.25, kGapLevelShare = 0.1, kMinGapPx = 3.0, kMinGapBlurs = 3.0;
 // With the object's body on both sides such a run may be a stripe at the background's level (the
-// matrix draws stripes up to 0.3 of the width; a lens's core is about a third) — but not over
-// half the width: a strand and a hair 222 px beside it, paired across both (382 px where the
-// strand is 153, the gap's background sloping with the rest).
-constexpr double kMaxStripeShare = 0.5;
+// matrix draws stripes up to 0.3 of the width) or a lens's core (centred, its rims alike: 28 and
+// 28 px of a 113 px lens whose core covers 51 %) — but not one over half the width with the body
+// on one side under half as wide as on the other: a strand and a hair 218 px beside it, paired
+// across both (382 px where the strand is 153: bodies of 154 and 10 px).
+constexpr double kMaxStripeShare = 0.5, kMinBodyBalance = 0.5;
 // A wider object around the silhouette: each side's outside read on to kWiderReachWidths times its
 // width (a stripe down to a twelfth of its strand's width; the matrix draws them from a twentieth
 // to 0.3), and kMinReachPx at least, for a step of at least the least contrast to a farther level
@@ -239,7 +240,8 @@ SelfCheck CheckInsideIsOneObject(const GreyImage& img, const AxisFrame& f, doubl
   // object of its own. (With the body on both sides the run may as well be a stripe at the
   // background's level inside one object: the search judges that, on the whole pair. A lit
   // strand's dark rim strip, shaded to the background's level, lies on the other side of it
-  // from its lit body. Over half the width, it is the background between two objects.)
+  // from its lit body. Over half the width and off the middle, it is the background between two
+  // objects.)
   for (int k = 1; k < n; ++k) {
     if (!background_like(k) || background_like(k - 1)) continue;
     int end = k;
@@ -250,14 +252,16 @@ SelfCheck CheckInsideIsOneObject(const GreyImage& img, const AxisFrame& f, doubl
       bool body_before = false, body_after = false;
       for (int j = 0; j < k; ++j) body_before = body_before || object_like(j);
       for (int j = end; j < n; ++j) body_after = body_after || object_like(j);
+      const double body_l_px = inset_px + k, body_r_px = width_px - inset_px - end;
       if (body_before && body_after && extreme(0, k) * extreme(end, n) > 0 &&
-          run >= kMaxStripeShare * width_px) {
+          run >= kMaxStripeShare * width_px &&
+          std::min(body_l_px, body_r_px) < kMinBodyBalance * std::max(body_l_px, body_r_px)) {
         out.passed = false;
         out.why = fmt::format(
             "the background shows inside it: {} px at the background's level {:.0f} px inside "
-            "its left edge, over {:.0f} % of its width (two objects and the background between "
-            "them, measured as one)",
-            run, inset_px + k, 100.0 * run / width_px);
+            "its left edge, over {:.0f} % of its width, between {:.0f} and {:.0f} px of the "
+            "object (two objects and the background between them, measured as one)",
+            run, inset_px + k, 100.0 * run / width_px, body_l_px, body_r_px);
         return out;
       }
       if (body_before != body_after && extreme(0, k) * extreme(end, n) > 0) {
@@ -329,8 +333,12 @@ SelfCheck CheckNotOnAWiderObject(const GreyImage& img, const AxisFrame& f, doubl
     // A step on one side only, the other side's near level already the farther one: the wider
     // object ends just beyond the silhouette there (a stripe by a dark strand's rim, the rim a
     // blur or two wide: 17.6 px measured where the strand is 108.5).
+    // Only a body of the other kind than the object (darker than the background under a bright
+    // silhouette): one of its kind, fainter, is as likely a hair or a shadow beside it (a dark
+    // hair converging on a dark strand read as a grey body 22 px wide, stringer 8905).
     const int a = stepped[0] ? 0 : 1, b = 1 - a;
     step[a] = step[b] = beyond[a].level - near[a];
+    if (object_dark || step[a] < 0) return out;
     if (std::abs(near[b] - beyond[a].level) > kFarLevelMismatch * std::abs(step[a])) return out;
     beyond[b] = {near[b], 0.0};
   }
