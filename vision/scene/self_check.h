@@ -55,8 +55,9 @@ SelfCheck CheckInsideIsOneObject(const GreyImage& img, const AxisFrame& f, doubl
 // halves of the band (parallel to the object). Then the silhouette lies on a wider object: a
 // stripe inside the strand measured as the object, the strand's body on both sides of it. Fails
 // too when one side steps so and the other side's outside is already at the farther level, the
-// bright silhouette's body darker than the background: the silhouette lies at the side of a wider
-// object (a stripe by a dark strand's rim that the blur hides).
+// bright silhouette's body darker than the background and reaching at least the silhouette's
+// width beyond it: the silhouette lies at the side of a wider object (a stripe by a dark strand's
+// rim that the blur hides).
 // `object_dark`: the silhouette is darker than its outside; one on a bright field ringed by dark
 // (a backlight's disc, a microscope's vignette) is not judged.
 SelfCheck CheckNotOnAWiderObject(const GreyImage& img, const AxisFrame& f, double s0, double s1,

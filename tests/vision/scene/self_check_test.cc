@@ -78,6 +78,23 @@ TEST(CheckNotOnAWiderObjectTest, AStripeByADarkStrandsRimLiesAtTheSideOfAWiderOb
   EXPECT_TRUE(Check(DrawBands(107, {{{-5, 5}, 180}}), false).passed);
 }
 
+TEST(CheckNotOnAWiderObjectTest, ADarkBlobBesideABrightStrandIsNoBodyAroundAStripe) {
+  // A bright 40 px strand (125 on a background of 27) and, against its right edge, a dark blob
+  // (1) 25 px wide: outward the level steps up to the background's, which lies just outside the
+  // left edge too, but a stripe's body would reach at least as far again as the stripe is wide.
+  const cv::Mat f = DrawBands(27, {{{20, 45}, 1}, {{-20, 20}, 125}});
+  const GreyImage img{f, false};
+  const AxisFrame axis{kCentreX, 0, 0, 1};
+  const SelfCheck check =
+      CheckNotOnAWiderObject(img, axis, 20, 140, -20, 20, 0, kBlurPx, kMinStep, false);
+  EXPECT_TRUE(check.passed) << check.why;
+  // The same blob reaching 50 px out is the strand's body around a stripe at its rim.
+  const cv::Mat wide = DrawBands(27, {{{20, 70}, 1}, {{-20, 20}, 125}});
+  EXPECT_FALSE(CheckNotOnAWiderObject(GreyImage{wide, false}, axis, 20, 140, -20, 20, 0, kBlurPx,
+                                      kMinStep, false)
+                   .passed);
+}
+
 TEST(CheckNotOnAWiderObjectTest, AWideObjectBesideTheStrandIsNotOneItLiesOn) {
   // A bright strand on a dark background (20), and 25 px beside it a wide object of 75 running
   // to the frame's side: outward from the strand the level steps up to the object's, but the
