@@ -52,19 +52,22 @@ inline void ExpectMatrixFramesValidAndRight(const AdversarialScene& p) {
   }
 }
 
+// A width within the matrix's tolerance or 3σ of the truth (never another object's).
+inline void ExpectWidthRight(const vision::StrandMeasurement& m, const AdversarialTruth& t,
+                             size_t frame, const AdversarialScene& p) {
+  EXPECT_LE(std::abs(m.width_px - t.width_px),
+            std::max(WrongTolerancePx(t.width_px), 3 * m.width_sigma_px))
+      << "frame " << frame << ": " << m.width_px << " ± " << m.width_sigma_px << " px, truth "
+      << t.width_px << " " << m.detail << " " << Describe(p);
+}
+
 // The scene's four matrix frames: each refused, or a width within the matrix's tolerance or 3σ
 // of the truth (never another object's).
 inline void ExpectMatrixFramesRefusedOrRight(const AdversarialScene& p) {
   AdversarialTruth t;
   const std::vector<vision::StrandMeasurement> measured = MeasuredMatrixFrames(p, &t);
-  for (size_t i = 0; i < measured.size(); ++i) {
-    const vision::StrandMeasurement& m = measured[i];
-    if (!m.gave_width()) continue;
-    EXPECT_LE(std::abs(m.width_px - t.width_px),
-              std::max(WrongTolerancePx(t.width_px), 3 * m.width_sigma_px))
-        << "frame " << i << ": " << m.width_px << " ± " << m.width_sigma_px << " px, truth "
-        << t.width_px << " " << m.detail << " " << Describe(p);
-  }
+  for (size_t i = 0; i < measured.size(); ++i)
+    if (measured[i].gave_width()) ExpectWidthRight(measured[i], t, i, p);
 }
 
 // The scene's four matrix frames, each `ambiguous`.

@@ -599,6 +599,8 @@ bool FollowPair(const GreyImage& img, const SceneOptions& o, const PairCandidate
   const AxisFrame& a = c.axis;
   const double ref_l = ReferenceContrast(img, a, c.left_u0, c.edge_slope, left_sign, c.length_px);
   const double ref_r = ReferenceContrast(img, a, c.right_u0, c.edge_slope, right_sign, c.length_px);
+  g->left_contrast = ref_l;
+  g->right_contrast = ref_r;
   if (!(ref_l > 0.5 * o.min_contrast && ref_r > 0.5 * o.min_contrast)) {
     *failure = PairVerdict::kWeakEdges;
     *why = fmt::format("edge contrast {:.0f}/{:.0f} too weak along the pair", ref_l, ref_r);
@@ -957,10 +959,8 @@ void ChoosePair(const cv::Mat& channel, const SceneOptions& o, SceneResult* resu
     if (!FollowPair(img, o, c, r.edges[c.left].sign, r.edges[c.right].sign, &g, &c.verdict,
                     &c.why)) {
       if (c.verdict == PairVerdict::kWeakEdges) {
-        c.left_contrast = ReferenceContrast(img, c.axis, c.left_u0, c.edge_slope,
-                                            r.edges[c.left].sign, c.length_px);
-        c.right_contrast = ReferenceContrast(img, c.axis, c.right_u0, c.edge_slope,
-                                             r.edges[c.right].sign, c.length_px);
+        c.left_contrast = g.left_contrast;
+        c.right_contrast = g.right_contrast;
       }
       if (first_reason.empty()) {
         first_reason = c.why;

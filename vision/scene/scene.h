@@ -97,6 +97,9 @@ struct StrandGeometry {
   // Tracking a filament: the straight part of the stretch measured last (px from origin; empty
   // when none), kept while it stays straight so that the width comes from the same place.
   double straight_s0_px = 0, straight_s1_px = 0;
+  // Each edge's contrast along the full-resolution image where the pair was followed (grey
+  // levels; FollowPair sets them before judging them, also when they are too weak).
+  double left_contrast = 0, right_contrast = 0;
   double s_end = 0;  // where the pair ends downward (bed, obstacle or border), from origin
   bool end_is_object = false;  // the pair ends at an object (bed) rather than the border
   double score = 0;
@@ -180,7 +183,7 @@ SceneResult FindScene(const std::vector<cv::Mat>& channels, const SceneOptions& 
 
 // Follows a known pair (from an earlier frame) in `grey`: finds its ends again. Used by tracking;
 // returns false when the pair's edges are not there, with the verdict (kWeakEdges or kNoTip) and
-// why in words.
+// why in words (out's edge contrasts are set either way).
 bool FollowPair(const GreyImage& img, const SceneOptions& options, const PairCandidate& pair,
                 int left_sign, int right_sign, StrandGeometry* out, PairVerdict* failure,
                 std::string* why);

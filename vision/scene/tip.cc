@@ -1,6 +1,7 @@
 #include "vision/scene/tip.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -307,12 +308,16 @@ TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0,
   centred.ox = a.ImageX(0, axis_u);
   centred.oy = a.ImageY(0, axis_u);
   const double half = 0.5 * t.widest_px;
+  // The face read on both sides of the strand about s.
+  const auto faces_about = [&](double s) {
+    return std::array<std::vector<LineReading>, 2>{
+        FaceOnSide(img, centred, s, half, min_face_step, -1),
+        FaceOnSide(img, centred, s, half, min_face_step, +1)};
+  };
   // Looked for from the edge that got furthest, then from both ends' middle: an edge that
   // stopped short in noise leaves the other's end nearer the face.
   for (double s_guess : {std::min(l.s_end, r.s_end), t.s_tip_px}) {
-    std::vector<LineReading> faces[2] = {
-        FaceOnSide(img, centred, s_guess, half, min_face_step, -1),
-        FaceOnSide(img, centred, s_guess, half, min_face_step, +1)};
+    std::array<std::vector<LineReading>, 2> faces = faces_about(s_guess);
     TipEstimate face = LineAcross(faces[0], faces[1]);
     // Read again about the face found: the edges of a swell that flares too fast to follow end
     // several px short of it, and a window about their end holds too little of the face to fit
@@ -320,14 +325,11 @@ TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0,
     // ended 6.5 px below the face, only the columns beside the flare read it, 4-5 px low, and
     // the width came out 2.1-2.9 px narrow at σ 0.23-0.28).
     if (face.found) {
-      std::vector<LineReading> again[2] = {
-          FaceOnSide(img, centred, face.s_px, half, min_face_step, -1),
-          FaceOnSide(img, centred, face.s_px, half, min_face_step, +1)};
+      std::array<std::vector<LineReading>, 2> again = faces_about(face.s_px);
       const TipEstimate refined = LineAcross(again[0], again[1]);
       if (refined.found) {
         face = refined;
-        faces[0].swap(again[0]);
-        faces[1].swap(again[1]);
+        faces = std::move(again);
       }
     }
     const auto end_near = [&](double s) {

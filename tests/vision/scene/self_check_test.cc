@@ -32,11 +32,12 @@ cv::Mat DrawBands(double background,
   return out;
 }
 
-// The check on an object between u = −5 and +5, over rows 20-140.
-SelfCheck Check(const cv::Mat& frame, bool object_dark) {
+// The check on an object between u = left_u and right_u, over rows 20-140.
+SelfCheck Check(const cv::Mat& frame, bool object_dark, double left_u = -5, double right_u = 5) {
   const GreyImage img{frame, false};
   const AxisFrame axis{kCentreX, 0, 0, 1};
-  return CheckNotOnAWiderObject(img, axis, 20, 140, -5, 5, 0, kBlurPx, kMinStep, object_dark);
+  return CheckNotOnAWiderObject(img, axis, 20, 140, left_u, right_u, 0, kBlurPx, kMinStep,
+                                object_dark);
 }
 
 TEST(CheckNotOnAWiderObjectTest, AStripeOnALitStrandLiesOnAWiderObject) {
@@ -82,17 +83,10 @@ TEST(CheckNotOnAWiderObjectTest, ADarkBlobBesideABrightStrandIsNoBodyAroundAStri
   // A bright 40 px strand (125 on a background of 27) and, against its right edge, a dark blob
   // (1) 25 px wide: outward the level steps up to the background's, which lies just outside the
   // left edge too, but a stripe's body would reach at least as far again as the stripe is wide.
-  const cv::Mat f = DrawBands(27, {{{20, 45}, 1}, {{-20, 20}, 125}});
-  const GreyImage img{f, false};
-  const AxisFrame axis{kCentreX, 0, 0, 1};
-  const SelfCheck check =
-      CheckNotOnAWiderObject(img, axis, 20, 140, -20, 20, 0, kBlurPx, kMinStep, false);
+  const SelfCheck check = Check(DrawBands(27, {{{20, 45}, 1}, {{-20, 20}, 125}}), false, -20, 20);
   EXPECT_TRUE(check.passed) << check.why;
   // The same blob reaching 50 px out is the strand's body around a stripe at its rim.
-  const cv::Mat wide = DrawBands(27, {{{20, 70}, 1}, {{-20, 20}, 125}});
-  EXPECT_FALSE(CheckNotOnAWiderObject(GreyImage{wide, false}, axis, 20, 140, -20, 20, 0, kBlurPx,
-                                      kMinStep, false)
-                   .passed);
+  EXPECT_FALSE(Check(DrawBands(27, {{{20, 70}, 1}, {{-20, 20}, 125}}), false, -20, 20).passed);
 }
 
 TEST(CheckNotOnAWiderObjectTest, AWideObjectBesideTheStrandIsNotOneItLiesOn) {
