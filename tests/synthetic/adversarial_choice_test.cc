@@ -180,6 +180,14 @@ TEST(AdversarialTest, AStrandAndAHairFarBesideItPairedAcrossBothAreNotOneObject)
   ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kStringer, 3725));
 }
 
+TEST(AdversarialTest, AStrandAndAHairThinnerThanTheInsetPairedAcrossBothAreNotOneObject) {
+  // A faint 178.5 px strand (185 on 227, the background sloping and textured) and a 20 µm hair
+  // 230 px from its axis: the pair of the hair's outer edge and the strand's far edge held up as
+  // one object in all four frames, 322.8 px at sigma 0.14-0.25. The hair lies within the read's
+  // inset from the edge, so the background between them starts the read.
+  ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kStringer, 3690));
+}
+
 TEST(AdversarialTest, ALensWhoseCoreCoversHalfItsWidthIsOneObject) {
   // A 113 px backlit lens (n 1.40, acceptance 0.35 rad) whose core, at the backlight's level,
   // covers 51 % of its width: its rims alike (28 px each), it is not two objects with the

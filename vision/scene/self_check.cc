@@ -36,6 +36,12 @@ constexpr double kGapLevelBand = 0.25, kGapLevelShare = 0.1, kMinGapPx = 3.0, kM
 // on one side under half as wide as on the other: a strand and a hair 218 px beside it, paired
 // across both (382 px where the strand is 153: bodies of 154 and 10 px).
 constexpr double kMaxStripeShare = 0.5, kMinBodyBalance = 0.5;
+// A run at the background's level from one end of the read, over at least this share of the
+// width, with the object's body beyond it: the silhouette's edge on that side has no object
+// behind it past its blur (a hair thinner than the inset, paired with the strand's far edge).
+// Less may be a stripe at the background's level by a rim thinner than the inset (stripe 3836:
+// 0.19-0.21 of a 37.7 px strand, its width right).
+constexpr double kEdgeRunShare = 0.25;
 // A wider object around the silhouette: each side's outside read on to kWiderReachWidths times its
 // width (a stripe down to a twelfth of its strand's width; the matrix draws them from a twentieth
 // to 0.3), and kMinReachPx at least, for a step of at least the least contrast to a farther level
@@ -275,6 +281,30 @@ SelfCheck CheckInsideIsOneObject(const GreyImage& img, const AxisFrame& f, doubl
       }
     }
     k = end;  // inside[end] is no background: no run starts there
+  }
+  // The runs above lie clear of the read's ends. One from an end means the object on that side
+  // is thinner than the inset: a hair whose blurred tail does not reach past it, paired with the
+  // strand's far edge across the background between them (stringer 3690: 322.8 px at σ 0.14
+  // where the strand is 178.5; 121 px at the background's level inside the hair's edge, then the
+  // strand). On nine sets (10 800 frames) no other frame had such a run over 0.15 of the width
+  // but stripe 3836's (kEdgeRunShare).
+  for (const bool from_left : {true, false}) {
+    const auto at = [&](int j) { return from_left ? j : n - 1 - j; };
+    int run = 0;
+    double sum = 0;
+    for (; run < n && background_like(at(run)); ++run) sum += deviation(at(run));
+    if (run >= n || run < gap_run_px || run < kEdgeRunShare * width_px ||
+        std::abs(sum / run) > kGapLevelShare * step)
+      continue;
+    bool body = false;
+    for (int j = run; j < n && !body; ++j) body = object_like(at(j));
+    if (!body) continue;
+    out.passed = false;
+    out.why = fmt::format(
+        "the background shows just inside its {} edge: {} px at the background's level, {:.0f} % "
+        "of its width, then the object (a thin object beside it, the two measured as one)",
+        from_left ? "left" : "right", run, 100.0 * run / width_px);
+    return out;
   }
   return out;
 }

@@ -42,8 +42,11 @@ SelfCheck CheckNoEdgeJustOutside(const GreyImage& img, const AxisFrame& f, doubl
 // part on the same side of the background that nowhere reaches half the contrast. That is the
 // background between two objects, a hair beside the strand paired with it, too thin and blurred
 // for the search's coarse scale to see the gap (and thick or sharp enough for its blurred tail to
-// reach past 3 blurs and 2 px inside its edge). With the body on both sides the run may be a
-// stripe inside one object: not judged here.
+// reach past 3 blurs and 2 px inside its edge); or when such a run starts at one end of the
+// read, over at least a quarter of the width, with the body beyond it: the hair on that side is too
+// thin for its tail to reach past the inset at all. With the body on both sides the run may be a
+// stripe inside one object, judged here only where it covers over half the width with the body
+// on one side under half as wide as on the other.
 SelfCheck CheckInsideIsOneObject(const GreyImage& img, const AxisFrame& f, double s0, double s1,
                                  double left_u0, double right_u0, double slope, double blur_px,
                                  double min_step);

@@ -127,6 +127,20 @@ TEST(CheckInsideIsOneObjectTest, TheBackgroundOverHalfTheWidthIsBetweenTwoObject
   EXPECT_NE(check.why.find("two objects"), std::string::npos) << check.why;
 }
 
+TEST(CheckInsideIsOneObjectTest, AHairThinnerThanTheInsetBesideTheStrandIsNotOneObject) {
+  // A dark 110 px strand and a 4 px hair 86 px beside it, paired across both: the hair lies
+  // inside the 8 px the read keeps from the edge, so the read starts on the background between
+  // them (43 % of the width), then the strand (stringer 3690: 121 px of 323).
+  const cv::Mat f = DrawBands(200, {{{-100, -96}, 60}, {{-10, 100}, 60}});
+  const SelfCheck check = CheckInside(f);
+  EXPECT_FALSE(check.passed);
+  EXPECT_NE(check.why.find("just inside its left edge"), std::string::npos) << check.why;
+  // The same from the right; and the strand alone, or a hair half as far, passes.
+  EXPECT_FALSE(CheckInside(DrawBands(200, {{{96, 100}, 60}, {{-100, 10}, 60}})).passed);
+  EXPECT_TRUE(CheckInside(DrawBands(200, {{{-100, 100}, 60}})).passed);
+  EXPECT_TRUE(CheckInside(DrawBands(200, {{{-100, -96}, 60}, {{-80, 100}, 60}})).passed);
+}
+
 TEST(CheckInsideIsOneObjectTest, ALenssCoreOverHalfItsWidthIsNotAGap) {
   // A dark backlit lens (60 on a field of 200) whose bright core, at the field's level, covers
   // 55 % of its width in its middle: rims alike on both sides, one object (lens 9114's core
