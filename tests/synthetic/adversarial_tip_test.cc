@@ -20,6 +20,21 @@ bool RefusedAsImprecise(const vision::StrandMeasurement& m, const AdversarialTru
   return true;
 }
 
+// Every frame of `p` gives a width with its tip fixed (a σ along the axis) and within 3σ of the
+// render's tip, and a width within the matrix's tolerance or 3σ of the truth.
+void ExpectTipFixedAndWidthRight(const AdversarialScene& p) {
+  AdversarialTruth t;
+  const std::vector<vision::StrandMeasurement> measured = MeasuredMatrixFrames(p, &t);
+  for (size_t i = 0; i < measured.size(); ++i) {
+    const vision::StrandMeasurement& m = measured[i];
+    ASSERT_TRUE(m.gave_width()) << "frame " << i << ": " << m.detail;
+    ASSERT_GT(m.tip_sigma_px, 0) << "frame " << i;
+    EXPECT_LT(std::hypot(m.tip_x_px - t.tip_x_px, m.tip_y_px - t.tip_y_px), 3 * m.tip_sigma_px)
+        << "frame " << i << ": tip σ " << m.tip_sigma_px << " px";
+    ExpectWidthRight(m, t, i, p);
+  }
+}
+
 TEST(AdversarialTipTest, DieSwellPutsTheTipAtTheNozzleAndReportsTheSwell) {
   for (uint64_t seed = 1; seed <= 6; ++seed) {
     const AdversarialScene p = RandomAdversarialScene(TroubleClass::kDieSwell, seed);
@@ -141,17 +156,7 @@ TEST(AdversarialTipTest, AFaceBesideASwellThatFlaresTooFastToFollowIsReadClearOf
   // flare gave a step, 4-5 px below the face, and in three frames of four the width (the band's
   // mean over a width falling 0.9 px a px along it) came out 2.1-2.9 px narrow at σ 0.23-0.28.
   // Read again about the face first found, the columns clear of the flare read it too.
-  const AdversarialScene p = RandomAdversarialScene(TroubleClass::kDieSwell, 9422);
-  AdversarialTruth t;
-  const std::vector<vision::StrandMeasurement> measured = MeasuredMatrixFrames(p, &t);
-  for (size_t i = 0; i < measured.size(); ++i) {
-    const vision::StrandMeasurement& m = measured[i];
-    ASSERT_TRUE(m.gave_width()) << "frame " << i << ": " << m.detail;
-    ASSERT_GT(m.tip_sigma_px, 0) << "frame " << i;
-    EXPECT_LT(std::hypot(m.tip_x_px - t.tip_x_px, m.tip_y_px - t.tip_y_px), 3 * m.tip_sigma_px)
-        << "frame " << i << ": tip σ " << m.tip_sigma_px << " px";
-    ExpectWidthRight(m, t, i, p);
-  }
+  ExpectTipFixedAndWidthRight(RandomAdversarialScene(TroubleClass::kDieSwell, 9422));
 }
 
 TEST(AdversarialTipTest, AStepReadBelowWhereTheEdgesEndIsNotTheStrandsEnd) {
@@ -161,17 +166,7 @@ TEST(AdversarialTipTest, AStepReadBelowWhereTheEdgesEndIsNotTheStrandsEnd) {
   // edges were still followed was taken for it: the tip 10 px low at σ 0.5, the width (the band's
   // mean over the relaxing swell) 1.65 px narrow at σ 0.10-0.12. The end is looked for again
   // further up, where it is.
-  const AdversarialScene p = RandomAdversarialScene(TroubleClass::kDieSwell, 3664);
-  AdversarialTruth t;
-  const std::vector<vision::StrandMeasurement> measured = MeasuredMatrixFrames(p, &t);
-  for (size_t i = 0; i < measured.size(); ++i) {
-    const vision::StrandMeasurement& m = measured[i];
-    ASSERT_TRUE(m.gave_width()) << "frame " << i << ": " << m.detail;
-    ASSERT_GT(m.tip_sigma_px, 0) << "frame " << i;
-    EXPECT_LT(std::hypot(m.tip_x_px - t.tip_x_px, m.tip_y_px - t.tip_y_px), 3 * m.tip_sigma_px)
-        << "frame " << i << ": tip σ " << m.tip_sigma_px << " px";
-    ExpectWidthRight(m, t, i, p);
-  }
+  ExpectTipFixedAndWidthRight(RandomAdversarialScene(TroubleClass::kDieSwell, 3664));
 }
 
 }  // namespace
