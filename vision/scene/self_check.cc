@@ -233,6 +233,12 @@ SelfCheck CheckInsideIsOneObject(const GreyImage& img, const AxisFrame& f, doubl
   if (!(step >= min_step)) return out;
   const auto object_like = [&](int k) { return std::abs(deviation(k)) > kObjectLikeShare * step; };
   const auto background_like = [&](int k) { return std::abs(deviation(k)) < kGapLevelBand * step; };
+  // Whether the object's body shows anywhere over [from, to).
+  const auto body_in = [&](int from, int to) {
+    for (int j = from; j < to; ++j)
+      if (object_like(j)) return true;
+    return false;
+  };
   // The deviation from the background farthest from it over [from, to).
   const auto extreme = [&](int from, int to) {
     double e = 0;
@@ -255,9 +261,7 @@ SelfCheck CheckInsideIsOneObject(const GreyImage& img, const AxisFrame& f, doubl
     while (end < n && background_like(end)) sum += deviation(end), ++end;
     const int run = end - k;
     if (end < n && run >= gap_run_px && std::abs(sum / run) <= kGapLevelShare * step) {
-      bool body_before = false, body_after = false;
-      for (int j = 0; j < k; ++j) body_before = body_before || object_like(j);
-      for (int j = end; j < n; ++j) body_after = body_after || object_like(j);
+      const bool body_before = body_in(0, k), body_after = body_in(end, n);
       const double body_l_px = inset_px + k, body_r_px = width_px - inset_px - end;
       if (body_before && body_after && extreme(0, k) * extreme(end, n) > 0 &&
           run >= kMaxStripeShare * width_px &&
@@ -296,9 +300,7 @@ SelfCheck CheckInsideIsOneObject(const GreyImage& img, const AxisFrame& f, doubl
     if (run >= n || run < gap_run_px || run < kEdgeRunShare * width_px ||
         std::abs(sum / run) > kGapLevelShare * step)
       continue;
-    bool body = false;
-    for (int j = run; j < n && !body; ++j) body = object_like(at(j));
-    if (!body) continue;
+    if (!(from_left ? body_in(run, n) : body_in(0, n - run))) continue;
     out.passed = false;
     out.why = fmt::format(
         "the background shows just inside its {} edge: {} px at the background's level, {:.0f} % "

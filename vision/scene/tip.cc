@@ -298,7 +298,8 @@ TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0,
   // A nozzle face ends both edges together; a hair or a flank that one edge ran into does not.
   if (std::abs(l.s_end - r.s_end) > MaxTipMismatchPx(width)) return t;
   t.found = true;
-  t.s_tip_px = 0.5 * (l.s_end + r.s_end);
+  const double edges_end = 0.5 * (l.s_end + r.s_end);
+  t.s_tip_px = edges_end;
   t.widest_px = width;
   const size_t n = std::min(l.u.size(), r.u.size());
   for (size_t i = 0; i < n; ++i) t.widest_px = std::max(t.widest_px, r.u[i] - l.u[i]);
@@ -335,24 +336,21 @@ TipTrace TraceToNozzle(const GreyImage& img, const AxisFrame& a, double left_u0,
         faces = std::move(again);
       }
     }
-    const auto end_near = [&](double s) {
-      return LineAcross(ObjectEnd(img, centred, s, -kEndColumns[1] * width, -kEndColumns[0] * width,
-                                  min_face_step),
-                        ObjectEnd(img, centred, s, kEndColumns[0] * width, kEndColumns[1] * width,
-                                  min_face_step));
-    };
     // The object's end lies where its edges end, or above them where a swell flared too fast to
     // follow; never below where both edges were still followed. A step read there is something
     // inside the strand, fitted because the end itself lay just beyond reach above (swell 3664:
     // 10 px below the end, the width 1.65 px narrow at σ 0.10-0.12 in two frames of four).
-    const auto below_edges = [&](const TipEstimate& e) {
-      return e.found && e.s_px > 0.5 * (l.s_end + r.s_end) + kEndBelowEdgesPx;
+    const auto end_near = [&](double s) {
+      const TipEstimate e = LineAcross(ObjectEnd(img, centred, s, -kEndColumns[1] * width,
+                                                 -kEndColumns[0] * width, min_face_step),
+                                       ObjectEnd(img, centred, s, kEndColumns[0] * width,
+                                                 kEndColumns[1] * width, min_face_step));
+      return e.found && e.s_px > edges_end + kEndBelowEdgesPx ? TipEstimate{} : e;
     };
     // Edges that flare out into a swell too fast to follow end short of the nozzle: the object's
     // end may lie beyond the reach below, and is looked for again half a reach further up.
     TipEstimate end = end_near(s_guess);
-    if (!end.found || below_edges(end)) end = end_near(s_guess - 0.5 * kReachPx);
-    if (below_edges(end)) end = TipEstimate{};
+    if (!end.found) end = end_near(s_guess - 0.5 * kReachPx);
     // A face on one side only, or two that are not one line (a flank, a hair's end): the reading
     // nearest the guess.
     const LineReading* one = nullptr;
