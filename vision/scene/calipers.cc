@@ -533,11 +533,17 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       // Two models of the same silhouette: each within its blur of it where it holds. Beyond
       // that, one of them is wrong (a stripe the cylinder traded its blur against), and which
       // one the frame cannot tell: half the excess counts as one σ, as the shading's does.
+      // With an edge found inside the object, the cylinder's smooth interior does not hold, and
+      // the whole disagreement is doubt (a bright strand's brighter stripe 2 px inside its rim:
+      // the cylinder put the other edge 0.85 px inside the per-edge fit's, within the blur, and the
+      // width came out 1.5 px narrow at σ 0.12-0.15).
       const double sc = 0.5 * (band_s0 + band_s1);
+      const double allowed_px =
+          std::isfinite(inner_edge_px[0]) || std::isfinite(inner_edge_px[1]) ? 0.0 : sigma_guess;
       const auto excess = [&](double cylinder_u0, double per_edge_u0) {
         const double apart =
             std::abs((cylinder_u0 + lines.slope * sc) - (per_edge_u0 + slope_guess * sc));
-        return std::max(0.0, apart - sigma_guess);
+        return std::max(0.0, apart - allowed_px);
       };
       cylinder_doubt_px =
           0.5 * (excess(lines.left_u0, left_guess) + excess(lines.right_u0, right_guess));
