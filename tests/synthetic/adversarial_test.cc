@@ -175,8 +175,8 @@ TEST(AdversarialTest, AStripeByTheRimOfAStrandShadedOnBothSidesCarriesItsDoubt) 
 TEST(AdversarialTest, AStripeInsideALitStrandLeavesItsCylindersInDoubt) {
   // A bright 90.6 px strand lit from one side, through H.264, a brighter stripe (clipped at the
   // luma's white) 2 px inside one rim: refitted as lit cylinders, whose smooth interior the stripe
-  // breaks, the far edge came 0.85 px inside the per-edge fit's, within the blur (2.8 px), and the
-  // width 1.5 px narrow, valid at sigma 0.12-0.15 in three frames of four.
+  // breaks, the other edge came 0.85 px inside the per-edge fit's, within the blur (2.8 px), and
+  // the width 1.5 px narrow, valid at sigma 0.12-0.15 in three frames of four.
   const AdversarialScene p = RandomAdversarialScene(TroubleClass::kSpecularStripe, 4063);
   AdversarialTruth t;
   const std::vector<vision::StrandMeasurement> measured = MeasuredMatrixFrames(p, &t);
