@@ -3,19 +3,11 @@
 // The pixels a caliper works on: one slab of the strand, across one edge or both.
 #include <vector>
 
+#include "vision/edges/clip_levels.h"
 #include "vision/edges/edge_fit.h"
 #include "vision/edges/grey_image.h"
 
 namespace clogscope::vision {
-
-// The values at which a frame's data is clipped: its black and white, or where a codec put them. A
-// clipped plateau passed through a codec keeps a spike in the histogram near its white (x264 in
-// limited range decodes clipped white at ~233 of 235; the same read as full-range BGR at ~252 of
-// 255); such a spike is the clip level.
-struct ClipLevels {
-  float low = 0, high = 255;
-  double clipped_low_fraction = 0, clipped_high_fraction = 0;  // of the slab's pixels at or beyond
-};
 
 // The clip levels of the slab s0 <= s < s1, u0 <= u <= u1: the data's max and 0, or a spike at
 // most 1 % of black-to-white inside the data's white (black), or in the outer 4 % of its range,
@@ -55,9 +47,6 @@ inline constexpr double kGroupSpanBlurs = 0.05;
 PixelGroups GroupByU(const std::vector<EdgeSample>& samples, double span_px,
                      double interior_lo_px = 0, double interior_hi_px = 0,
                      double interior_span_px = 0);
-
-// Whether a value is at or beyond the clip levels.
-inline bool Clipped(float v, const ClipLevels& clip) { return v <= clip.low || v >= clip.high; }
 
 // Of the samples within half_px of an edge at edge_u (its transition, where the edge's position
 // is read), how many there are and how many are clipped.

@@ -176,53 +176,97 @@ struct LineModel : OnePosition {
 // A fit's samples in groups at about the same u (GroupByU, within kGroupSpanBlurs of the starting
 // blur): each group's count, mean u and mean value. With equal weights a group's pixels pull the
 // fit as their count at their mean (their offsets about it sum to zero), and the model is evaluated
-// once a group: on an edge nearly along a pixel axis, once a column.
+// once a group: on an edge nearly along a pixel axis, once a column. With clip levels to censor
+// at, also each group's clipped pixels at either level, their count and sum.
 struct Grouped {
   PixelGroups groups;
   std::vector<double> count, mean_value;
+  const ClipLevels* censor = nullptr;  // null when no sample is clipped
+  std::vector<double> count_low, sum_low, count_high, sum_high, sum;
 };
-Grouped GroupSamples(const std::vector<EdgeSample>& samples, double sigma_px) {
+Grouped GroupSamples(const std::vector<EdgeSample>& samples, double sigma_px,
+                     const ClipLevels* censor) {
   Grouped out;
   out.groups = GroupByU(samples, kGroupSpanBlurs * sigma_px);
   const size_t n = out.groups.size();
   out.count.resize(n);
   out.mean_value.resize(n);
+  bool any_clipped = false;
+  if (censor) {
+    for (const auto& smp : samples) any_clipped = any_clipped || Clipped(smp.value, *censor);
+    if (any_clipped) {
+      out.censor = censor;
+      for (auto* v : {&out.count_low, &out.sum_low, &out.count_high, &out.sum_high, &out.sum})
+        v->assign(n, 0.0);
+    }
+  }
   int k = 0;
   for (size_t g = 0; g < n; ++g) {
     double sum = 0;
     const int begin = k;
-    for (const int end = out.groups.end[g]; k < end; ++k)
-      sum += samples[out.groups.pixels[k]].value;
+    for (const int end = out.groups.end[g]; k < end; ++k) {
+      const float v = samples[out.groups.pixels[k]].value;
+      sum += v;
+      if (!out.censor) continue;
+      if (v <= censor->low) ++out.count_low[g], out.sum_low[g] += v;
+      if (v >= censor->high) ++out.count_high[g], out.sum_high[g] += v;
+    }
     out.count[g] = k - begin;
     out.mean_value[g] = sum / (k - begin);
+    if (out.censor) out.sum[g] = sum;
   }
   return out;
 }
 
+// Which of a group's pixels count at a model value m, how many and their mean value: all of
+// them, or, where m lies beyond a clip level its clipped pixels reach, the others (CensoredBy).
+struct GroupPart {
+  double count, mean_value;
+  bool censored;  // its clipped pixels left out
+};
+GroupPart CountedPart(const Grouped& grouped, size_t g, double m) {
+  if (grouped.censor) {
+    const ClipLevels& clip = *grouped.censor;
+    const auto without = [&](double clipped, double clipped_sum) {
+      const double n = grouped.count[g] - clipped;
+      return GroupPart{n, n > 0 ? (grouped.sum[g] - clipped_sum) / n : 0.0, true};
+    };
+    if (grouped.count_high[g] > 0 && m >= clip.high)
+      return without(grouped.count_high[g], grouped.sum_high[g]);
+    if (grouped.count_low[g] > 0 && m <= clip.low)
+      return without(grouped.count_low[g], grouped.sum_low[g]);
+  }
+  return {grouped.count[g], grouped.mean_value[g], false};
+}
+
 // The groups' part of the residuals' sum of squares, Σ count·(model at the mean u − mean value)²,
-// with its Gauss-Newton system J^T J and J^T r at p. What it leaves out, each pixel's residual
-// about its group's, moves with p only through the model's slope across the group; Solve adds it
-// where the fit ends.
+// with its Gauss-Newton system J^T J and J^T r at p, and how many pixels it counts (*counted).
+// What it leaves out, each pixel's residual about its group's, moves with p only through the
+// model's slope across the group; Solve adds it where the fit ends.
 template <typename Model>
 double Evaluate(const Grouped& grouped, const Vec<Model::kN>& p, double u_ref, const Model& model,
-                Mat<Model::kN>* jtj, Vec<Model::kN>* jtr) {
+                Mat<Model::kN>* jtj, Vec<Model::kN>* jtr, double* counted = nullptr) {
   constexpr int N = Model::kN;
   double h[N][N] = {}, g[N] = {};
-  double cost = 0;
+  double cost = 0, n = 0;
   for (size_t k = 0; k < grouped.count.size(); ++k) {
     const double u = grouped.groups.mean_u_px[k];
     double value, j[N];
     model(u - u_ref, u, p.data(), &value, j);
-    const double r = value - grouped.mean_value[k];
-    cost += grouped.count[k] * r * r;
-    fitcore::Accumulate<N>(j, r, grouped.count[k], h, g);
+    const GroupPart part = CountedPart(grouped, k, value);
+    if (part.count == 0) continue;
+    const double r = value - part.mean_value;
+    cost += part.count * r * r;
+    n += part.count;
+    fitcore::Accumulate<N>(j, r, part.count, h, g);
   }
   fitcore::Symmetric<N>(h, g, jtj, jtr);
+  if (counted) *counted = n;
   return cost;
 }
 
 // The pixels' residuals about their groups' at p: Σ (slope·offset − (value − mean value))², the
-// slope the model's across u.
+// slope the model's across u (of the pixels each group counts).
 template <typename Model>
 double WithinGroups(const std::vector<EdgeSample>& samples, const Grouped& grouped,
                     const Vec<Model::kN>& p, double u_ref, const Model& model) {
@@ -234,9 +278,11 @@ double WithinGroups(const std::vector<EdgeSample>& samples, const Grouped& group
     double value, j[N];
     model(u - u_ref, u, p.data(), &value, j);
     const double slope = Model::SlopeAcrossU(p.data(), j);
+    const GroupPart part = CountedPart(grouped, g, value);
     for (const int end = grouped.groups.end[g]; k < end; ++k) {
-      const double r = slope * grouped.groups.offset_px[k] -
-                       (samples[grouped.groups.pixels[k]].value - grouped.mean_value[g]);
+      const float v = samples[grouped.groups.pixels[k]].value;
+      if (part.censored && CensoredBy(v, value, *grouped.censor)) continue;
+      const double r = slope * grouped.groups.offset_px[k] - (v - part.mean_value);
       cost += r * r;
     }
   }
@@ -248,14 +294,15 @@ double WithinGroups(const std::vector<EdgeSample>& samples, const Grouped& group
 // normal matrix scaled by the residual variance.
 template <typename Model>
 EdgeFit Solve(const std::vector<EdgeSample>& samples, const Vec<Model::kN>& p0, double u_ref,
-              const Model& model, Vec<Model::kN>* solved = nullptr) {
+              const Model& model, Vec<Model::kN>* solved = nullptr,
+              const ClipLevels* censor = nullptr) {
   constexpr int N = Model::kN;
   EdgeFit fit;
   fit.samples = static_cast<int>(samples.size());
   // The groups span kGroupSpanBlurs of the blur they are made for: of the start's, then, should the
   // fit end at less than a quarter of it, of the fit's, and the fit runs again from there (from a
   // guess ten times a sharp edge's blur, 1 fit in 10 had reported its edge's σ above 0.2 px).
-  Grouped grouped = GroupSamples(samples, p0[kS]);
+  Grouped grouped = GroupSamples(samples, p0[kS], censor);
   double within_start = 0;
   const auto run = [&](const Vec<N>& from) {
     // The cost LM compares carries the pixels' part about their groups as it is at the start: it
@@ -273,7 +320,7 @@ EdgeFit Solve(const std::vector<EdgeSample>& samples, const Vec<Model::kN>& p0, 
   };
   auto lm = run(p0);
   if (lm.converged && lm.p[kS] < 0.25 * p0[kS]) {
-    grouped = GroupSamples(samples, lm.p[kS]);
+    grouped = GroupSamples(samples, lm.p[kS], censor);
     const int first_iterations = lm.iterations;
     lm = run(lm.p);
     lm.iterations += first_iterations;
@@ -288,8 +335,16 @@ EdgeFit Solve(const std::vector<EdgeSample>& samples, const Vec<Model::kN>& p0, 
   fit.base = p[kA];
   fit.slope_per_px = p[kB];
   if (solved) *solved = p;
-  const int dof = fit.samples - N;
-  fit.rms = std::sqrt(lm.cost / fit.samples);
+  // Censored, the pixels left out carry no residual: the residuals are the others'.
+  double counted = fit.samples;
+  if (grouped.censor) {
+    Mat<N> jtj;
+    Vec<N> jtr;
+    Evaluate(grouped, p, u_ref, model, &jtj, &jtr, &counted);
+    fit.samples = static_cast<int>(counted);
+  }
+  const double dof = counted - N;
+  fit.rms = counted > 0 ? std::sqrt(lm.cost / counted) : 0.0;
   const double residual_var = dof > 0 ? lm.cost / dof : 0.0;
   const Mat<N> cov = lm.jtj.ldlt().solve(Mat<N>::Identity());
   fit.edge_sigma_px = std::sqrt(std::max(0.0, cov(kE, kE) * residual_var));
@@ -327,7 +382,7 @@ namespace {
 template <typename Model>
 EdgeFit FitStepModel(const std::vector<EdgeSample>& samples, double edge_guess_px,
                      double sigma_guess_px, double u_ref, size_t min_samples, const Model& model,
-                     Vec<Model::kN>* solved = nullptr) {
+                     Vec<Model::kN>* solved = nullptr, const ClipLevels* censor = nullptr) {
   EdgeFit fit;
   fit.samples = static_cast<int>(samples.size());
   if (solved) solved->setZero();
@@ -340,7 +395,7 @@ EdgeFit FitStepModel(const std::vector<EdgeSample>& samples, double edge_guess_p
   p[kC] = hi - lo;
   p[kE] = edge_guess_px;
   p[kS] = std::max(sigma_guess_px, 0.5);
-  fit = Solve(samples, p, u_ref, model, solved);
+  fit = Solve(samples, p, u_ref, model, solved, censor);
   fit.u_ref = u_ref;
   fit.contrast = fit.step;  // FitShadedStep adds its ramp's part
   return fit;
@@ -348,13 +403,14 @@ EdgeFit FitStepModel(const std::vector<EdgeSample>& samples, double edge_guess_p
 }  // namespace
 
 EdgeFit FitBlurredStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
-                       double sigma_guess_px, double u_ref) {
-  return FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 8, StepModel());
+                       double sigma_guess_px, double u_ref, const ClipLevels* censor) {
+  return FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 8, StepModel(), nullptr,
+                      censor);
 }
 
 EdgeFit FitStepBeforeInnerStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
                                double sigma_guess_px, double u_ref, double inner_guess_px,
-                               double far_guess_px) {
+                               double far_guess_px, const ClipLevels* censor) {
   EdgeFit fit;
   fit.samples = static_cast<int>(samples.size());
   const bool stripe = std::isfinite(far_guess_px);
@@ -400,7 +456,7 @@ EdgeFit FitStepBeforeInnerStep(const std::vector<EdgeSample>& samples, double ed
   // Either model's fit, and the inner step's amplitude and place from its solution.
   const auto solve = [&](const auto& model, const auto& p) {
     std::decay_t<decltype(p)> solved;
-    fit = Solve(samples, p, u_ref, model, &solved);
+    fit = Solve(samples, p, u_ref, model, &solved, censor);
     fit.inner_step = solved[kC2];
     fit.inner_edge_px = solved[kE2];
     return solved;
@@ -426,11 +482,13 @@ EdgeFit FitStepBeforeInnerStep(const std::vector<EdgeSample>& samples, double ed
 }
 
 EdgeFit FitShadedStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
-                      double sigma_guess_px, double u_ref, int object_side) {
+                      double sigma_guess_px, double u_ref, int object_side,
+                      const ClipLevels* censor) {
   ShadedStepModel model;
   model.iota = object_side > 0 ? 1.0 : -1.0;
   Vec<ShadedStepModel::kN> solved;
-  EdgeFit fit = FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 10, model, &solved);
+  EdgeFit fit =
+      FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 10, model, &solved, censor);
   fit.shading = solved[kK];
   if (fit.samples < 10) return fit;
   fit.object_side = object_side > 0 ? 1 : -1;
@@ -441,15 +499,16 @@ EdgeFit FitShadedStep(const std::vector<EdgeSample>& samples, double edge_guess_
 }
 
 EdgeFit FitPeakedStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
-                      double sigma_guess_px, double u_ref) {
-  return FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 10, PeakedStepModel());
+                      double sigma_guess_px, double u_ref, const ClipLevels* censor) {
+  return FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 10, PeakedStepModel(), nullptr,
+                      censor);
 }
 
 EdgeFit FitTwoSlopeStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
-                        double sigma_guess_px, double u_ref) {
+                        double sigma_guess_px, double u_ref, const ClipLevels* censor) {
   Vec<TwoSlopeStepModel::kN> solved;
-  EdgeFit fit =
-      FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 10, TwoSlopeStepModel(), &solved);
+  EdgeFit fit = FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 10, TwoSlopeStepModel(),
+                             &solved, censor);
   fit.slope_change_per_px = solved[kK];
   return fit;
 }

@@ -5,6 +5,8 @@
 #include <limits>
 #include <vector>
 
+#include "vision/edges/clip_levels.h"
+
 namespace clogscope::vision {
 
 // One pixel near an edge: its distance across the edge direction (px) and its grey value.
@@ -49,13 +51,19 @@ inline double PsfSigmaPx(const EdgeFit& fit) {
   return std::sqrt(std::max(0.0, fit.sigma_px * fit.sigma_px - 1.0 / 12.0));
 }
 
+// Clipped samples in the step fits (`censor`, when given): a sample at or beyond a clip level says
+// only that the scene there lies at or beyond it. Where the model lies beyond the level too, the
+// sample is left out of the fit (and of its residuals); elsewhere it counts as its value, as
+// without `censor`. A clipped lamp's spot behind an edge, or a stripe clipped inside the object,
+// then no longer cuts the step short.
+
 // The blurred step whose sides slope differently (a background gradient or texture on one side of
 // a silhouette, a flat object on the other):
 //   value(u) = base + slope·(u − u_ref) + step·Φ(z) + k·sigma_px·(zΦ(z) + φ(z)),
 // the last term a ramp of slope k on the +u side, blurred with the step. One parameter more than
 // FitBlurredStep, which it equals when both sides slope alike.
 EdgeFit FitTwoSlopeStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
-                        double sigma_guess_px, double u_ref);
+                        double sigma_guess_px, double u_ref, const ClipLevels* censor = nullptr);
 
 // The blurred step through a symmetric PSF somewhat more or less peaked than a Gaussian (a colour
 // camera's demosaiced luma, a lens's aberrations), to the first Gram–Charlier term:
@@ -64,7 +72,7 @@ EdgeFit FitTwoSlopeStep(const std::vector<EdgeSample>& samples, double edge_gues
 // profile is no evidence of a lit cylinder's one-sided shading. One parameter more than
 // FitBlurredStep. (EdgeModelValue does not evaluate it: only its residuals are used.)
 EdgeFit FitPeakedStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
-                      double sigma_guess_px, double u_ref);
+                      double sigma_guess_px, double u_ref, const ClipLevels* censor = nullptr);
 
 // How far FitBlurredStep over [−below_px, above_px] puts the edge of a step of `step` (signed:
 // value at +u less value at −u) and blur sigma_px (EdgeFit::sigma_px) whose +u side slopes by
@@ -80,7 +88,7 @@ double EdgeModelValue(const EdgeFit& fit, double u_px);
 // Written by hand rather than with Ceres: it runs ~100 times per frame in a 1 ms budget, where a
 // 5-parameter dense solve costs less than Ceres' per-problem set-up.
 EdgeFit FitBlurredStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
-                       double sigma_guess_px, double u_ref);
+                       double sigma_guess_px, double u_ref, const ClipLevels* censor = nullptr);
 
 // FitBlurredStep with a second step of the same blur inside the object, started at
 // inner_guess_px: a stripe's or a lens core's near edge, too close to the silhouette for the
@@ -93,7 +101,8 @@ EdgeFit FitBlurredStep(const std::vector<EdgeSample>& samples, double edge_guess
 // its far side beyond its near side.
 EdgeFit FitStepBeforeInnerStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
                                double sigma_guess_px, double u_ref, double inner_guess_px,
-                               double far_guess_px = std::numeric_limits<double>::infinity());
+                               double far_guess_px = std::numeric_limits<double>::infinity(),
+                               const ClipLevels* censor = nullptr);
 
 // The blurred step with a lit cylinder's shading on the object side:
 //   value(u) = base + slope·(u − u_ref) + step·Φ(z) + shading·G(ι·z),  z = (u − edge_px)/sigma_px,
@@ -102,7 +111,8 @@ EdgeFit FitStepBeforeInnerStep(const std::vector<EdgeSample>& samples, double ed
 // 50 % level of a sloping plateau. With no shading present the fit returns shading ≈ 0 and the
 // same edge as FitBlurredStep.
 EdgeFit FitShadedStep(const std::vector<EdgeSample>& samples, double edge_guess_px,
-                      double sigma_guess_px, double u_ref, int object_side);
+                      double sigma_guess_px, double u_ref, int object_side,
+                      const ClipLevels* censor = nullptr);
 
 // Fit of a thin line's profile, value(u) = base + slope·(u − centre_guess) + depth·exp(−z²/2),
 // z = (u − centre)/width. The result's edge_px is the line centre, sigma_px its Gaussian width,

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <random>
 #include <utility>
 #include <vector>
@@ -151,6 +152,92 @@ TEST(EdgeFitTest, StepBeforeInnerStripeTakesTheStripesFarSideIntoTheModel) {
     for (const EdgeSample& smp : window)
       EXPECT_NEAR(EdgeModelValue(box, smp.u_px), smp.value, 0.2) << inward;
   }
+}
+
+// Samples clipped at the clip levels, as a camera or a codec clips them.
+std::vector<EdgeSample> ClippedAt(std::vector<EdgeSample> s, const ClipLevels& clip) {
+  for (EdgeSample& smp : s) smp.value = std::clamp(smp.value, clip.low, clip.high);
+  return s;
+}
+
+// A dark silhouette (40) whose background beside it is brighter than the camera's white (a
+// lamp's spot behind the edge: 330), blurred by numerical convolution, then clipped at 255: the
+// step's upper part is cut off. The plain fit takes the clipped pixels at their value and puts
+// the edge at the middle of what is left, toward the background; censored, a clipped pixel only
+// says the scene there is at least white, and the edge is where it lies. With noise, the pixels
+// just below white are those whose noise kept them there, a bias censoring leaves; the edge is
+// still within its σ, which knows the step's top is missing. On either side of the object.
+TEST(EdgeFitTest, CensoredFitPutsAnEdgeWhoseBackgroundIsClippedWhereItLies) {
+  const double edge = 0.3, blur = 1.6;
+  const ClipLevels clip{0.0f, 255.0f};
+  std::mt19937 rng(17);
+  std::normal_distribution<double> noise(0, 1.5);
+  for (const int inward : {+1, -1}) {
+    const auto scene = [&](double t) { return (t - edge) * inward < 0 ? 330.0 : 40.0; };
+    const std::vector<EdgeSample> clean = NumericallyBlurred(scene, blur, -10, 10);
+    const std::vector<EdgeSample> s = ClippedAt(clean, clip);
+    const EdgeFit plain = FitBlurredStep(s, 0.0, 1.5, 0.0);
+    const EdgeFit censored = FitBlurredStep(s, 0.0, 1.5, 0.0, &clip);
+    ASSERT_TRUE(plain.converged && censored.converged) << inward;
+    EXPECT_GT(std::abs(plain.edge_px - edge), 0.5) << inward;
+    EXPECT_NEAR(censored.edge_px, edge, 0.01) << inward;
+    EXPECT_NEAR(censored.step, inward * (40.0 - 330.0), 2.0) << inward;
+    EXPECT_NEAR(censored.sigma_px, blur, 0.02) << inward;
+
+    std::vector<EdgeSample> noisy = clean;
+    for (EdgeSample& smp : noisy) smp.value += static_cast<float>(noise(rng));
+    noisy = ClippedAt(noisy, clip);
+    const EdgeFit noisy_plain = FitBlurredStep(noisy, 0.0, 1.5, 0.0);
+    const EdgeFit noisy_censored = FitBlurredStep(noisy, 0.0, 1.5, 0.0, &clip);
+    ASSERT_TRUE(noisy_plain.converged && noisy_censored.converged) << inward;
+    EXPECT_LT(std::abs(noisy_censored.edge_px - edge), 0.3 * std::abs(noisy_plain.edge_px - edge))
+        << inward;
+    EXPECT_LT(std::abs(noisy_censored.edge_px - edge), 3 * noisy_censored.edge_sigma_px) << inward;
+    // Only the pixels left unclipped carry residuals: their noise.
+    EXPECT_NEAR(noisy_censored.rms, 1.5, 0.3) << inward;
+  }
+}
+
+// A dark silhouette (20 on a background of 180) with a stripe 4 px inside it far brighter than
+// white (400), clipped at 255: the stripe's step is cut short, and the silhouette's fitted with it
+// moves outward; censored, it is where it lies.
+TEST(EdgeFitTest, CensoredStepBeforeInnerStepSeesPastAStripeClippedAtWhite) {
+  const double edge = 0.3, blur = 1.6, gap = 4.0;
+  const ClipLevels clip{0.0f, 255.0f};
+  for (const int inward : {+1, -1}) {
+    const auto scene = [&](double t) {
+      const double d = (t - edge) * inward;  // into the object
+      return d < 0 ? 180.0 : d < gap ? 20.0 : 400.0;
+    };
+    const std::vector<EdgeSample> s = ClippedAt(NumericallyBlurred(scene, blur, -12, 12), clip);
+    const EdgeFit plain = FitStepBeforeInnerStep(s, 0.0, 1.5, 0.0, inward * gap);
+    const EdgeFit censored = FitStepBeforeInnerStep(s, 0.0, 1.5, 0.0, inward * gap,
+                                                    std::numeric_limits<double>::infinity(), &clip);
+    ASSERT_TRUE(censored.converged) << inward;
+    EXPECT_FALSE(plain.converged && std::abs(plain.edge_px - edge) < 0.1) << inward;
+    EXPECT_NEAR(censored.edge_px, edge, 0.02) << inward;
+    EXPECT_NEAR(censored.inner_edge_px, edge + inward * gap, 0.05) << inward;
+  }
+}
+
+// Pixels clipped by noise on a plateau that lies inside the clip levels (a dark strand at 6 with
+// noise 5, clipped at black): the scene is not beyond black, and the censored fit is the plain
+// one, both within their σ of the edge.
+TEST(EdgeFitTest, CensoringLeavesANoiseClippedPlateauAsItIs) {
+  std::mt19937 rng(23);
+  const ClipLevels clip{0.0f, 255.0f};
+  int clipped = 0;
+  for (int i = 0; i < 20; ++i) {
+    const auto s = ClippedAt(Samples(0.25, 1.5, 6, 200, 5.0, &rng), clip);
+    for (const EdgeSample& smp : s) clipped += Clipped(smp.value, clip);
+    const EdgeFit plain = FitBlurredStep(s, 0.0, 1.5, 0.0);
+    const EdgeFit censored = FitBlurredStep(s, 0.0, 1.5, 0.0, &clip);
+    ASSERT_TRUE(plain.converged && censored.converged);
+    EXPECT_EQ(censored.edge_px, plain.edge_px);
+    EXPECT_EQ(censored.edge_sigma_px, plain.edge_sigma_px);
+    EXPECT_LT(std::abs(censored.edge_px - 0.25), 4 * censored.edge_sigma_px);
+  }
+  EXPECT_GT(clipped, 20);  // the plateau's noise reached black (52 times)
 }
 
 // A flat strand's edge through a PSF that is not a Gaussian (a colour camera's luma: channels
