@@ -155,6 +155,10 @@ BandEdgeDoubt JudgeBandEdge(const GreyImage& img, const AxisFrame& f, const Clip
     rms.push_back(e.rms);  // every caliper's, as the far slopes pool every caliper
     const double u0 = e.edge_px - below_px, u1 = e.edge_px + above_px;
     if (!GatherEdgeSamples(img, f, c.s0_px, c.s1_px, u0, u1, clip, &samples)) continue;
+    // Clipped pixels keep their residuals, a censored fit's excess over the clip included: what
+    // the frame cannot confirm of the model is doubt. (Left out, a stripe clipped at white beside
+    // an edge through JPEG, whose smeared clip the censoring misses, lost its doubt: specular
+    // stripe 4033, 0.47 px wide at sigma 0.12.)
     for (const EdgeSample& smp : samples) {
       doubt.structure().Add(smp.u_px - e.edge_px, smp.value - EdgeModelValue(e, smp.u_px));
       pooled.Add(smp.u_px - e.edge_px, smp.value);
