@@ -177,66 +177,72 @@ struct LineModel : OnePosition {
 // blur): each group's count, mean u and mean value. With equal weights a group's pixels pull the
 // fit as their count at their mean (their offsets about it sum to zero), and the model is evaluated
 // once a group: on an edge nearly along a pixel axis, once a column. With clip levels to censor
-// at, also each group's clipped pixels at either level, their count and sum.
+// at, the pixels clipped at either level are grouped apart from the others (a group is counted
+// or left out whole) and each group knows its side: +1 clipped high, −1 low, 0 neither.
 struct Grouped {
   PixelGroups groups;
   std::vector<double> count, mean_value;
   const ClipLevels* censor = nullptr;  // null when no sample is clipped
-  std::vector<double> count_low, sum_low, count_high, sum_high, sum;
+  std::vector<signed char> clipped_side;
 };
+// GroupByU of the samples at `indices`, appended to `out` (indices into all the samples).
+void AppendGroups(const std::vector<EdgeSample>& samples, const std::vector<int>& indices,
+                  double span_px, int side, Grouped* out) {
+  if (indices.empty()) return;
+  std::vector<EdgeSample> part(indices.size());
+  for (size_t i = 0; i < indices.size(); ++i) part[i] = samples[indices[i]];
+  const PixelGroups g = GroupByU(part, span_px);
+  PixelGroups& all = out->groups;
+  const int base = static_cast<int>(all.pixels.size());
+  for (size_t k = 0; k < g.pixels.size(); ++k) {
+    all.pixels.push_back(indices[g.pixels[k]]);
+    all.offset_px.push_back(g.offset_px[k]);
+  }
+  for (size_t k = 0; k < g.size(); ++k) {
+    all.end.push_back(base + g.end[k]);
+    all.mean_u_px.push_back(g.mean_u_px[k]);
+    out->clipped_side.push_back(static_cast<signed char>(side));
+  }
+}
 Grouped GroupSamples(const std::vector<EdgeSample>& samples, double sigma_px,
                      const ClipLevels* censor) {
   Grouped out;
-  out.groups = GroupByU(samples, kGroupSpanBlurs * sigma_px);
+  const double span_px = kGroupSpanBlurs * sigma_px;
+  bool any_clipped = false;
+  if (censor)
+    for (const auto& smp : samples) any_clipped = any_clipped || Clipped(smp.value, *censor);
+  if (any_clipped) {
+    out.censor = censor;
+    std::vector<int> by_side[3];  // low, neither, high
+    for (int i = 0; i < static_cast<int>(samples.size()); ++i) {
+      const float v = samples[i].value;
+      by_side[v <= censor->low ? 0 : v >= censor->high ? 2 : 1].push_back(i);
+    }
+    for (int side = -1; side <= 1; ++side)
+      AppendGroups(samples, by_side[side + 1], span_px, side, &out);
+  } else {
+    out.groups = GroupByU(samples, span_px);
+  }
   const size_t n = out.groups.size();
   out.count.resize(n);
   out.mean_value.resize(n);
-  bool any_clipped = false;
-  if (censor) {
-    for (const auto& smp : samples) any_clipped = any_clipped || Clipped(smp.value, *censor);
-    if (any_clipped) {
-      out.censor = censor;
-      for (auto* v : {&out.count_low, &out.sum_low, &out.count_high, &out.sum_high, &out.sum})
-        v->assign(n, 0.0);
-    }
-  }
   int k = 0;
   for (size_t g = 0; g < n; ++g) {
     double sum = 0;
     const int begin = k;
-    for (const int end = out.groups.end[g]; k < end; ++k) {
-      const float v = samples[out.groups.pixels[k]].value;
-      sum += v;
-      if (!out.censor) continue;
-      if (v <= censor->low) ++out.count_low[g], out.sum_low[g] += v;
-      if (v >= censor->high) ++out.count_high[g], out.sum_high[g] += v;
-    }
+    for (const int end = out.groups.end[g]; k < end; ++k)
+      sum += samples[out.groups.pixels[k]].value;
     out.count[g] = k - begin;
     out.mean_value[g] = sum / (k - begin);
-    if (out.censor) out.sum[g] = sum;
   }
   return out;
 }
 
-// Which of a group's pixels count at a model value m, how many and their mean value: all of
-// them, or, where m lies beyond a clip level its clipped pixels reach, the others (CensoredBy).
-struct GroupPart {
-  double count, mean_value;
-  bool censored;  // its clipped pixels left out
-};
-GroupPart CountedPart(const Grouped& grouped, size_t g, double m) {
-  if (grouped.censor) {
-    const ClipLevels& clip = *grouped.censor;
-    const auto without = [&](double clipped, double clipped_sum) {
-      const double n = grouped.count[g] - clipped;
-      return GroupPart{n, n > 0 ? (grouped.sum[g] - clipped_sum) / n : 0.0, true};
-    };
-    if (grouped.count_high[g] > 0 && m >= clip.high)
-      return without(grouped.count_high[g], grouped.sum_high[g]);
-    if (grouped.count_low[g] > 0 && m <= clip.low)
-      return without(grouped.count_low[g], grouped.sum_low[g]);
-  }
-  return {grouped.count[g], grouped.mean_value[g], false};
+// Whether a group is left out at a model value m there: its pixels are clipped and m lies beyond
+// their level (CensoredBy, at their mean value: beyond the level too).
+bool LeftOut(const Grouped& grouped, size_t g, double m) {
+  return grouped.censor && grouped.clipped_side[g] != 0 &&
+         CensoredBy(static_cast<float>(grouped.mean_value[g]), m, *grouped.censor);
 }
 
 // The groups' part of the residuals' sum of squares, Σ count·(model at the mean u − mean value)²,
@@ -253,12 +259,11 @@ double Evaluate(const Grouped& grouped, const Vec<Model::kN>& p, double u_ref, c
     const double u = grouped.groups.mean_u_px[k];
     double value, j[N];
     model(u - u_ref, u, p.data(), &value, j);
-    const GroupPart part = CountedPart(grouped, k, value);
-    if (part.count == 0) continue;
-    const double r = value - part.mean_value;
-    cost += part.count * r * r;
-    n += part.count;
-    fitcore::Accumulate<N>(j, r, part.count, h, g);
+    if (LeftOut(grouped, k, value)) continue;
+    const double r = value - grouped.mean_value[k];
+    cost += grouped.count[k] * r * r;
+    n += grouped.count[k];
+    fitcore::Accumulate<N>(j, r, grouped.count[k], h, g);
   }
   fitcore::Symmetric<N>(h, g, jtj, jtr);
   if (counted) *counted = n;
@@ -266,7 +271,7 @@ double Evaluate(const Grouped& grouped, const Vec<Model::kN>& p, double u_ref, c
 }
 
 // The pixels' residuals about their groups' at p: Σ (slope·offset − (value − mean value))², the
-// slope the model's across u (of the pixels each group counts).
+// slope the model's across u (of the groups counted).
 template <typename Model>
 double WithinGroups(const std::vector<EdgeSample>& samples, const Grouped& grouped,
                     const Vec<Model::kN>& p, double u_ref, const Model& model) {
@@ -278,11 +283,13 @@ double WithinGroups(const std::vector<EdgeSample>& samples, const Grouped& group
     double value, j[N];
     model(u - u_ref, u, p.data(), &value, j);
     const double slope = Model::SlopeAcrossU(p.data(), j);
-    const GroupPart part = CountedPart(grouped, g, value);
+    if (LeftOut(grouped, g, value)) {
+      k = grouped.groups.end[g];
+      continue;
+    }
     for (const int end = grouped.groups.end[g]; k < end; ++k) {
-      const float v = samples[grouped.groups.pixels[k]].value;
-      if (part.censored && CensoredBy(v, value, *grouped.censor)) continue;
-      const double r = slope * grouped.groups.offset_px[k] - (v - part.mean_value);
+      const double r = slope * grouped.groups.offset_px[k] -
+                       (samples[grouped.groups.pixels[k]].value - grouped.mean_value[g]);
       cost += r * r;
     }
   }
@@ -335,13 +342,15 @@ EdgeFit Solve(const std::vector<EdgeSample>& samples, const Vec<Model::kN>& p0, 
   fit.base = p[kA];
   fit.slope_per_px = p[kB];
   if (solved) *solved = p;
-  // Censored, the pixels left out carry no residual: the residuals are the others'.
+  // Censored, the pixels left out carry no residual: the residuals are the others', and a fit
+  // with no more of them than parameters has no σ (not converged).
   double counted = fit.samples;
   if (grouped.censor) {
     Mat<N> jtj;
     Vec<N> jtr;
     Evaluate(grouped, p, u_ref, model, &jtj, &jtr, &counted);
     fit.samples = static_cast<int>(counted);
+    if (counted <= N) fit.converged = false;
   }
   const double dof = counted - N;
   fit.rms = counted > 0 ? std::sqrt(lm.cost / counted) : 0.0;
@@ -490,7 +499,7 @@ EdgeFit FitShadedStep(const std::vector<EdgeSample>& samples, double edge_guess_
   EdgeFit fit =
       FitStepModel(samples, edge_guess_px, sigma_guess_px, u_ref, 10, model, &solved, censor);
   fit.shading = solved[kK];
-  if (fit.samples < 10) return fit;
+  if (samples.size() < 10) return fit;
   fit.object_side = object_side > 0 ? 1 : -1;
   double g2, dg2;
   BlurredSqrt::Get()(2.0, &g2, &dg2);

@@ -52,10 +52,11 @@ inline double PsfSigmaPx(const EdgeFit& fit) {
 }
 
 // Clipped samples in the step fits (`censor`, when given): a sample at or beyond a clip level says
-// only that the scene there lies at or beyond it. Where the model lies beyond the level too, the
-// sample is left out of the fit (and of its residuals); elsewhere it counts as its value, as
-// without `censor`. A clipped lamp's spot behind an edge, or a stripe clipped inside the object,
-// then no longer cuts the step short.
+// only that the scene there is at or beyond it. The clipped samples are grouped by u apart from
+// the others; where the model at such a group lies beyond its level, the group is left out of the
+// fit; elsewhere it counts at its values, as without `censor`. The fit's `samples` and `rms` are
+// then the counted samples'. A clipped lamp's spot behind an edge, or a stripe clipped inside the
+// object, then no longer pulls the step's plateau down to the clip.
 
 // The blurred step whose sides slope differently (a background gradient or texture on one side of
 // a silhouette, a flat object on the other):
