@@ -15,10 +15,4 @@ struct ClipLevels {
 // Whether a value is at or beyond the clip levels.
 inline bool Clipped(float v, const ClipLevels& clip) { return v <= clip.low || v >= clip.high; }
 
-// Whether a clipped value says nothing against a model's value there: the model lies beyond the
-// level the value is clipped at. The censored edge fits leave such samples out (edge_fit.h).
-inline bool CensoredBy(float v, double model, const ClipLevels& clip) {
-  return (v >= clip.high && model >= clip.high) || (v <= clip.low && model <= clip.low);
-}
-
 }  // namespace clogscope::vision

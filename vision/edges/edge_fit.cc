@@ -208,10 +208,8 @@ Grouped GroupSamples(const std::vector<EdgeSample>& samples, double sigma_px,
                      const ClipLevels* censor) {
   Grouped out;
   const double span_px = kGroupSpanBlurs * sigma_px;
-  bool any_clipped = false;
-  if (censor)
-    for (const auto& smp : samples) any_clipped = any_clipped || Clipped(smp.value, *censor);
-  if (any_clipped) {
+  if (censor && std::any_of(samples.begin(), samples.end(),
+                            [&](const EdgeSample& smp) { return Clipped(smp.value, *censor); })) {
     out.censor = censor;
     std::vector<int> by_side[3];  // low, neither, high
     for (int i = 0; i < static_cast<int>(samples.size()); ++i) {
@@ -239,10 +237,11 @@ Grouped GroupSamples(const std::vector<EdgeSample>& samples, double sigma_px,
 }
 
 // Whether a group is left out at a model value m there: its pixels are clipped and m lies beyond
-// their level (CensoredBy, at their mean value: beyond the level too).
+// their level.
 bool LeftOut(const Grouped& grouped, size_t g, double m) {
-  return grouped.censor && grouped.clipped_side[g] != 0 &&
-         CensoredBy(static_cast<float>(grouped.mean_value[g]), m, *grouped.censor);
+  if (!grouped.censor) return false;
+  const int side = grouped.clipped_side[g];
+  return (side > 0 && m >= grouped.censor->high) || (side < 0 && m <= grouped.censor->low);
 }
 
 // The groups' part of the residuals' sum of squares, Σ count·(model at the mean u − mean value)²,

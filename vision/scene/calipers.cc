@@ -214,19 +214,18 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   const ClipLevels clip = FindClipLevels(
       img, f, band_s0, band_s1, left_guess + slope_guess * mid_s - reach_px,
       right_guess + slope_guess * mid_s + reach_px, LevelsOf(data_max, opt.luma_range));
-  const ClipLevels* censor = &clip;
   // A side's plain step in the window's samples about e0.
   const auto fit_plain = [&](int side, double e0) {
     const double inward = side == 0 ? 1.0 : -1.0;
     return inner_step[side]
                ? FitStepBeforeInnerStep(
                      samples, e0, sigma_guess, e0, e0 + inward * inner_edge_px[side],
-                     inner_stripe[side] ? e0 + inward * inner_far_px[side] : kNone, censor)
-               : FitBlurredStep(samples, e0, sigma_guess, e0, censor);
+                     inner_stripe[side] ? e0 + inward * inner_far_px[side] : kNone, &clip)
+               : FitBlurredStep(samples, e0, sigma_guess, e0, &clip);
   };
   // Its shaded step, and the step as its side's model stands (shaded once decided so).
   const auto fit_shaded = [&](int side, double e0) {
-    return FitShadedStep(samples, e0, sigma_guess, e0, side == 0 ? 1 : -1, censor);
+    return FitShadedStep(samples, e0, sigma_guess, e0, side == 0 ? 1 : -1, &clip);
   };
   const auto fit_as_decided = [&](int side, double e0) {
     return shade[side] == 1 ? fit_shaded(side, e0) : fit_plain(side, e0);
@@ -320,7 +319,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
             if (!plain.converged || (rss_alt - rss_s) / unit > kMinMedianShadingF) {
               const EdgeFit& start = plain.converged ? plain : shaded;
               const EdgeFit peaked =
-                  FitPeakedStep(samples, start.edge_px, start.sigma_px, e0, censor);
+                  FitPeakedStep(samples, start.edge_px, start.sigma_px, e0, &clip);
               if (usable(peaked)) rss_alt = std::min(rss_alt, Rss(peaked));
             }
             evidence = std::isinf(rss_alt) ? 1e9 : std::max(0.0, rss_alt - rss_s) / unit;
