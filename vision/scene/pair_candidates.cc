@@ -16,6 +16,10 @@ namespace {
 
 constexpr int kMaxCandidates = 40;     // pairs kept after scoring
 constexpr double kMixedPenalty = 0.5;  // a pair brighter on one side only is less likely
+// How far a long pair's edges may open over its length: 0.6°, and 1.7° narrowing downward below a
+// nozzle (die swell 4640, a strand 1.29 times as wide at the nozzle relaxing over 0.35 widths: its
+// lines 0.9° apart; 4727, 1.42 over 0.3 widths, 1.45°).
+constexpr double kMaxOpening = 0.01, kMaxSwellOpening = 0.03;
 // The segment's line in an axis frame: u at s.
 struct LineInAxis {
   double s0, s1, u0, u1;
@@ -32,10 +36,71 @@ Polarity PairPolarity(int left_sign, int right_sign) {
   return Polarity::kMixed;
 }
 
+// How far from a segment's line an edge point may lie and count as its (detection-scale px).
+constexpr double kLineTolPx = 2.0;
+// A segment's line at the detection scale, x = a + b·y.
+struct SmallLine {
+  double a, b;
+  int sign;
+};
+SmallLine ToSmall(const Detection& d, const EdgeSegment& e) {
+  const double f = d.factor, off = 0.5 * (d.factor - 1);
+  const double y0 = (e.top.y - off) / f, y1 = (e.bottom.y - off) / f;
+  const double x0 = (e.top.x - off) / f, x1 = (e.bottom.x - off) / f;
+  const double slope = y1 > y0 ? (x1 - x0) / (y1 - y0) : 0.0;
+  return {x0 - slope * y0, slope, e.sign};
+}
+
+// The edge point of the line's sign nearest its x on row r, within tol_px (detection scale).
+const EdgePoint* PointNear(const Detection& d, const SmallLine& l, int r, double tol_px) {
+  const double x = l.a + l.b * d.row_y[r];
+  const auto& pts = d.rows[r];
+  auto it = std::lower_bound(pts.begin(), pts.end(), x - tol_px,
+                             [](const EdgePoint& p, double v) { return p.x < v; });
+  const EdgePoint* hit = nullptr;
+  double best = tol_px;
+  for (; it != pts.end() && it->x <= x + tol_px; ++it) {
+    if (it->sign == l.sign && std::abs(it->x - x) <= best) {
+      best = std::abs(it->x - x);
+      hit = &*it;
+    }
+  }
+  return hit;
+}
+
+// Whether a pair that closes downward holds its width over the lower half of the rows both
+// edges share: a swell closes at its top and runs parallel below, where two objects that close
+// in (a hair slanting onto a strand's edge) keep closing. From the edge points near each line.
+bool ParallelBelowASwell(const Detection& d, const EdgeSegment& left, const EdgeSegment& right,
+                         double width_px) {
+  const double f = d.factor, off = 0.5 * (d.factor - 1);
+  const double y_top = std::max(left.top.y, right.top.y);
+  const double y_bottom = std::min(left.bottom.y, right.bottom.y);
+  const double y_mid = 0.5 * (y_top + y_bottom);
+  const SmallLine l = ToSmall(d, left), r = ToSmall(d, right);
+  // The widths along the rows, as a line in y: its slope is the pair's opening per px down.
+  double n = 0, sy = 0, sw = 0, syy = 0, syw = 0;
+  for (size_t k = 0; k < d.row_y.size(); ++k) {
+    const double y = d.row_y[k] * f + off;
+    if (y < y_mid || y > y_bottom) continue;
+    const EdgePoint* pl = PointNear(d, l, static_cast<int>(k), kLineTolPx);
+    const EdgePoint* pr = PointNear(d, r, static_cast<int>(k), kLineTolPx);
+    if (!pl || !pr) continue;
+    const double w = (pr->x - pl->x) * f;
+    n += 1, sy += y, sw += w, syy += y * y, syw += y * w;
+  }
+  const double den = n * syy - sy * sy;
+  if (n < kMinPiecePoints || !(den > 0)) return false;
+  const double opening_px = std::abs((n * syw - sy * sw) / den) * (y_bottom - y_mid);
+  return opening_px <= std::max({2.0, 0.03 * width_px, kMaxOpening * (y_bottom - y_mid)});
+}
+
 // Two edges as a strand silhouette: geometry and score, or false when they are not parallel, too
 // short together, too narrow or too wide. `left`/`right` in the result are 0 and 1 (a and b).
+// With the detection, a strand's pair may close downward as a swell does (ParallelBelowASwell).
 bool MakeCandidate(const EdgeSegment& a, const EdgeSegment& b, double noise_full, int roi_width,
-                   double min_overlap, const SceneOptions& o, PairCandidate* out) {
+                   double min_overlap, const SceneOptions& o, const Detection* d,
+                   PairCandidate* out) {
   const cv::Point2d da = (a.bottom - a.top) / a.length_px();
   const cv::Point2d db = (b.bottom - b.top) / b.length_px();
   const double min_len = std::min(a.length_px(), b.length_px());
@@ -58,11 +123,18 @@ bool MakeCandidate(const EdgeSegment& a, const EdgeSegment& b, double noise_full
   const double w0 = lb.U(s0) - la.U(s0), w1 = lb.U(s1) - la.U(s1);
   const double width = 0.5 * (w0 + w1);
   if (width < o.min_width_px || width > 0.9 * roi_width) return false;
-  // Not parallel enough; a long pair may open by 0.6° (a curved end, such as a swell below the
-  // nozzle, tilts a segment's fitted line).
-  if (std::abs(w1 - w0) > std::max({2.0, 0.03 * width, 0.01 * len})) return false;
   const EdgeSegment& L = li == 0 ? a : b;
   const EdgeSegment& R = li == 0 ? b : a;
+  // Not parallel enough; a long pair may open by 0.6° (a curved end tilts a segment's fitted
+  // line). A strand's pair may close downward by up to kMaxSwellOpening where it runs parallel
+  // below: a swell relaxing below the nozzle curves each edge's top, within a piece's
+  // straightness, and its line leans in.
+  const double closing = w0 - w1, allowed = std::max(2.0, 0.03 * width);
+  if (std::abs(closing) > std::max(allowed, kMaxOpening * len) &&
+      !(o.target == MeasureTarget::kStrand && d && closing > 0 &&
+        closing <= std::max(allowed, kMaxSwellOpening * len) &&
+        ParallelBelowASwell(*d, L, R, width)))
+    return false;
   const Polarity pol = PairPolarity(L.sign, R.sign);
   if (o.polarity != Polarity::kAuto && pol != o.polarity) return false;
   PairCandidate c;
@@ -93,39 +165,14 @@ bool MakeCandidate(const EdgeSegment& a, const EdgeSegment& b, double noise_full
 // gaps allowed) and refits both lines there. Returns the two edges, or false without a run.
 bool ExtendPair(const Detection& d, const EdgeSegment& a, const EdgeSegment& b, EdgeSegment* ea,
                 EdgeSegment* eb) {
-  const double f = d.factor, off = 0.5 * (d.factor - 1);
-  struct Line {
-    double a, b;
-    int sign;
-  };
-  auto to_small = [&](const EdgeSegment& e) {
-    const double y0 = (e.top.y - off) / f, y1 = (e.bottom.y - off) / f;
-    const double x0 = (e.top.x - off) / f, x1 = (e.bottom.x - off) / f;
-    const double slope = y1 > y0 ? (x1 - x0) / (y1 - y0) : 0.0;
-    return Line{x0 - slope * y0, slope, e.sign};
-  };
-  Line lines[2] = {to_small(a), to_small(b)};
-  constexpr double kTolPx = 2.0;  // small px either side of the line
+  SmallLine lines[2] = {ToSmall(d, a), ToSmall(d, b)};
   constexpr int kMaxGapRows = 6;
   const int n = static_cast<int>(d.rows.size());
   std::vector<const EdgePoint*> hit[2];
   for (int pass = 0; pass < 2; ++pass) {
     for (int side = 0; side < 2; ++side) {
       hit[side].assign(n, nullptr);
-      const Line& l = lines[side];
-      for (int r = 0; r < n; ++r) {
-        const double x = l.a + l.b * d.row_y[r];
-        const auto& pts = d.rows[r];
-        auto it = std::lower_bound(pts.begin(), pts.end(), x - kTolPx,
-                                   [](const EdgePoint& p, double v) { return p.x < v; });
-        double best = kTolPx;
-        for (; it != pts.end() && it->x <= x + kTolPx; ++it) {
-          if (it->sign == l.sign && std::abs(it->x - x) <= best) {
-            best = std::abs(it->x - x);
-            hit[side][r] = &*it;
-          }
-        }
-      }
+      for (int r = 0; r < n; ++r) hit[side][r] = PointNear(d, lines[side], r, kLineTolPx);
     }
     // Each side's runs of rows with support (gaps of up to kMaxGapRows); the pair of runs whose
     // stretches overlap most along the axis (a short, wide, tilted strand has its two edges on
@@ -197,7 +244,8 @@ std::vector<PairCandidate> PairSegments(const Detection& d, const std::vector<Ed
   for (size_t i = 0; i < edges.size(); ++i) {
     for (size_t j = i + 1; j < edges.size(); ++j) {
       PairCandidate c;
-      if (!MakeCandidate(edges[i], edges[j], noise_full, roi_width, 0.5 * o.min_length_px, o, &c))
+      if (!MakeCandidate(edges[i], edges[j], noise_full, roi_width, 0.5 * o.min_length_px, o, &d,
+                         &c))
         continue;
       c.left = c.left == 0 ? static_cast<int>(i) : static_cast<int>(j);
       c.right = c.right == 0 ? static_cast<int>(i) : static_cast<int>(j);
@@ -212,10 +260,13 @@ std::vector<PairCandidate> PairSegments(const Detection& d, const std::vector<Ed
     if (!ExtendPair(d, edges[seeds[k].left], edges[seeds[k].right], &el, &er)) continue;
     PairCandidate c;
     // Extended lines that are no longer parallel took in a curve (a strand swelling below the
-    // nozzle): the seed's own segments stand.
-    if (!MakeCandidate(el, er, noise_full, roi_width, o.min_length_px, o, &c) &&
+    // nozzle): the seed's own segments stand. (Only a seed may close as a swell does: extended,
+    // the lines of a strand and of a hair beside its top took in the hair's edge, closed by it
+    // at the top and ran parallel below, and the band was put on the two together, stringer
+    // 4685, 12.6 px wide at σ 0.16.)
+    if (!MakeCandidate(el, er, noise_full, roi_width, o.min_length_px, o, nullptr, &c) &&
         !MakeCandidate(edges[seeds[k].left], edges[seeds[k].right], noise_full, roi_width,
-                       o.min_length_px, o, &c))
+                       o.min_length_px, o, &d, &c))
       continue;
     c.left = seeds[k].left;
     c.right = seeds[k].right;

@@ -10,7 +10,8 @@
 namespace clogscope::vision {
 
 // Scores pairs of long segments as strand silhouettes: every parallel, overlapping pair seeds two
-// lines, whose support is then counted over all edge points. Best first, at most 40.
+// lines, whose support is then counted over all edge points. Best first, at most 40. A strand's
+// seed may close downward as a swell below the nozzle does, where it runs parallel below.
 std::vector<PairCandidate> PairSegments(const Detection& d, const std::vector<EdgeSegment>& edges,
                                         double noise_full, int roi_width, const SceneOptions& o);
 
