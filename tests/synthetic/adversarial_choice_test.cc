@@ -32,6 +32,21 @@ TEST(AdversarialTest, AHairBesideTheStrandIsNeverMeasuredAsIt) {
   EXPECT_GE(valid, 8);
 }
 
+TEST(AdversarialTest, TheGapBetweenAHairClosingInAndTheStrandIsNoSwell) {
+  // A bright 85 px strand and a 7.7 px hair 288 px to its left, slanting 1.2° toward it: the
+  // background between them, a dark 236 px pair, closes by 10 px over its 489 px, half of that
+  // in its lower half, as two straight lines do. Taken for a swell's closing (a swell holds a
+  // third of it there at most), it outscored the strand, and all four frames were refused
+  // (`not_silhouette`). Every frame measures the strand.
+  const AdversarialScene p = RandomAdversarialScene(TroubleClass::kStringer, 4136);
+  AdversarialTruth t;
+  const std::vector<vision::StrandMeasurement> measured = MeasuredMatrixFrames(p, &t);
+  for (size_t i = 0; i < measured.size(); ++i) {
+    ASSERT_TRUE(measured[i].gave_width()) << "frame " << i << ": " << measured[i].detail;
+    ExpectWidthRight(measured[i], t, i, p);
+  }
+}
+
 TEST(AdversarialTest, AStrandAndAHairUnderANozzleAtTheBackgroundsLevelAreAmbiguous) {
   // An 83 px strand 19° off vertical and a 10 px hair beside it, under a nozzle 2 grey levels
   // above the background: no face shows beside either. What the columns beside them read are

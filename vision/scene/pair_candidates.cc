@@ -20,6 +20,9 @@ constexpr double kMixedPenalty = 0.5;  // a pair brighter on one side only is le
 // nozzle (die swell 4640, a strand 1.29 times as wide at the nozzle relaxing over 0.35 widths: its
 // lines 0.9° apart; 4727, 1.42 over 0.3 widths, 1.45°).
 constexpr double kMaxOpening = 0.01, kMaxSwellOpening = 0.03;
+// The most of such a closing its lower half may hold: two straight lines closing in hold half of
+// it there (the gap between a hair and a strand, stringer 4136: 0.51), swells 0.01-0.26 (4738).
+constexpr double kMaxLowerClosingShare = 1.0 / 3;
 // The segment's line in an axis frame: u at s.
 struct LineInAxis {
   double s0, s1, u0, u1;
@@ -68,11 +71,12 @@ const EdgePoint* PointNear(const Detection& d, const SmallLine& l, int r, double
   return hit;
 }
 
-// Whether a pair that closes downward holds its width over the lower half of the rows both
-// edges share: a swell closes at its top and runs parallel below, where two objects that close
-// in (a hair slanting onto a strand's edge) keep closing. From the edge points near each line.
+// Whether a pair that closes downward by closing_px holds its width over the lower half of the
+// rows both edges share: a swell closes at its top and runs parallel below, where two objects
+// that close in (a hair slanting onto a strand's edge) keep closing, half of it in the lower half.
+// From the edge points near each line.
 bool ParallelBelowASwell(const Detection& d, const EdgeSegment& left, const EdgeSegment& right,
-                         double width_px) {
+                         double width_px, double closing_px) {
   const double f = d.factor, off = 0.5 * (d.factor - 1);
   const double y_top = std::max(left.top.y, right.top.y);
   const double y_bottom = std::min(left.bottom.y, right.bottom.y);
@@ -92,7 +96,8 @@ bool ParallelBelowASwell(const Detection& d, const EdgeSegment& left, const Edge
   const double den = n * syy - sy * sy;
   if (n < kMinPiecePoints || !(den > 0)) return false;
   const double opening_px = std::abs((n * syw - sy * sw) / den) * (y_bottom - y_mid);
-  return opening_px <= std::max({2.0, 0.03 * width_px, kMaxOpening * (y_bottom - y_mid)});
+  return opening_px <= std::max({2.0, 0.03 * width_px, kMaxOpening * (y_bottom - y_mid)}) &&
+         opening_px <= kMaxLowerClosingShare * closing_px;
 }
 
 // Two edges as a strand silhouette: geometry and score, or false when they are not parallel, too
@@ -133,7 +138,7 @@ bool MakeCandidate(const EdgeSegment& a, const EdgeSegment& b, double noise_full
   if (std::abs(closing) > std::max(allowed, kMaxOpening * len) &&
       !(o.target == MeasureTarget::kStrand && d && closing > 0 &&
         closing <= std::max(allowed, kMaxSwellOpening * len) &&
-        ParallelBelowASwell(*d, L, R, width)))
+        ParallelBelowASwell(*d, L, R, width, closing)))
     return false;
   const Polarity pol = PairPolarity(L.sign, R.sign);
   if (o.polarity != Polarity::kAuto && pol != o.polarity) return false;
