@@ -23,6 +23,11 @@ constexpr double kMaxOpening = 0.01, kMaxSwellOpening = 0.03;
 // The most of such a closing its lower half may hold: two straight lines closing in hold half of
 // it there (the gap between a hair and a strand, stringer 4136: 0.51), swells 0.01-0.26 (4738).
 constexpr double kMaxLowerClosingShare = 1.0 / 3;
+// What a pair width_px wide may open by over len_px at that rate per px: 2 px, or 3 % of its width.
+double MaxOpeningPx(double width_px, double len_px, double per_px) {
+  return std::max({2.0, 0.03 * width_px, per_px * len_px});
+}
+
 // The segment's line in an axis frame: u at s.
 struct LineInAxis {
   double s0, s1, u0, u1;
@@ -54,8 +59,9 @@ SmallLine ToSmall(const Detection& d, const EdgeSegment& e) {
   return {x0 - slope * y0, slope, e.sign};
 }
 
-// The edge point of the line's sign nearest its x on row r, within tol_px (detection scale).
-const EdgePoint* PointNear(const Detection& d, const SmallLine& l, int r, double tol_px) {
+// The edge point of the line's sign nearest its x on row r, within kLineTolPx.
+const EdgePoint* PointNear(const Detection& d, const SmallLine& l, int r) {
+  constexpr double tol_px = kLineTolPx;
   const double x = l.a + l.b * d.row_y[r];
   const auto& pts = d.rows[r];
   auto it = std::lower_bound(pts.begin(), pts.end(), x - tol_px,
@@ -82,21 +88,20 @@ bool ParallelBelowASwell(const Detection& d, const EdgeSegment& left, const Edge
   const double y_bottom = std::min(left.bottom.y, right.bottom.y);
   const double y_mid = 0.5 * (y_top + y_bottom);
   const SmallLine l = ToSmall(d, left), r = ToSmall(d, right);
-  // The widths along the rows, as a line in y: its slope is the pair's opening per px down.
-  double n = 0, sy = 0, sw = 0, syy = 0, syw = 0;
+  // The widths along the rows as a line in y (Piece's fit, the width in place of x): its slope is
+  // the pair's opening per px down.
+  Piece widths;
   for (size_t k = 0; k < d.row_y.size(); ++k) {
     const double y = d.row_y[k] * f + off;
     if (y < y_mid || y > y_bottom) continue;
-    const EdgePoint* pl = PointNear(d, l, static_cast<int>(k), kLineTolPx);
-    const EdgePoint* pr = PointNear(d, r, static_cast<int>(k), kLineTolPx);
-    if (!pl || !pr) continue;
-    const double w = (pr->x - pl->x) * f;
-    n += 1, sy += y, sw += w, syy += y * y, syw += y * w;
+    const EdgePoint* pl = PointNear(d, l, static_cast<int>(k));
+    const EdgePoint* pr = PointNear(d, r, static_cast<int>(k));
+    if (pl && pr) widths.pts.push_back({pr->x - pl->x, d.row_y[k], 0.0f, 0});
   }
-  const double den = n * syy - sy * sy;
-  if (n < kMinPiecePoints || !(den > 0)) return false;
-  const double opening_px = std::abs((n * syw - sy * sw) / den) * (y_bottom - y_mid);
-  return opening_px <= std::max({2.0, 0.03 * width_px, kMaxOpening * (y_bottom - y_mid)}) &&
+  if (static_cast<int>(widths.pts.size()) < kMinPiecePoints) return false;
+  widths.Fit();
+  const double half_px = y_bottom - y_mid, opening_px = std::abs(widths.b) * half_px;
+  return opening_px <= MaxOpeningPx(width_px, half_px, kMaxOpening) &&
          opening_px <= kMaxLowerClosingShare * closing_px;
 }
 
@@ -134,10 +139,10 @@ bool MakeCandidate(const EdgeSegment& a, const EdgeSegment& b, double noise_full
   // line). A strand's pair may close downward by up to kMaxSwellOpening where it runs parallel
   // below: a swell relaxing below the nozzle curves each edge's top, within a piece's
   // straightness, and its line leans in.
-  const double closing = w0 - w1, allowed = std::max(2.0, 0.03 * width);
-  if (std::abs(closing) > std::max(allowed, kMaxOpening * len) &&
+  const double closing = w0 - w1;
+  if (std::abs(closing) > MaxOpeningPx(width, len, kMaxOpening) &&
       !(o.target == MeasureTarget::kStrand && d && closing > 0 &&
-        closing <= std::max(allowed, kMaxSwellOpening * len) &&
+        closing <= MaxOpeningPx(width, len, kMaxSwellOpening) &&
         ParallelBelowASwell(*d, L, R, width, closing)))
     return false;
   const Polarity pol = PairPolarity(L.sign, R.sign);
@@ -177,7 +182,7 @@ bool ExtendPair(const Detection& d, const EdgeSegment& a, const EdgeSegment& b, 
   for (int pass = 0; pass < 2; ++pass) {
     for (int side = 0; side < 2; ++side) {
       hit[side].assign(n, nullptr);
-      for (int r = 0; r < n; ++r) hit[side][r] = PointNear(d, lines[side], r, kLineTolPx);
+      for (int r = 0; r < n; ++r) hit[side][r] = PointNear(d, lines[side], r);
     }
     // Each side's runs of rows with support (gaps of up to kMaxGapRows); the pair of runs whose
     // stretches overlap most along the axis (a short, wide, tilted strand has its two edges on
