@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -55,6 +56,40 @@ TEST(MedianStandardErrorTest, MatchesTheScatterOfMediansOfNormalSamples) {
   EXPECT_NEAR(scatter, 0.63, 0.03);
   EXPECT_NEAR(estimated / kSamples / scatter, 1.0, 0.15);
   EXPECT_EQ(MedianStandardError({}, 0), 0);
+}
+
+// The median networks give nth_element's middle values. On every input of 0s and 1s (a
+// compare-exchange network that puts those right puts every input right: the 0-1 principle), and
+// on random values with many ties.
+TEST(MedianNetworkTest, GivesTheMiddleValuesOfASelection) {
+  const auto selected = [](std::vector<double> v, size_t k) {
+    std::nth_element(v.begin(), v.begin() + k, v.end());
+    return v[k];
+  };
+  const auto check = [&](const std::vector<double>& values) {
+    std::vector<double> v = values;
+    if (values.size() == 8) {
+      ASSERT_EQ(MedianOf8(v.data()), 0.5 * (selected(values, 4) + selected(values, 3)));
+      v = values;
+      ASSERT_EQ(MedianOf8(v.data()), Median(values));
+    } else {
+      ASSERT_EQ(UpperMedianOf12(v.data()), selected(values, 6));
+    }
+  };
+  for (size_t n : {8, 12})
+    for (unsigned bits = 0; bits < (1u << n); ++bits) {
+      std::vector<double> v(n);
+      for (size_t i = 0; i < n; ++i) v[i] = (bits >> i) & 1;
+      check(v);
+    }
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> level(0, 9);
+  for (int trial = 0; trial < 20000; ++trial)
+    for (size_t n : {8, 12}) {
+      std::vector<double> v(n);
+      for (double& x : v) x = level(rng) + 0.25 * (trial % 4);
+      check(v);
+    }
 }
 
 }  // namespace

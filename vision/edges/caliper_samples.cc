@@ -338,27 +338,42 @@ double InnerEdgeDistance(const GreyImage& img, const AxisFrame& f, double s0, do
   // within max_depth_px, the rows' spread about it, which at a place along the profile is noise
   // (and texture), not the object's structure across it. Sampled as far as `until`, or until the
   // rows leave the image (the profile ends there).
-  std::vector<double> profile, spread, column;
+  std::vector<double> profile, spread;
+  // Each row's point at u = 0 (ImageX/ImageY less their u term, summed in their order): the same
+  // doubles as ImageX(s, u) and ImageY(s, u) give, without the row's s worked out at every step.
+  double row_x[kRows], row_y[kRows];
+  for (int r = 0; r < kRows; ++r) {
+    const double s = s0 + (s1 - s0) * (r + 0.5) / kRows;
+    row_x[r] = f.ox + s * f.dx;
+    row_y[r] = f.oy + s * f.dy;
+  }
+  // The middle value (the upper of two) of a column: of a whole one through a median network
+  // (robust.h), of one cut short by the image's side through nth_element. The same value either
+  // way.
+  static_assert(kRows == 12);
+  const auto middle = [](double* v, int n) {
+    if (n == kRows) return UpperMedianOf12(v);
+    std::nth_element(v, v + n / 2, v + n);
+    return v[n / 2];
+  };
+  double column[kRows];
   bool ended = false;
   const auto extend = [&](int until) {
     for (int i = static_cast<int>(profile.size()); i < until && !ended; ++i) {
       const double u = edge_u + inward * (i * kStepPx - kBehindPx);
-      column.clear();
+      int n = 0;
       for (int r = 0; r < kRows; ++r) {
-        const double s = s0 + (s1 - s0) * (r + 0.5) / kRows;
-        const double x = f.ImageX(s, u), y = f.ImageY(s, u);
-        if (img.InsideForBilinear(x, y)) column.push_back(img.Bilinear(x, y));
+        const double x = row_x[r] + u * f.dy, y = row_y[r] - u * f.dx;
+        if (img.InsideForBilinear(x, y)) column[n++] = img.Bilinear(x, y);
       }
-      if (column.size() < kRows / 2) {
+      if (n < kRows / 2) {
         ended = true;
         break;
       }
-      std::nth_element(column.begin(), column.begin() + column.size() / 2, column.end());
-      profile.push_back(column[column.size() / 2]);
+      profile.push_back(middle(column, n));
       if (i < n_first) {
-        for (double& v : column) v = std::abs(v - profile[i]);
-        std::nth_element(column.begin(), column.begin() + column.size() / 2, column.end());
-        spread.push_back(column[column.size() / 2]);
+        for (int k = 0; k < n; ++k) column[k] = std::abs(column[k] - profile[i]);
+        spread.push_back(middle(column, n));
       }
     }
   };

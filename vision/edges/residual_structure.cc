@@ -15,6 +15,17 @@ namespace {
 // background within 2σ of it or this share of it (a pixel's box is not quite a Gaussian's blur).
 constexpr double kMaxObjectSlopeShare = 0.25, kSameMoveShare = 0.1;
 
+// std::lround to the same integer, without a call into libm for every pooled sample's bin (1.6 %
+// of a tracked frame's instructions). Exact for finite |x| < 2^52: x less its integer part is its
+// fraction.
+long RoundHalfAway(double x) {
+  long r = static_cast<long>(x);
+  const double fraction = x - static_cast<double>(r);
+  if (fraction >= 0.5) ++r;
+  if (fraction <= -0.5) --r;
+  return r;
+}
+
 // The band's pooled profile about its calipers' own edges, from below_px before each to above_px
 // after it, in 0.1 px bins (far finer than any blur: the fits then cost what two calipers' do, not
 // what the whole band's samples would).
@@ -29,7 +40,7 @@ class PooledProfile {
   void Add(double u_from_edge_px, float value) {
     // The same float distance for every sample at one place.
     const float u = static_cast<float>(u_from_edge_px);
-    const long b = std::lround((u + below_px_) / kBinPx);
+    const long b = RoundHalfAway((u + below_px_) / kBinPx);
     if (b < 0 || b >= static_cast<long>(sum_.size())) return;
     sum_[b] += value;
     sum2_[b] += static_cast<double>(value) * value;
@@ -102,7 +113,7 @@ ResidualStructure::ResidualStructure(double half_width_px)
 
 void ResidualStructure::Add(double u_from_edge_px, double residual) {
   if (!(std::abs(u_from_edge_px) <= half_width_px_) || !std::isfinite(residual)) return;
-  const size_t bin = static_cast<size_t>(std::lround(u_from_edge_px + std::ceil(half_width_px_)));
+  const size_t bin = static_cast<size_t>(RoundHalfAway(u_from_edge_px + std::ceil(half_width_px_)));
   sum_[bin] += residual;
   count_[bin] += 1;
   sum_sq_ += residual * residual;

@@ -65,17 +65,29 @@ std::vector<double> Strip(const GreyImage& img, const AxisFrame& f, double s0, d
   std::vector<double> out, column;
   out.reserve(static_cast<size_t>(std::max(0.0, length)) + 1);
   column.reserve(kRows);
+  // Each row's edge and its point at u = 0, summed as ImageX, ImageY and the edge's u are (the
+  // same doubles, not worked out again at every px).
+  static_assert(kRows == 8);
+  double row_u[kRows], row_x[kRows], row_y[kRows];
+  for (int r = 0; r < kRows; ++r) {
+    const double s = s0 + (s1 - s0) * (r + 0.5) / kRows;
+    row_u[r] = u0 + slope * s;
+    row_x[r] = f.ox + s * f.dx;
+    row_y[r] = f.oy + s * f.dy;
+  }
   for (double d = 0; d <= length; d += 1.0) {
     column.clear();
     for (int r = 0; r < kRows; ++r) {
-      const double s = s0 + (s1 - s0) * (r + 0.5) / kRows;
-      const double u = u0 + slope * s + dir * (from + d);
-      const double x = f.ImageX(s, u), y = f.ImageY(s, u);
+      const double u = row_u[r] + dir * (from + d);
+      const double x = row_x[r] + u * f.dy, y = row_y[r] - u * f.dx;
       if (img.InsideForBilinear(x, y)) column.push_back(img.Bilinear(x, y));
     }
     // Each row's ray leaves the (convex) frame once: none inside, none further out either.
     if (column.empty() && d > 0) break;
-    if (column.size() >= kRows / 2) out.push_back(MedianInPlace(&column));
+    if (column.size() == kRows)
+      out.push_back(MedianOf8(column.data()));
+    else if (column.size() >= kRows / 2)
+      out.push_back(MedianInPlace(&column));
   }
   return out;
 }
