@@ -339,13 +339,13 @@ double InnerEdgeDistance(const GreyImage& img, const AxisFrame& f, double s0, do
   // (and texture), not the object's structure across it. Sampled as far as `until`, or until the
   // rows leave the image (the profile ends there).
   std::vector<double> profile, spread;
-  // Each row's point at u = 0 (ImageX/ImageY less their u term, summed in their order): the same
-  // doubles as ImageX(s, u) and ImageY(s, u) give, without the row's s worked out at every step.
+  // Each row's point at u = 0, to which a step adds its u term as ImageX and ImageY do (the same
+  // doubles), without the row's s worked out at every step.
   double row_x[kRows], row_y[kRows];
   for (int r = 0; r < kRows; ++r) {
     const double s = s0 + (s1 - s0) * (r + 0.5) / kRows;
-    row_x[r] = f.ox + s * f.dx;
-    row_y[r] = f.oy + s * f.dy;
+    row_x[r] = f.ImageX(s, 0.0);
+    row_y[r] = f.ImageY(s, 0.0);
   }
   // The middle value (the upper of two) of a column: of a whole one through a median network
   // (robust.h), of one cut short by the image's side through nth_element. The same value either

@@ -65,15 +65,15 @@ std::vector<double> Strip(const GreyImage& img, const AxisFrame& f, double s0, d
   std::vector<double> out, column;
   out.reserve(static_cast<size_t>(std::max(0.0, length)) + 1);
   column.reserve(kRows);
-  // Each row's edge and its point at u = 0, summed as ImageX, ImageY and the edge's u are (the
-  // same doubles, not worked out again at every px).
+  // Each row's edge and its point at u = 0, to which a px adds its u term as ImageX and ImageY do
+  // (the same doubles, not worked out again at every px).
   static_assert(kRows == 8);
   double row_u[kRows], row_x[kRows], row_y[kRows];
   for (int r = 0; r < kRows; ++r) {
     const double s = s0 + (s1 - s0) * (r + 0.5) / kRows;
     row_u[r] = u0 + slope * s;
-    row_x[r] = f.ox + s * f.dx;
-    row_y[r] = f.oy + s * f.dy;
+    row_x[r] = f.ImageX(s, 0.0);
+    row_y[r] = f.ImageY(s, 0.0);
   }
   for (double d = 0; d <= length; d += 1.0) {
     column.clear();
