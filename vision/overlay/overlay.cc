@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <utility>
 
 #include "vision/io/data_range.h"
 
@@ -66,11 +67,39 @@ void DrawGeometry(cv::Mat& img, const StrandMeasurement& m, double zoom, cv::Poi
 }
 
 void Text(cv::Mat& img, const std::string& s, cv::Point org, double size) {
-  cv::putText(img, s, org, cv::FONT_HERSHEY_SIMPLEX, size, kBlack, 4, cv::LINE_AA);
-  cv::putText(img, s, org, cv::FONT_HERSHEY_SIMPLEX, size, kWhite, 1, cv::LINE_AA);
+  // Hershey fonts draw ASCII only: a "±" or "σ" in a status line came out as "??".
+  const std::string ascii = OverlayText(s);
+  cv::putText(img, ascii, org, cv::FONT_HERSHEY_SIMPLEX, size, kBlack, 4, cv::LINE_AA);
+  cv::putText(img, ascii, org, cv::FONT_HERSHEY_SIMPLEX, size, kWhite, 1, cv::LINE_AA);
 }
 
 }  // namespace
+
+std::string OverlayText(const std::string& utf8) {
+  static const std::pair<const char*, const char*> kSpelled[] = {
+      {"\u00b1", "+/-"}, {"\u03c3", "sigma"}, {"\u00b0", " deg"}, {"\u00b5", "u"},
+      {"\u03bc", "u"},   {"\u2212", "-"},     {"\u00b7", "*"},    {"\u00d7", "x"},
+      {"\u2013", "-"},   {"\u2014", "-"},     {"\u2192", "->"},   {"\u2026", "..."}};
+  std::string out;
+  out.reserve(utf8.size());
+  for (size_t i = 0; i < utf8.size();) {
+    const unsigned char c = static_cast<unsigned char>(utf8[i]);
+    if (c < 0x80) {
+      out += static_cast<char>(c);
+      ++i;
+      continue;
+    }
+    // A UTF-8 sequence's length from its lead byte (a stray continuation byte counts alone).
+    const size_t n = (c & 0xe0) == 0xc0 ? 2 : (c & 0xf0) == 0xe0 ? 3 : (c & 0xf8) == 0xf0 ? 4 : 1;
+    const std::string seq = utf8.substr(i, n);
+    const char* spelled = "?";
+    for (const auto& [from, to] : kSpelled)
+      if (seq == from) spelled = to;
+    out += spelled;
+    i += n;
+  }
+  return out;
+}
 
 cv::Mat DrawOverlay(const cv::Mat& frame, const StrandMeasurement& m, double scale_um_per_px,
                     double edge_bias_px) {

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <opencv2/core.hpp>
+#include <string>
 
 #include "vision/scene/scene.h"
 #include "vision/scene/strand_measure.h"
@@ -21,5 +22,10 @@ cv::Mat DrawOverlay(const cv::Mat& frame, const StrandMeasurement& m, double sca
 // that lost by rule (nested, spanning objects, no tip) in grey.
 void DrawCandidates(cv::Mat& overlay, const SceneResult& scene, cv::Point roi_offset,
                     int max_candidates = 8);
+
+// A UTF-8 line as the overlay's (Hershey) font can draw it: ASCII only, the signs the tool's
+// messages use spelled out ("±" → "+/-", "σ" → "sigma", "°" → " deg", "µ" → "u", "−" → "-"), any
+// other non-ASCII character as "?".
+std::string OverlayText(const std::string& utf8);
 
 }  // namespace clogscope::vision
