@@ -65,6 +65,14 @@ PairContest ContestPairs(const PairCandidate& b, const StrandGeometry& bg, const
   // background's level.)
   if (o.target == MeasureTarget::kStrand && !b_at_face && !c_at_face && CouldRival(b, c))
     return PairContest::kNeitherAtFace;
+  // Both at the face: the tip does not tell them apart either, and a wider object that could be
+  // the strand is not outranked by a narrower one's score (a 50 µm stringer from the face's
+  // corner, 9.1 px at σ 0.17 reported where the strand beside it is 102.6 px, stringer 3966). A
+  // narrower rival is a stringer beside the strand as often as not; the better-scoring wider one
+  // stays chosen.
+  if (o.target == MeasureTarget::kStrand && b_at_face && c_at_face && c.width_px > b.width_px &&
+      CouldRival(b, c))
+    return PairContest::kBothAtFace;
   return c.score >= o.ambiguity_ratio * b.score ? PairContest::kSimilarScore
                                                 : PairContest::kOutscored;
 }
@@ -79,6 +87,9 @@ std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const P
                      : contest == PairContest::kFaceOnOneSide
                          ? "two strand-like objects, the nozzle's face read on one side only, or "
                            "faintly, beside one of them: {} and {}"
+                     : contest == PairContest::kBothAtFace
+                         ? "two strand-like objects, both hanging from the nozzle's face, the "
+                           "wider scoring less: {} and {}"
                          : "two strand-like pairs of similar score: {} and {}",
                      Describe(b), Describe(c));
 }

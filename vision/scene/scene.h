@@ -133,6 +133,9 @@ struct SceneResult {
 // could be the strand (it scores at least half as well as b, or is wider than b and one of its
 // edges longer than it is wide): the tip does not decide, and a score (contrast, length) does
 // not tell a strand from a hair or another strand: ambiguous;
+// kBothAtFace: a strand's target, both hang clearly from the face, and c is wider than b and
+// could be the strand: the thinner one does not win on its score (a stringer from the face's
+// corner beside the strand): ambiguous;
 // kSimilarScore: c scores at least ambiguity_ratio of b: ambiguous; kOutscored: b wins.
 // Whether the nozzle's face shows on both sides of a pair followed as `g` clearly enough to tell
 // it from another strand-like object: some reading of it steps by 1.5 times the least contrast
@@ -146,6 +149,7 @@ enum class PairContest {
   kSideBySide,
   kNeitherAtFace,
   kFaceOnOneSide,  // one clearly at the face, the other on one side or faintly: not decided so
+  kBothAtFace,     // both at the face, the other wider and strand-like: not decided by score
   kSimilarScore,
   kOutscored
 };
@@ -153,7 +157,8 @@ PairContest ContestPairs(const PairCandidate& b, const StrandGeometry& bg, const
                          const StrandGeometry& cg, const SceneOptions& options);
 inline bool Ambiguous(PairContest c) {
   return c == PairContest::kSideBySide || c == PairContest::kNeitherAtFace ||
-         c == PairContest::kFaceOnOneSide || c == PairContest::kSimilarScore;
+         c == PairContest::kFaceOnOneSide || c == PairContest::kBothAtFace ||
+         c == PairContest::kSimilarScore;
 }
 // The `ambiguous` detail for an ambiguous contest (Ambiguous).
 std::string AmbiguityDetail(PairContest contest, const PairCandidate& b, const PairCandidate& c);

@@ -145,6 +145,46 @@ TEST(SceneTest, OnlyAClearFaceDecidesBetweenTwoStrandLikeObjects) {
   EXPECT_EQ(ContestPairs(hair, faint, strand, clear, o), PairContest::kFaceOnOneSide);
 }
 
+// Two strand-like objects both hanging clearly from the nozzle's face (a stringer from the face's
+// corner beside the strand): the tip does not decide, and the thinner one's better score does not
+// either. The wider one scoring better stays chosen over a thinner rival.
+TEST(SceneTest, BothAtTheFaceTheThinnerDoesNotWinByScore) {
+  SceneOptions o;
+  o.target = MeasureTarget::kStrand;
+  o.min_contrast = 20;
+  PairCandidate strand;
+  strand.left = 0;
+  strand.right = 1;
+  strand.axis = {400, 100, 0, 1};
+  strand.left_u0 = -50;
+  strand.right_u0 = 50;
+  strand.width_px = 100;
+  strand.length_px = strand.long_edge_px = 300;
+  strand.score = 300;
+  strand.polarity = Polarity::kDarkOnBright;
+  PairCandidate hair = strand;
+  hair.left = 2;
+  hair.right = 3;
+  hair.axis.ox = 700;  // farther from the strand than it is wide: not side by side
+  hair.left_u0 = -5;
+  hair.right_u0 = 5;
+  hair.width_px = 10;
+  hair.score = 480;  // the strand scores 62 % of it: below the ambiguity ratio
+  StrandGeometry face;
+  face.tip_face_sides = 2;
+  face.tip_face_step = 3 * o.min_contrast;
+  EXPECT_EQ(ContestPairs(hair, face, strand, face, o), PairContest::kBothAtFace);
+  EXPECT_TRUE(Ambiguous(PairContest::kBothAtFace));
+  // The strand scoring better: chosen over the hair, whatever the hair could be.
+  strand.score = 700;
+  EXPECT_EQ(ContestPairs(strand, face, hair, face, o), PairContest::kOutscored);
+  // A wider pair that is no strand-like object (its edges shorter than it is wide) and scores
+  // little does not rival the hair.
+  strand.score = 200;
+  strand.long_edge_px = 90;
+  EXPECT_EQ(ContestPairs(hair, face, strand, face, o), PairContest::kOutscored);
+}
+
 TEST(SceneTest, TargetsDecideWhatATipMeans) {
   SceneParams p;
   p.nozzle = false;  // a filament through the whole frame
