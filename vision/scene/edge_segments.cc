@@ -172,10 +172,14 @@ class SobelRows {
         row_(img.ptr<T>(y)),
         below_(img.ptr<T>(std::min(img.rows - 1, y + 1))),
         last_(img.cols - 1) {}
-  void GradientX(float* out) const {
-    out[0] = Dx(0, std::min(1, last_));
-    for (int x = 1; x < last_; ++x) out[x] = Dx(x - 1, x + 1);  // no clamps: vectorised
-    if (last_ > 0) out[last_] = Dx(last_ - 1, last_);
+  // `column` holds cols values: each column's vertical [1 2 1] sum, from which ∂/∂x is a
+  // difference (the 3×3 mask is separable; the integer-valued sums are the same either way).
+  void GradientX(Sum* column, float* out) const {
+    for (int x = 0; x <= last_; ++x)  // vectorised
+      column[x] = static_cast<Sum>(Sum(above_[x]) + 2 * Sum(row_[x]) + Sum(below_[x]));
+    out[0] = Scaled(column[std::min(1, last_)] - column[0]);
+    for (int x = 1; x < last_; ++x) out[x] = Scaled(column[x + 1] - column[x - 1]);
+    if (last_ > 0) out[last_] = Scaled(column[last_] - column[last_ - 1]);
   }
   float GradientY(int x) const {
     const int l = std::max(0, x - 1), r = std::min(last_, x + 1);
@@ -185,27 +189,25 @@ class SobelRows {
   }
 
  private:
-  float Dx(int l, int r) const {
-    const Sum sum =
-        static_cast<Sum>((Sum(above_[r]) - Sum(above_[l])) + 2 * (Sum(row_[r]) - Sum(row_[l])) +
-                         (Sum(below_[r]) - Sum(below_[l])));
-    return static_cast<float>(sum) * 0.125f;
-  }
+  static float Scaled(Sum sum) { return static_cast<float>(static_cast<Sum>(sum)) * 0.125f; }
   const T *above_, *row_, *below_;
   int last_;
 };
 
-// |Immerkær's mask| at every inner column of row y (the rows above and below it too).
+// |Immerkær's mask| at every inner column of row y (the rows above and below it too). The mask
+// is [1 −2 1] across of [1 −2 1] down: `column` (cols values) holds each column's second
+// difference down, whose second difference across is the response (integer-valued, the same
+// either way).
 template <typename T>
-void NoiseMaskRow(const cv::Mat& img, int y, float* response) {
+void NoiseMaskRow(const cv::Mat& img, int y, typename SumOf<T>::type* column, float* response) {
   using Sum = typename SumOf<T>::type;
   const T* a = img.ptr<T>(y - 1);
   const T* b = img.ptr<T>(y);
   const T* c = img.ptr<T>(y + 1);
+  for (int x = 0; x < img.cols; ++x)  // vectorised
+    column[x] = static_cast<Sum>(Sum(a[x]) - 2 * Sum(b[x]) + Sum(c[x]));
   for (int x = 1; x + 1 < img.cols; ++x) {  // every column: vectorised; every other one used
-    const Sum sum = static_cast<Sum>(Sum(a[x - 1]) - 2 * Sum(a[x]) + Sum(a[x + 1]) -
-                                     2 * (Sum(b[x - 1]) - 2 * Sum(b[x]) + Sum(b[x + 1])) +
-                                     Sum(c[x - 1]) - 2 * Sum(c[x]) + Sum(c[x + 1]));
+    const Sum sum = static_cast<Sum>(column[x - 1] - 2 * column[x] + column[x + 1]);
     response[x] = std::abs(static_cast<float>(sum));
   }
 }
@@ -215,13 +217,14 @@ template <typename T>
 void FindEdgePoints(const cv::Mat& img, float threshold, float tan_max, Detection* d) {
   const int cols = img.cols;
   std::vector<float> gx(cols);
+  std::vector<typename SobelRows<T>::Sum> column(cols);
   // Which columns rise above the threshold: found in one vectorised pass, then looked at 8 at a
   // time, skipping the words with none (most of a row is below it).
   const int words = (cols + 7) / 8;
   std::vector<uint8_t> above(8 * words, 0);
   for (int y = d->row_step / 2; y < img.rows; y += d->row_step) {
     const SobelRows<T> rows(img, y);
-    rows.GradientX(gx.data());
+    rows.GradientX(column.data(), gx.data());
     const float* g = gx.data();
     for (int x = 0; x < cols; ++x) above[x] = std::abs(g[x]) >= threshold;
     std::vector<EdgePoint> pts;
@@ -306,11 +309,13 @@ Detection DetectEdgePoints(const cv::Mat& channel, const SceneOptions& o) {
   std::vector<int> lane_counts(whole_levels ? kLanes * kLevels : 0, 0);
   long long counted = 0;
   std::vector<float> response(img.cols, 0.0f);
+  std::vector<int16_t> column8(whole_levels ? img.cols : 0);
+  std::vector<float> column32(whole_levels ? 0 : img.cols);
   for (int y = std::max(1, d.row_step / 2); y + 1 < img.rows; y += d.row_step) {
     if (whole_levels)
-      NoiseMaskRow<uint8_t>(img, y, response.data());
+      NoiseMaskRow<uint8_t>(img, y, column8.data(), response.data());
     else
-      NoiseMaskRow<float>(img, y, response.data());
+      NoiseMaskRow<float>(img, y, column32.data(), response.data());
     // Every other inner column (x = 1, 3, …, x + 1 < cols); on 8-bit data four at a time, one
     // to a lane. The responses are whole numbers.
     int x = 1;
