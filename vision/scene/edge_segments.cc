@@ -189,7 +189,8 @@ class SobelRows {
   }
 
  private:
-  static float Scaled(Sum sum) { return static_cast<float>(static_cast<Sum>(sum)) * 0.125f; }
+  // A difference of two column sums (exact in Sum: at most 4·255 for 8-bit data), scaled by 1/8.
+  static float Scaled(Sum difference) { return static_cast<float>(difference) * 0.125f; }
   const T *above_, *row_, *below_;
   int last_;
 };

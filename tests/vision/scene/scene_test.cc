@@ -109,80 +109,74 @@ TEST(SceneTest, TwoStrandsNeitherAtAVisibleFaceAreAmbiguousWhateverTheirScores) 
   EXPECT_NEAR(alone.geometry.width_px, t.width_px, 1.0);
 }
 
-// The nozzle's face read on both sides of one object decides between two strand-like objects only
-// where some reading steps by 1.5 times the least contrast searched for: one just above that
-// least contrast may be missed beside the other object, or be a background's slope taken for a
-// step. Two vertical objects 300 px apart, the hair scoring better.
-TEST(SceneTest, OnlyAClearFaceDecidesBetweenTwoStrandLikeObjects) {
+// Two vertical strand-like pairs 300 px apart, of one polarity: a 100 px strand and a 10 px hair,
+// 300 px long, for the contests between pairs.
+struct StrandAndHair {
+  PairCandidate strand, hair;
+  StrandAndHair(double strand_score, double hair_score) {
+    strand.left = 0;
+    strand.right = 1;
+    strand.axis = {400, 100, 0, 1};
+    strand.left_u0 = -50;
+    strand.right_u0 = 50;
+    strand.width_px = 100;
+    strand.length_px = strand.long_edge_px = 300;
+    strand.score = strand_score;
+    strand.polarity = Polarity::kDarkOnBright;
+    hair = strand;
+    hair.left = 2;
+    hair.right = 3;
+    hair.axis.ox = 700;  // farther from the strand than it is wide: not side by side
+    hair.left_u0 = -5;
+    hair.right_u0 = 5;
+    hair.width_px = 10;
+    hair.score = hair_score;
+  }
+};
+
+SceneOptions StrandContestOptions() {
   SceneOptions o;
   o.target = MeasureTarget::kStrand;
   o.min_contrast = 20;
-  PairCandidate strand;
-  strand.left = 0;
-  strand.right = 1;
-  strand.axis = {400, 100, 0, 1};
-  strand.left_u0 = -50;
-  strand.right_u0 = 50;
-  strand.width_px = 100;
-  strand.length_px = strand.long_edge_px = 300;
-  strand.score = 400;
-  strand.polarity = Polarity::kBrightOnDark;
-  PairCandidate hair = strand;
-  hair.left = 2;
-  hair.right = 3;
-  hair.axis.ox = 700;
-  hair.left_u0 = -5;
-  hair.right_u0 = 5;
-  hair.width_px = 10;
-  hair.score = 450;
+  return o;
+}
+
+// The nozzle's face read on both sides of one object decides between two strand-like objects only
+// where some reading steps by 1.5 times the least contrast searched for: one just above that
+// least contrast may be missed beside the other object, or be a background's slope taken for a
+// step. The hair scores better.
+TEST(SceneTest, OnlyAClearFaceDecidesBetweenTwoStrandLikeObjects) {
+  const SceneOptions o = StrandContestOptions();
+  const StrandAndHair p(400, 450);
   StrandGeometry clear, faint, none;
   clear.tip_face_sides = faint.tip_face_sides = 2;
   clear.tip_face_step = 1.6 * o.min_contrast;
   faint.tip_face_step = 1.4 * o.min_contrast;
-  EXPECT_EQ(ContestPairs(hair, clear, strand, none, o), PairContest::kFirstAtFace);
-  EXPECT_EQ(ContestPairs(hair, none, strand, clear, o), PairContest::kSecondAtFace);
-  EXPECT_EQ(ContestPairs(hair, faint, strand, none, o), PairContest::kNeitherAtFace);
-  EXPECT_EQ(ContestPairs(hair, faint, strand, clear, o), PairContest::kFaceOnOneSide);
+  EXPECT_EQ(ContestPairs(p.hair, clear, p.strand, none, o), PairContest::kFirstAtFace);
+  EXPECT_EQ(ContestPairs(p.hair, none, p.strand, clear, o), PairContest::kSecondAtFace);
+  EXPECT_EQ(ContestPairs(p.hair, faint, p.strand, none, o), PairContest::kNeitherAtFace);
+  EXPECT_EQ(ContestPairs(p.hair, faint, p.strand, clear, o), PairContest::kFaceOnOneSide);
 }
 
 // Two strand-like objects both hanging clearly from the nozzle's face (a stringer from the face's
 // corner beside the strand): the tip does not decide, and the thinner one's better score does not
 // either. The wider one scoring better stays chosen over a thinner rival.
 TEST(SceneTest, BothAtTheFaceTheThinnerDoesNotWinByScore) {
-  SceneOptions o;
-  o.target = MeasureTarget::kStrand;
-  o.min_contrast = 20;
-  PairCandidate strand;
-  strand.left = 0;
-  strand.right = 1;
-  strand.axis = {400, 100, 0, 1};
-  strand.left_u0 = -50;
-  strand.right_u0 = 50;
-  strand.width_px = 100;
-  strand.length_px = strand.long_edge_px = 300;
-  strand.score = 300;
-  strand.polarity = Polarity::kDarkOnBright;
-  PairCandidate hair = strand;
-  hair.left = 2;
-  hair.right = 3;
-  hair.axis.ox = 700;  // farther from the strand than it is wide: not side by side
-  hair.left_u0 = -5;
-  hair.right_u0 = 5;
-  hair.width_px = 10;
-  hair.score = 480;  // the strand scores 62 % of it: below the ambiguity ratio
+  const SceneOptions o = StrandContestOptions();
+  StrandAndHair p(300, 480);  // the strand scores 62 % of the hair: below the ambiguity ratio
   StrandGeometry face;
   face.tip_face_sides = 2;
   face.tip_face_step = 3 * o.min_contrast;
-  EXPECT_EQ(ContestPairs(hair, face, strand, face, o), PairContest::kBothAtFace);
+  EXPECT_EQ(ContestPairs(p.hair, face, p.strand, face, o), PairContest::kBothAtFace);
   EXPECT_TRUE(Ambiguous(PairContest::kBothAtFace));
   // The strand scoring better: chosen over the hair, whatever the hair could be.
-  strand.score = 700;
-  EXPECT_EQ(ContestPairs(strand, face, hair, face, o), PairContest::kOutscored);
+  p.strand.score = 700;
+  EXPECT_EQ(ContestPairs(p.strand, face, p.hair, face, o), PairContest::kOutscored);
   // A wider pair that is no strand-like object (its edges shorter than it is wide) and scores
   // little does not rival the hair.
-  strand.score = 200;
-  strand.long_edge_px = 90;
-  EXPECT_EQ(ContestPairs(hair, face, strand, face, o), PairContest::kOutscored);
+  p.strand.score = 200;
+  p.strand.long_edge_px = 90;
+  EXPECT_EQ(ContestPairs(p.hair, face, p.strand, face, o), PairContest::kOutscored);
 }
 
 TEST(SceneTest, TargetsDecideWhatATipMeans) {
