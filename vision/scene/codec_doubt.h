@@ -24,16 +24,20 @@ struct CodecCheck {
   double shift_px = 0;  // the second pass's width minus the frame's
   // The shift's standard error from its calipers' scatter (-1: too few calipers in both).
   double shift_sigma_px = -1;
+  // The doubt of a second pass on a grid half a macroblock off the stream's (-1: none done).
+  double off_grid_doubt_px = -1;
   FrameStatus second_pass_status = FrameStatus::kNoStrand;
 
-  // The codec's doubt: the shift with its noise taken out (all of it when the noise is unknown).
+  // The codec's doubt: the shift with its noise taken out (all of it when the noise is unknown),
+  // or the pass off the stream's grid's, whichever is larger.
   double DoubtPx() const;
 };
 
 // Measures `frame` afresh, passes the region from the strand's tip to the end of its band (with
 // a margin, on the codec's 16-px macroblock grid) once more through `round_trip`, and measures
 // that afresh too. Its calipers are paired with the first measurement's by their place along the
-// axis.
+// axis. Then the same with the region half a macroblock up and to the left (within the frame),
+// off the grid.
 CodecCheck CheckCodec(const cv::Mat& frame, const StrandMeasureOptions& options,
                       X264RoundTrip* round_trip);
 
