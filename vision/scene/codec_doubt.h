@@ -50,7 +50,9 @@ CodecCheck CheckCodec(const cv::Mat& frame, const StrandMeasureOptions& options,
 // little of the stream's codec: on the matrix's colour seed 16 it came out `saturated` on frames
 // the stream measured within 0.02 px, and refusing such frames cost 12 frames within the
 // tolerance over the four adversarial matrices and caught no wrong one.)
-inline constexpr int kCodecCheckEveryFrames = 50;
+// Every 100th: a check is two passes (on the stream's grid and off it, ~12 ms on a 720p strand),
+// and one every 100 frames costs what one pass every 50 did.
+inline constexpr int kCodecCheckEveryFrames = 100;
 class CodecDoubt {
  public:
   // Throws std::invalid_argument when check_every_frames < 1.
