@@ -40,10 +40,6 @@ cv::Rect StrandRegion(const StrandMeasurement& m, const cv::Size& frame) {
   return {left, top, width, height};
 }
 
-}  // namespace
-
-namespace {
-
 // One second pass of `region` through the round trip, measured afresh and compared with `first`.
 CodecCheck SecondPass(const cv::Mat& frame, const StrandMeasureOptions& options,
                       const StrandMeasurement& first, const cv::Rect& region,
