@@ -339,14 +339,7 @@ double InnerEdgeDistance(const GreyImage& img, const AxisFrame& f, double s0, do
   // (and texture), not the object's structure across it. Sampled as far as `until`, or until the
   // rows leave the image (the profile ends there).
   std::vector<double> profile, spread;
-  // Each row's point at u = 0, to which a step adds its u term as ImageX and ImageY do (the same
-  // doubles), without the row's s worked out at every step.
-  double row_x[kRows], row_y[kRows];
-  for (int r = 0; r < kRows; ++r) {
-    const double s = s0 + (s1 - s0) * (r + 0.5) / kRows;
-    row_x[r] = f.ImageX(s, 0.0);
-    row_y[r] = f.ImageY(s, 0.0);
-  }
+  const BandRows<kRows> rows(f, s0, s1);
   // The middle value (the upper of two) of a column: of a whole one through a median network
   // (robust.h), of one cut short by the image's side through nth_element. The same value either
   // way.
@@ -363,7 +356,7 @@ double InnerEdgeDistance(const GreyImage& img, const AxisFrame& f, double s0, do
       const double u = edge_u + inward * (i * kStepPx - kBehindPx);
       int n = 0;
       for (int r = 0; r < kRows; ++r) {
-        const double x = row_x[r] + u * f.dy, y = row_y[r] - u * f.dx;
+        const double x = rows.X(r, u), y = rows.Y(r, u);
         if (img.InsideForBilinear(x, y)) column[n++] = img.Bilinear(x, y);
       }
       if (n < kRows / 2) {

@@ -57,6 +57,24 @@ struct AxisFrame {
   double U(double x, double y) const { return (x - ox) * dy - (y - oy) * dx; }
 };
 
+// N profile rows across a band s0..s1 of an axis frame, evenly spread (row r at
+// s0 + (s1 − s0)(r + ½)/N), for profiles that step along u in every row: each row's point at u = 0
+// is worked out once, and X and Y add the u term as ImageX and ImageY do (the same doubles).
+template <int N>
+struct BandRows {
+  double s[N], x0[N], y0[N];
+  double dx, dy;
+  BandRows(const AxisFrame& f, double s0, double s1) : dx(f.dx), dy(f.dy) {
+    for (int r = 0; r < N; ++r) {
+      s[r] = s0 + (s1 - s0) * (r + 0.5) / N;
+      x0[r] = f.ImageX(s[r], 0.0);
+      y0[r] = f.ImageY(s[r], 0.0);
+    }
+  }
+  double X(int r, double u) const { return x0[r] + u * dy; }
+  double Y(int r, double u) const { return y0[r] - u * dx; }
+};
+
 // An edge's contrast across the line u at s: sign·(I(u + offset) − I(u − offset)), positive when
 // the edge is there with its sign; false when either point leaves the image.
 inline bool ContrastAcross(const GreyImage& img, const AxisFrame& a, double s, double u, int sign,

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <string_view>
 #include <utility>
 
 #include "vision/io/data_range.h"
@@ -91,7 +92,7 @@ std::string OverlayText(const std::string& utf8) {
     }
     // A UTF-8 sequence's length from its lead byte (a stray continuation byte counts alone).
     const size_t n = (c & 0xe0) == 0xc0 ? 2 : (c & 0xf0) == 0xe0 ? 3 : (c & 0xf8) == 0xf0 ? 4 : 1;
-    const std::string seq = utf8.substr(i, n);
+    const std::string_view seq(utf8.data() + i, std::min(n, utf8.size() - i));
     const char* spelled = "?";
     for (const auto& [from, to] : kSpelled)
       if (seq == from) spelled = to;

@@ -65,21 +65,15 @@ std::vector<double> Strip(const GreyImage& img, const AxisFrame& f, double s0, d
   std::vector<double> out, column;
   out.reserve(static_cast<size_t>(std::max(0.0, length)) + 1);
   column.reserve(kRows);
-  // Each row's edge and its point at u = 0, to which a px adds its u term as ImageX and ImageY do
-  // (the same doubles, not worked out again at every px).
-  static_assert(kRows == 8);
-  double row_u[kRows], row_x[kRows], row_y[kRows];
-  for (int r = 0; r < kRows; ++r) {
-    const double s = s0 + (s1 - s0) * (r + 0.5) / kRows;
-    row_u[r] = u0 + slope * s;
-    row_x[r] = f.ImageX(s, 0.0);
-    row_y[r] = f.ImageY(s, 0.0);
-  }
+  static_assert(kRows == 8);  // MedianOf8 below
+  const BandRows<kRows> rows(f, s0, s1);
+  double row_u[kRows];  // each row's edge
+  for (int r = 0; r < kRows; ++r) row_u[r] = u0 + slope * rows.s[r];
   for (double d = 0; d <= length; d += 1.0) {
     column.clear();
     for (int r = 0; r < kRows; ++r) {
       const double u = row_u[r] + dir * (from + d);
-      const double x = row_x[r] + u * f.dy, y = row_y[r] - u * f.dx;
+      const double x = rows.X(r, u), y = rows.Y(r, u);
       if (img.InsideForBilinear(x, y)) column.push_back(img.Bilinear(x, y));
     }
     // Each row's ray leaves the (convex) frame once: none inside, none further out either.
