@@ -37,32 +37,62 @@ Vec<kN> Parameters(const CylinderFit& fit, const CylinderTemplate& t) {
   return q;
 }
 
-// The template's model at one group's mean u for parameters q, and its Jacobian row j.
-double Model(const CylinderTemplate::Sample& s, const Vec<kN>& q, double* j) {
-  const double amp[3] = {q[kA], q[kK], q[kL]};
-  const double dg[3] = {q[kDc], q[kDr], q[kDs]};
-  j[kB0] = 1.0;
-  j[kB1] = s.du_px;
-  double model = q[kB0] + q[kB1] * s.du_px;
-  for (int k = 0; k < 3; ++k) {
-    const double shape =
-        s.shape[k] + s.d_shape[k][0] * dg[0] + s.d_shape[k][1] * dg[1] + s.d_shape[k][2] * dg[2];
-    j[kA + k] = shape;
-    model += amp[k] * shape;
-  }
-  for (int k = 0; k < 3; ++k)
-    j[kDc + k] = amp[0] * s.d_shape[0][k] + amp[1] * s.d_shape[1][k] + amp[2] * s.d_shape[2][k];
-  return model;
+using Cols = CylinderTemplate;  // the template's shape columns
+using ShapeColumns = Eigen::Matrix<double, Eigen::Dynamic, Cols::kShapeColumns>;
+Eigen::Map<const ShapeColumns> ShapesOf(const CylinderTemplate& t) {
+  return {t.shapes.data(), static_cast<Eigen::Index>(t.groups.size()), Cols::kShapeColumns};
 }
 
-// The system at q over all samples with Cauchy weights at the residuals and scale `noise`, as the
-// full fit's second run; keeps the residuals (each pixel's from its group's model value and the
-// model's slope across u). Its gradient is the Cauchy loss's with each group's Jacobian row for
-// its pixels' (their offsets about the group's mean u sum to zero); its matrix the
-// Gauss–Newton one with those weights (kWeights: what the fit's covariance is taken from), or with
-// the loss's own curvature (kCurvature: Newton's step, which converges quadratically where the
-// weights' fixed point is approached only by a constant ratio a step). With kCurvature, `weighted`
-// (when given) takes the kWeights system's rows besides, for the covariance where the fit ends.
+// One fit's scratch: each group's Jacobian row, model value and slope across u; each pixel's
+// residual (indexed as the samples).
+struct Work {
+  Eigen::Matrix<double, Eigen::Dynamic, kN> j;
+  Eigen::ArrayXd model, slope;
+  std::vector<double> residuals;
+  Eigen::ArrayXd scale, r, weighted_scale, weighted_r, wr_sum;  // Weigh's, per group
+};
+
+// The template's model at q for all groups at once, its Jacobian rows and its slope across each
+// group (the line's, less the object's shapes' by their centre), then each pixel's residual from
+// its group's value and slope.
+void Residuals(const CylinderTemplate& t, const std::vector<EdgeSample>& samples, const Vec<kN>& q,
+               Work* work) {
+  const auto s = ShapesOf(t);
+  const double amp[3] = {q[kA], q[kK], q[kL]};
+  const double dg[3] = {q[kDc], q[kDr], q[kDs]};
+  auto& j = work->j;
+  j.resize(s.rows(), kN);
+  j.col(kB0).setOnes();
+  j.col(kB1) = s.col(Cols::kDu);
+  work->model = q[kB0] + q[kB1] * s.col(Cols::kDu).array();
+  for (int k = 0; k < 3; ++k) {
+    j.col(kA + k) = s.col(Cols::kShape + k) + s.col(Cols::DShape(k, 0)) * dg[0] +
+                    s.col(Cols::DShape(k, 1)) * dg[1] + s.col(Cols::DShape(k, 2)) * dg[2];
+    work->model += amp[k] * j.col(kA + k).array();
+  }
+  for (int m = 0; m < 3; ++m)
+    j.col(kDc + m) = amp[0] * s.col(Cols::DShape(0, m)) + amp[1] * s.col(Cols::DShape(1, m)) +
+                     amp[2] * s.col(Cols::DShape(2, m));
+  work->slope = q[kB1] - j.col(kDc).array();
+  const PixelGroups& groups = t.groups;
+  int p = 0;
+  for (size_t g = 0; g < groups.size(); ++g) {
+    const double model = work->model[g], slope = work->slope[g];
+    for (const int end = groups.end[g]; p < end; ++p) {
+      const int i = groups.pixels[p];
+      work->residuals[i] = model + slope * groups.offset_px[p] - samples[i].value;
+    }
+  }
+}
+
+// The system at the residuals Residuals left, with Cauchy weights at scale `noise`, as the full
+// fit's second run. Its gradient is the Cauchy loss's with each group's Jacobian row for its
+// pixels' (their offsets about the group's mean u sum to zero); its matrix the Gauss–Newton one
+// with those weights (kWeights: what the fit's covariance is taken from), or with the loss's own
+// curvature (kCurvature: Newton's step, which converges quadratically where the weights' fixed
+// point is approached only by a constant ratio a step). With kCurvature, `weighted` (when given)
+// takes the kWeights system's rows besides, for the covariance where the fit ends. (Apart from
+// Residuals, so that a scale taken from these residuals weights them at once.)
 enum class Curvature { kWeights, kCurvature };
 struct System {
   Mat<kN> jtj;
@@ -79,26 +109,22 @@ struct System {
 // outlier then barely bends the step, as it barely pulls the gradient).
 constexpr double kMinCurvatureShare = 0.05;
 
-System Evaluate(const CylinderTemplate& t, const std::vector<EdgeSample>& samples, const Vec<kN>& q,
-                double noise, Curvature curvature, std::vector<double>* residuals,
-                fitcore::NormalSystem<kN>* normal,
-                fitcore::NormalSystem<kN>* weighted = nullptr) {
+System Weigh(const CylinderTemplate& t, double noise, Curvature curvature, Work* work,
+             fitcore::NormalSystem<kN>* normal, fitcore::NormalSystem<kN>* weighted = nullptr) {
   System out;
   const double cs = kCauchyC * noise, inv_cs2 = 1.0 / (cs * cs);
   const PixelGroups& groups = t.groups;
-  if (normal->size() != groups.size()) normal->Resize(groups.size());
-  if (weighted && weighted->size() != groups.size()) weighted->Resize(groups.size());
+  const auto n = static_cast<Eigen::Index>(groups.size());
+  work->scale.resize(n);
+  work->r.resize(n);
+  work->weighted_scale.resize(n);
+  work->weighted_r.resize(n);
+  work->wr_sum.resize(n);
   int p = 0;
-  for (size_t g = 0; g < groups.size(); ++g) {
-    double j[kN];
-    const double model = Model(t.samples[g], q, j);
-    // The model's slope across the group: the line's, less the object's shapes' by their centre.
-    const double slope = q[kB1] - j[kDc];
+  for (Eigen::Index g = 0; g < n; ++g) {
     double w_sum = 0, wr_sum = 0, curvature_sum = 0;
     for (const int end = groups.end[g]; p < end; ++p) {
-      const int i = groups.pixels[p];
-      const double r = model + slope * groups.offset_px[p] - samples[i].value;
-      (*residuals)[i] = r;
+      const double r = work->residuals[groups.pixels[p]];
       const double z2 = r * r * inv_cs2;
       const double w = 1.0 / (1.0 + z2);
       out.wsum += w;
@@ -108,15 +134,26 @@ System Evaluate(const CylinderTemplate& t, const std::vector<EdgeSample>& sample
       if (curvature == Curvature::kCurvature)
         curvature_sum += std::max((1.0 - z2) * w * w, kMinCurvatureShare * w);
     }
-    if (curvature == Curvature::kWeights) {
-      normal->Set(g, j, wr_sum / w_sum, w_sum);
-    } else {
-      normal->Set(g, j, wr_sum, 1.0, curvature_sum);
-      if (weighted) weighted->Set(g, j, wr_sum / w_sum, w_sum);
-      const CylinderTemplate::Sample& s = t.samples[g];
-      for (int k = 0; k < 3; ++k)
-        for (int m = 0; m < 3; ++m) out.cross[k][m] += wr_sum * s.d_shape[k][m];
+    // The weights' rows (NormalSystem::Set), and with kCurvature the Newton system's.
+    const double s = std::sqrt(w_sum);
+    work->weighted_scale[g] = s;
+    work->weighted_r[g] = s * (wr_sum / w_sum);
+    work->wr_sum[g] = wr_sum;
+    if (curvature == Curvature::kCurvature) {
+      const double c = std::sqrt(curvature_sum);
+      work->scale[g] = c;
+      work->r[g] = 1.0 / c * wr_sum;
     }
+  }
+  if (curvature == Curvature::kWeights) {
+    normal->SetRows(work->j, work->weighted_scale, work->weighted_r);
+  } else {
+    normal->SetRows(work->j, work->scale, work->r);
+    if (weighted) weighted->SetRows(work->j, work->weighted_scale, work->weighted_r);
+    const auto s = ShapesOf(t);
+    for (int k = 0; k < 3; ++k)
+      for (int m = 0; m < 3; ++m)
+        out.cross[k][m] = work->wr_sum.matrix().dot(s.col(Cols::DShape(k, m)));
   }
   normal->Get(&out.jtj, &out.jtr);
   return out;
@@ -150,16 +187,18 @@ void Linearise(const std::vector<EdgeSample>& samples, double u_ref_px, double c
   t->centre_px = centre_px;
   t->radius_px = radius_px;
   t->sigma_px = sigma_px;
-  t->samples.resize(t->groups.size());
+  t->shapes.resize(t->groups.size() * Cols::kShapeColumns);
+  Eigen::Map<ShapeColumns> s(t->shapes.data(), static_cast<Eigen::Index>(t->groups.size()),
+                             Cols::kShapeColumns);
   for (size_t g = 0; g < t->groups.size(); ++g) {
     const double u = t->groups.mean_u_px[g];
     Shapes sh;
     EvalShapes<false>(u, u_ref_px, centre_px, radius_px, sigma_px, root, &sh);
-    CylinderTemplate::Sample& s = t->samples[g];
-    s.du_px = static_cast<float>(u - u_ref_px);
+    auto row = s.row(static_cast<Eigen::Index>(g));
+    row[Cols::kDu] = u - u_ref_px;
     for (int k = 0; k < 3; ++k) {
-      s.shape[k] = static_cast<float>(sh.v[kObjectShapes[k]]);
-      for (int m = 0; m < 3; ++m) s.d_shape[k][m] = static_cast<float>(sh.d[kObjectShapes[k]][m]);
+      row[Cols::kShape + k] = sh.v[kObjectShapes[k]];
+      for (int m = 0; m < 3; ++m) row[Cols::DShape(k, m)] = sh.d[kObjectShapes[k]][m];
     }
   }
 }
@@ -196,11 +235,10 @@ bool MakeCylinderTemplate(const std::vector<EdgeSample>& samples, const Cylinder
   out->max_sigma_px = std::max(3.0 * fit.sigma_px, std::min(8.0, fit.radius_px / 3.0));
   out->pixels = static_cast<int>(samples.size());
   Linearise(samples, fit.u_ref_px, fit.centre_px, fit.radius_px, fit.sigma_px, out);
-  std::vector<double> residuals(samples.size());
-  fitcore::NormalSystem<kN> normal(out->samples.size());
-  Evaluate(*out, samples, Parameters(fit, *out), fit.noise, Curvature::kWeights, &residuals,
-           &normal);
-  out->noise = RobustScale(residuals);
+  Work work;
+  work.residuals.resize(samples.size());
+  Residuals(*out, samples, Parameters(fit, *out), &work);
+  out->noise = RobustScale(work.residuals);
   return true;
 }
 
@@ -221,7 +259,8 @@ CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t, const std::vector<Edg
   const CylinderTemplate* shapes = t;
   CylinderTemplate moved;
   Vec<kN> q = Parameters(from, *t);
-  std::vector<double> residuals(samples.size());
+  Work work;
+  work.residuals.resize(samples.size());
   fitcore::NormalSystem<kN> normal(t->groups.size()), weighted(t->groups.size());
   // Cauchy weights at the scale the full fit would take: the full fit takes its scale once per
   // fit, from the residuals of a first weighted fit, and on real profiles its width moves with
@@ -247,18 +286,21 @@ CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t, const std::vector<Edg
   for (int lin = 0;; ++lin) {
     bool converged = false;
     for (int it = 0; it < kMaxIterations && !converged; ++it) {
+      Residuals(*shapes, samples, q, &work);
+      // The scale from these residuals weighs them at once: the step from here is already the
+      // one to the minimum at that scale (where the weights' step at the scale before, and a
+      // Newton step on the next evaluation, took an evaluation more on most templates).
+      if (it == kScaleIteration) noise = ref.noise * RobustScale(work.residuals) / t->noise;
       // Newton's steps only within the first order's reach: beyond it the bilinear model's
       // curvature is the template's, not the object's, and its steps may run away.
-      newton = it > kScaleIteration && !beyond_first_order(q);
-      sys = Evaluate(*shapes, samples, q, noise,
-                     newton ? Curvature::kCurvature : Curvature::kWeights, &residuals, &normal,
-                     &weighted);
-      if (it == kScaleIteration) noise = ref.noise * RobustScale(residuals) / t->noise;
+      newton = it >= kScaleIteration && !beyond_first_order(q);
+      sys = Weigh(*shapes, noise, newton ? Curvature::kCurvature : Curvature::kWeights, &work,
+                  &normal, &weighted);
       const Vec<kN> d = Step(sys);
       q += d;
       ++out->iterations;
       // The full fit's tolerance (cylinder_fit.cc).
-      converged = it > kScaleIteration && std::abs(d[kDc]) < 1e-3 && std::abs(d[kDr]) < 1e-3 &&
+      converged = it >= kScaleIteration && std::abs(d[kDc]) < 1e-3 && std::abs(d[kDr]) < 1e-3 &&
                   std::abs(d[kDs]) < 1e-2;
     }
     if (!converged || !q.allFinite()) return CylinderTrackRefusal::kNotConverged;
@@ -307,7 +349,7 @@ CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t, const std::vector<Edg
   // radius moved by less than 1e-3 px each), not evaluated again. (A last step on the weights'
   // own system left that system in sys.)
   if (newton) weighted.Get(&sys.jtj, &sys.jtr);
-  for (double r : residuals)
+  for (double r : work.residuals)
     if (std::abs(r) > 4.0 * noise) ++out->outliers;
   out->rms = std::sqrt(sys.wrss / std::max(sys.wsum, 1.0));
   const double dof = sys.wsum * (1.0 - static_cast<double>(kN) / samples.size());

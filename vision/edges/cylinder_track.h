@@ -21,15 +21,13 @@ namespace clogscope::vision {
 
 struct CylinderTemplate {
   // The caliper's pixels in groups at about the same u (GroupCylinderPixels about the reference
-  // fit's silhouettes). One group's mean u − u_ref, shapes and their derivatives
-  // d[shape][centre, radius, blur], at the geometry below. (Floats: the shapes are of order 1, the
-  // model needs 1e-5 of them.)
-  struct Sample {
-    float du_px;
-    float shape[3];
-    float d_shape[3][3];
-  };
-  std::vector<Sample> samples;  // per group; empty: no template
+  // fit's silhouettes). A row per group, a column per kShapeColumns: its mean u − u_ref, the three
+  // shapes and their derivatives d[shape][centre, radius, blur], at the geometry below (columns,
+  // so that a frame's model is evaluated for all groups at once).
+  enum { kDu, kShape, kDShape = kShape + 3, kShapeColumns = kDShape + 9 };
+  static constexpr int DShape(int shape, int by) { return kDShape + 3 * shape + by; }
+  std::vector<double> shapes;                    // column by column, a row per group
+  bool empty() const { return shapes.empty(); }  // no template
   PixelGroups groups;
   int pixels = 0;    // the caliper's samples
   double noise = 0;  // robust scale (1.4826·MAD) of the reference fit's residuals, grey levels

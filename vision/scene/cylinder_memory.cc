@@ -96,7 +96,7 @@ TrackedCylinders TrackCylinders(const GreyImage& img, const AxisFrame& f, const 
       --c->rest_frames;
       continue;
     }
-    if (c && !c->cylinder.samples.empty()) {
+    if (c && !c->cylinder.empty()) {
       if (!GatherCylinderSamples(img, f, clip, c->s0_px, c->s1_px, c->left_px, c->right_px,
                                  c->sigma_px, &samples, &at_edges)) {
         out.border = true;
