@@ -12,24 +12,6 @@ namespace clogscope::vision {
 namespace {
 
 // The slab's pixel bounds; false when it leaves the image.
-bool SlabBounds(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
-                double u1, int* x_lo, int* x_hi, int* y_lo, int* y_hi) {
-  double xmin = 1e30, xmax = -1e30, ymin = 1e30, ymax = -1e30;
-  for (double s : {s0, s1}) {
-    for (double u : {u0, u1}) {
-      xmin = std::min(xmin, f.ImageX(s, u));
-      xmax = std::max(xmax, f.ImageX(s, u));
-      ymin = std::min(ymin, f.ImageY(s, u));
-      ymax = std::max(ymax, f.ImageY(s, u));
-    }
-  }
-  *x_lo = static_cast<int>(std::ceil(xmin));
-  *x_hi = static_cast<int>(std::floor(xmax));
-  *y_lo = static_cast<int>(std::ceil(ymin));
-  *y_hi = static_cast<int>(std::floor(ymax));
-  return *x_lo >= 0 && *y_lo >= 0 && *x_hi < img.m.cols && *y_hi < img.m.rows;
-}
-
 // Whether the pixel (x, y) lies in the slab s0 <= s < s1, u0 <= u <= u1.
 inline bool InSlab(const AxisFrame& f, int x, int y, double s0, double s1, double u0, double u1) {
   const double s = f.S(x, y), u = f.U(x, y);
@@ -59,6 +41,26 @@ void Interval(double a, double c, double ox, double lo, double hi, double* from,
 // run: it lies within the lines' estimate (widened beyond its rounding), whose ends are walked in
 // to the first and last pixel InSlab takes; the pixels between need no test (every band of every
 // frame passes here).
+}  // namespace
+
+bool SlabBounds(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
+                double u1, int* x_lo, int* x_hi, int* y_lo, int* y_hi) {
+  double xmin = 1e30, xmax = -1e30, ymin = 1e30, ymax = -1e30;
+  for (double s : {s0, s1}) {
+    for (double u : {u0, u1}) {
+      xmin = std::min(xmin, f.ImageX(s, u));
+      xmax = std::max(xmax, f.ImageX(s, u));
+      ymin = std::min(ymin, f.ImageY(s, u));
+      ymax = std::max(ymax, f.ImageY(s, u));
+    }
+  }
+  *x_lo = static_cast<int>(std::ceil(xmin));
+  *x_hi = static_cast<int>(std::floor(xmax));
+  *y_lo = static_cast<int>(std::ceil(ymin));
+  *y_hi = static_cast<int>(std::floor(ymax));
+  return *x_lo >= 0 && *y_lo >= 0 && *x_hi < img.m.cols && *y_hi < img.m.rows;
+}
+
 void SlabRow(const AxisFrame& f, int y, int x_lo, int x_hi, double s0, double s1, double u0,
              double u1, int* first, int* last) {
   const double ry = y - f.oy;
@@ -75,8 +77,6 @@ void SlabRow(const AxisFrame& f, int y, int x_lo, int x_hi, double s0, double s1
   *first = a;
   *last = b;
 }
-
-}  // namespace
 
 ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
                           double u1, const DataLevels& levels) {
@@ -230,19 +230,10 @@ bool GatherEdgeSamples(const GreyImage& img, const AxisFrame& f, double s0, doub
                        double u1, const ClipLevels& clip, std::vector<EdgeSample>* out,
                        int* saturated) {
   out->clear();
-  int x_lo, x_hi, y_lo, y_hi;
-  if (!SlabBounds(img, f, s0, s1, u0, u1, &x_lo, &x_hi, &y_lo, &y_hi)) return false;
-  for (int y = y_lo; y <= y_hi; ++y) {
-    int first, last;
-    SlabRow(f, y, x_lo, x_hi, s0, s1, u0, u1, &first, &last);
-    for (int x = first; x <= last; ++x) {
-      const double u = f.U(x, y);
-      const float v = img.At(x, y);
-      if (saturated && Clipped(v, clip)) ++*saturated;
-      out->push_back({static_cast<float>(u), v});
-    }
-  }
-  return true;
+  return ForEachSlabPixel(img, f, s0, s1, u0, u1, [&](double u, float v) {
+    if (saturated && Clipped(v, clip)) ++*saturated;
+    out->push_back({static_cast<float>(u), v});
+  });
 }
 
 namespace {

@@ -20,6 +20,33 @@ namespace clogscope::vision {
 ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
                           double u1, const DataLevels& levels);
 
+// The pixels of the slab s0 <= s < s1, u0 <= u <= u1 (axis frame f): its bounding box's rows
+// (false when the box leaves the image), and in row y the pixels first <= x <= last.
+bool SlabBounds(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
+                double u1, int* x_lo, int* x_hi, int* y_lo, int* y_hi);
+void SlabRow(const AxisFrame& f, int y, int x_lo, int x_hi, double s0, double s1, double u0,
+             double u1, int* first, int* last);
+// Calls visit(u, value) for each pixel of that slab, a row at a time, each row in order of x;
+// false, with no call, when the slab leaves the image.
+template <class Visit>
+bool ForEachSlabPixel(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
+                      double u1, Visit&& visit) {
+  int x_lo, x_hi, y_lo, y_hi;
+  if (!SlabBounds(img, f, s0, s1, u0, u1, &x_lo, &x_hi, &y_lo, &y_hi)) return false;
+  const auto row = [&](int y, const auto* values) {
+    int first, last;
+    SlabRow(f, y, x_lo, x_hi, s0, s1, u0, u1, &first, &last);
+    for (int x = first; x <= last; ++x) visit(f.U(x, y), static_cast<float>(values[x]));
+  };
+  for (int y = y_lo; y <= y_hi; ++y) {
+    if (img.is16)
+      row(y, img.m.ptr<uint16_t>(y));
+    else
+      row(y, img.m.ptr<uint8_t>(y));
+  }
+  return true;
+}
+
 // Gathers the pixels of the slab s0 <= s < s1, u0 <= u <= u1 (axis frame f) in (u, value) form,
 // counting those at or beyond the clip levels in *saturated (when given). Returns false when the
 // slab leaves the image.

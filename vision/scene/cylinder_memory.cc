@@ -21,26 +21,34 @@ bool GatherCylinderSamples(const GreyImage& img, const AxisFrame& f, const ClipL
                            double sigma_px, std::vector<EdgeSample>* samples,
                            ClippedCount* at_edges) {
   const double outer = CylinderReachPx(sigma_px);
-  if (!GatherEdgeSamples(img, f, s0_px, s1_px, left_px - outer, right_px + outer, clip, samples))
-    return false;
-  // A clipped highlight deep inside a lit object is not where its silhouettes are read (the
-  // interior's clipping is judged on the band as a whole, calipers.cc).
-  if (at_edges) {
-    const double zone = ClipZoneHalfWidthPx(sigma_px);
-    const ClippedCount l = CountClippedNear(*samples, clip, left_px, zone);
-    const ClippedCount r = CountClippedNear(*samples, clip, right_px, zone);
-    at_edges->samples = l.samples + r.samples;
-    at_edges->clipped = l.clipped + r.clipped;
-  }
-  // Deep inside, the profile only tells the shading's amplitudes, which vary slowly: every fourth
-  // sample there does, and the fit costs a third.
+  // In one pass over the slab: clipping is counted in both edges' transitions as the per-edge
+  // fits judge it, over all pixels there (a clipped highlight deep inside a lit object is not
+  // where its silhouettes are read: the interior's clipping is judged on the band as a whole,
+  // calipers.cc); deep inside, the profile only tells the shading's amplitudes, which vary
+  // slowly: every fourth pixel there does, and the fit costs a third.
+  const double zone = ClipZoneHalfWidthPx(sigma_px);
   const double keep = CylinderInteriorMarginPx(sigma_px);
-  size_t n = 0;
-  for (size_t i = 0; i < samples->size(); ++i) {
-    const double u = (*samples)[i].u_px;
-    if (u < left_px + keep || u > right_px - keep || i % 4 == 0) (*samples)[n++] = (*samples)[i];
+  ClippedCount left, right;
+  const auto count = [&](float u, float v, double edge_px, ClippedCount* n) {
+    if (std::abs(u - edge_px) > zone) return;
+    ++n->samples;
+    n->clipped += Clipped(v, clip);
+  };
+  samples->clear();
+  size_t i = 0;  // the slab's pixels so far
+  const bool inside = ForEachSlabPixel(
+      img, f, s0_px, s1_px, left_px - outer, right_px + outer, [&](double u_px, float v) {
+        const auto u = static_cast<float>(u_px);
+        count(u, v, left_px, &left);
+        count(u, v, right_px, &right);
+        if (u < left_px + keep || u > right_px - keep || i % 4 == 0) samples->push_back({u, v});
+        ++i;
+      });
+  if (!inside) return false;
+  if (at_edges) {
+    at_edges->samples = left.samples + right.samples;
+    at_edges->clipped = left.clipped + right.clipped;
   }
-  samples->resize(n);
   return true;
 }
 
