@@ -82,8 +82,6 @@ ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, d
                           double u1, const DataLevels& levels) {
   const double data_max = levels.max;
   ClipLevels clip{0.0f, static_cast<float>(data_max)};
-  int x_lo, x_hi, y_lo, y_hi;
-  if (!SlabBounds(img, f, s0, s1, u0, u1, &x_lo, &x_hi, &y_lo, &y_hi)) return clip;
   // 256 bins over the data's range; only its ends are looked at (below).
   constexpr int kBins = 256, kEdgeBins = 10, kBelow = 4;
   constexpr double kNearWhiteFraction = 0.01;  // of black to white
@@ -91,23 +89,16 @@ ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, d
   Histogram h{};
   const double scale = (kBins - 1) / data_max;
   int n = 0;
-  // Every band of every frame passes here: the pixel type is fixed per row, and the values are
-  // never negative, so rounding is a truncation of v + 0.5.
+  // Every band of every frame passes here: the values are never negative, so rounding is a
+  // truncation of v + 0.5.
   const auto bin_of = [&](auto v) {
     return std::min(static_cast<int>(v * scale + 0.5), kBins - 1);
   };
-  const auto count_row = [&](const auto* row, int y) {
-    int first, last;
-    SlabRow(f, y, x_lo, x_hi, s0, s1, u0, u1, &first, &last);
-    for (int x = first; x <= last; ++x) ++h[bin_of(row[x])];
-    n += std::max(0, last - first + 1);
-  };
-  for (int y = y_lo; y <= y_hi; ++y) {
-    if (img.is16)
-      count_row(img.m.ptr<uint16_t>(y), y);
-    else
-      count_row(img.m.ptr<uint8_t>(y), y);
-  }
+  if (!ForEachSlabPixel(img, f, s0, s1, u0, u1, [&](double, float v) {
+        ++h[bin_of(v)];
+        ++n;
+      }))
+    return clip;
   // A spike: the fullest bin of a window, well above the bins just inside it, with little
   // beyond it (a codec's ringing): an unclipped plateau has its noise on both sides. A spike
   // twice as sharp may have as much beyond it as in it: x264's clipped white in one key frame
