@@ -7,6 +7,7 @@
 #include <random>
 
 #include "common/angle.h"
+#include "vision/edges/fit_shapes.h"
 
 namespace clogscope::vision {
 namespace {
@@ -181,6 +182,40 @@ TEST(CylinderFitTest, RefusesTooFewSamplesOrCrossedGuesses) {
   EXPECT_FALSE(
       FitLitCylinder(std::vector<EdgeSample>(s.begin(), s.begin() + 10), 30, 70, 1.5).converged);
   EXPECT_FALSE(FitLitCylinder(s, 70, 30, 1.5).converged);
+}
+
+// The lit cylinder's normal equations (fit_shapes.h), two rows at a time in a vector register,
+// against JᵀWJ and JᵀWr formed by Eigen from the same rows: for row counts even and odd (the last
+// odd row is added on its own), set row by row or all at once.
+TEST(NormalSystemTest, ProductsAreTheWeightedJacobiansOwn) {
+  constexpr int kN = 8;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> value(-2.0, 2.0), weight(0.1, 3.0);
+  for (const int n : {1, 2, 7, 80, 81}) {
+    Eigen::Matrix<double, Eigen::Dynamic, kN> j(n, kN);
+    Eigen::VectorXd r(n), w(n);
+    for (int i = 0; i < n; ++i) {
+      for (int k = 0; k < kN; ++k) j(i, k) = value(rng);
+      r(i) = value(rng);
+      w(i) = weight(rng);
+    }
+    const Eigen::Matrix<double, kN, kN> want_jtj = j.transpose() * w.asDiagonal() * j;
+    const Eigen::Matrix<double, kN, 1> want_jtr = j.transpose() * w.asDiagonal() * r;
+    fitcore::NormalSystem<kN> by_row(n), at_once(0);
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Matrix<double, 1, kN> row = j.row(i);
+      by_row.Set(i, row.data(), r(i), w(i));
+    }
+    const Eigen::ArrayXd s = w.array().sqrt();
+    at_once.SetRows(j, s, s * r.array());
+    for (auto* system : {&by_row, &at_once}) {
+      fitcore::Mat<kN> jtj;
+      fitcore::Vec<kN> jtr;
+      system->Get(&jtj, &jtr);
+      EXPECT_LT((jtj - want_jtj).cwiseAbs().maxCoeff(), 1e-12 * n) << n;
+      EXPECT_LT((jtr - want_jtr).cwiseAbs().maxCoeff(), 1e-12 * n) << n;
+    }
+  }
 }
 
 }  // namespace
