@@ -11,7 +11,6 @@ namespace clogscope::vision {
 
 namespace {
 
-// The slab's pixel bounds; false when it leaves the image.
 // Whether the pixel (x, y) lies in the slab s0 <= s < s1, u0 <= u <= u1.
 inline bool InSlab(const AxisFrame& f, int x, int y, double s0, double s1, double u0, double u1) {
   const double s = f.S(x, y), u = f.U(x, y);
@@ -36,11 +35,6 @@ void Interval(double a, double c, double ox, double lo, double hi, double* from,
   *to = std::max(p, q) + slack;
 }
 
-// The pixels of row y (within x_lo..x_hi) that lie in the slab, [*first, *last] (empty when
-// *first > *last). Along a row s and u are monotone, even as rounded, so these pixels are one
-// run: it lies within the lines' estimate (widened beyond its rounding), whose ends are walked in
-// to the first and last pixel InSlab takes; the pixels between need no test (every band of every
-// frame passes here).
 }  // namespace
 
 bool SlabBounds(const GreyImage& img, const AxisFrame& f, double s0, double s1, double u0,
@@ -61,6 +55,10 @@ bool SlabBounds(const GreyImage& img, const AxisFrame& f, double s0, double s1, 
   return *x_lo >= 0 && *y_lo >= 0 && *x_hi < img.m.cols && *y_hi < img.m.rows;
 }
 
+// Along a row s and u are monotone, even as rounded, so the row's pixels in the slab are one run:
+// it lies within the lines' estimate (widened beyond its rounding), whose ends are walked in to
+// the first and last pixel InSlab takes; the pixels between need no test (every band of every
+// frame passes here).
 void SlabRow(const AxisFrame& f, int y, int x_lo, int x_hi, double s0, double s1, double u0,
              double u1, int* first, int* last) {
   const double ry = y - f.oy;
@@ -91,7 +89,7 @@ ClipLevels FindClipLevels(const GreyImage& img, const AxisFrame& f, double s0, d
   int n = 0;
   // Every band of every frame passes here: the values are never negative, so rounding is a
   // truncation of v + 0.5.
-  const auto bin_of = [&](auto v) {
+  const auto bin_of = [&](float v) {
     return std::min(static_cast<int>(v * scale + 0.5), kBins - 1);
   };
   if (!ForEachSlabPixel(img, f, s0, s1, u0, u1, [&](double, float v) {
@@ -292,11 +290,7 @@ PixelGroups GroupByU(const std::vector<EdgeSample>& samples, double span_px, dou
 ClippedCount CountClippedNear(const std::vector<EdgeSample>& samples, const ClipLevels& clip,
                               double edge_u, double half_px) {
   ClippedCount n;
-  for (const EdgeSample& smp : samples) {
-    if (std::abs(smp.u_px - edge_u) > half_px) continue;
-    ++n.samples;
-    n.clipped += Clipped(smp.value, clip);
-  }
+  for (const EdgeSample& smp : samples) n.Add(smp, clip, edge_u, half_px);
   return n;
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 
 // The pixels a caliper works on: one slab of the strand, across one edge or both.
+#include <cmath>
 #include <vector>
 
 #include "vision/edges/clip_levels.h"
@@ -79,6 +80,12 @@ PixelGroups GroupByU(const std::vector<EdgeSample>& samples, double span_px,
 // is read), how many there are and how many are clipped.
 struct ClippedCount {
   int samples = 0, clipped = 0;
+  // Counts one sample, when it lies within half_px of edge_u.
+  void Add(const EdgeSample& smp, const ClipLevels& clip, double edge_u, double half_px) {
+    if (std::abs(smp.u_px - edge_u) > half_px) return;
+    ++samples;
+    clipped += Clipped(smp.value, clip);
+  }
 };
 ClippedCount CountClippedNear(const std::vector<EdgeSample>& samples, const ClipLevels& clip,
                               double edge_u, double half_px);

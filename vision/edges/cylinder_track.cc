@@ -49,9 +49,9 @@ struct Work {
   Eigen::Matrix<double, Eigen::Dynamic, kN> j;
   Eigen::ArrayXd model, slope;
   std::vector<double> residuals;
-  Eigen::ArrayXd scale, r, weighted_scale, weighted_r, wr_sum;  // Weigh's, per group
+  // Weigh's, per group: the weights' sum, the weighted mean residual, Σ w·r, the curvature's sum.
+  Eigen::ArrayXd w_sum, mean_r, wr_sum, curvature_sum;
 };
-
 // The template's model at q for all groups at once, its Jacobian rows and its slope across each
 // group (the line's, less the object's shapes' by their centre), then each pixel's residual from
 // its group's value and slope.
@@ -115,11 +115,10 @@ System Weigh(const CylinderTemplate& t, double noise, Curvature curvature, Work*
   const double cs = kCauchyC * noise, inv_cs2 = 1.0 / (cs * cs);
   const PixelGroups& groups = t.groups;
   const auto n = static_cast<Eigen::Index>(groups.size());
-  work->scale.resize(n);
-  work->r.resize(n);
-  work->weighted_scale.resize(n);
-  work->weighted_r.resize(n);
+  work->w_sum.resize(n);
+  work->mean_r.resize(n);
   work->wr_sum.resize(n);
+  work->curvature_sum.resize(n);
   int p = 0;
   for (Eigen::Index g = 0; g < n; ++g) {
     double w_sum = 0, wr_sum = 0, curvature_sum = 0;
@@ -134,22 +133,16 @@ System Weigh(const CylinderTemplate& t, double noise, Curvature curvature, Work*
       if (curvature == Curvature::kCurvature)
         curvature_sum += std::max((1.0 - z2) * w * w, kMinCurvatureShare * w);
     }
-    // The weights' rows (NormalSystem::Set), and with kCurvature the Newton system's.
-    const double s = std::sqrt(w_sum);
-    work->weighted_scale[g] = s;
-    work->weighted_r[g] = s * (wr_sum / w_sum);
+    work->w_sum[g] = w_sum;
+    work->mean_r[g] = wr_sum / w_sum;
     work->wr_sum[g] = wr_sum;
-    if (curvature == Curvature::kCurvature) {
-      const double c = std::sqrt(curvature_sum);
-      work->scale[g] = c;
-      work->r[g] = 1.0 / c * wr_sum;
-    }
+    work->curvature_sum[g] = curvature_sum;
   }
   if (curvature == Curvature::kWeights) {
-    normal->SetRows(work->j, work->weighted_scale, work->weighted_r);
+    normal->SetRows(work->j, work->mean_r, work->w_sum);
   } else {
-    normal->SetRows(work->j, work->scale, work->r);
-    if (weighted) weighted->SetRows(work->j, work->weighted_scale, work->weighted_r);
+    normal->SetNewtonRows(work->j, work->wr_sum, work->curvature_sum);
+    if (weighted) weighted->SetRows(work->j, work->mean_r, work->w_sum);
     const auto s = ShapesOf(t);
     for (int k = 0; k < 3; ++k)
       for (int m = 0; m < 3; ++m)

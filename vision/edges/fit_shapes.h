@@ -196,19 +196,20 @@ class NormalSystem {
     for (int k = 0; k < N; ++k) j_(row, k) = s * j[k];
     r_(row) = s * r;
   }
-  // All rows at once: row i of j scaled by scale(i), and r(i) as it is (scaled already).
-  void SetRows(const Eigen::Matrix<double, Eigen::Dynamic, N>& j, const Eigen::ArrayXd& scale,
-               const Eigen::ArrayXd& r) {
-    j_ = (j.array().colwise() * scale).matrix();
-    r_ = r.matrix();
+  // All rows at once, row i as Set(i, j.row(i), r(i), w(i)).
+  void SetRows(const Eigen::Matrix<double, Eigen::Dynamic, N>& j, const Eigen::ArrayXd& r,
+               const Eigen::ArrayXd& w) {
+    const Eigen::ArrayXd s = w.sqrt();
+    j_ = (j.array().colwise() * s).matrix();
+    r_ = (s * r).matrix();
   }
-  // With one weight for JᵀJ (w_curvature > 0) and another for Jᵀr: a robust loss's Newton
-  // system, whose curvature is not its gradient's weight.
-  void Set(size_t i, const double* j, double r, double w_gradient, double w_curvature) {
-    const double s = std::sqrt(w_curvature);
-    const auto row = static_cast<Eigen::Index>(i);
-    for (int k = 0; k < N; ++k) j_(row, k) = s * j[k];
-    r_(row) = w_gradient / s * r;
+  // All rows at once with one weight for JᵀJ (w_curvature > 0) and none for Jᵀr (r carries it):
+  // a robust loss's Newton system, whose curvature is not its gradient's weight.
+  void SetNewtonRows(const Eigen::Matrix<double, Eigen::Dynamic, N>& j, const Eigen::ArrayXd& r,
+                     const Eigen::ArrayXd& w_curvature) {
+    const Eigen::ArrayXd s = w_curvature.sqrt();
+    j_ = (j.array().colwise() * s).matrix();
+    r_ = (1.0 / s * r).matrix();
   }
   void Get(Mat<N>* jtj, Vec<N>* jtr) const {
     const double* cols[N + 1];

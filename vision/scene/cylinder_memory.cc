@@ -29,19 +29,17 @@ bool GatherCylinderSamples(const GreyImage& img, const AxisFrame& f, const ClipL
   const double zone = ClipZoneHalfWidthPx(sigma_px);
   const double keep = CylinderInteriorMarginPx(sigma_px);
   ClippedCount left, right;
-  const auto count = [&](float u, float v, double edge_px, ClippedCount* n) {
-    if (std::abs(u - edge_px) > zone) return;
-    ++n->samples;
-    n->clipped += Clipped(v, clip);
-  };
   samples->clear();
   size_t i = 0;  // the slab's pixels so far
   const bool inside = ForEachSlabPixel(
       img, f, s0_px, s1_px, left_px - outer, right_px + outer, [&](double u_px, float v) {
-        const auto u = static_cast<float>(u_px);
-        count(u, v, left_px, &left);
-        count(u, v, right_px, &right);
-        if (u < left_px + keep || u > right_px - keep || i % 4 == 0) samples->push_back({u, v});
+        const EdgeSample smp{static_cast<float>(u_px), v};
+        if (at_edges) {
+          left.Add(smp, clip, left_px, zone);
+          right.Add(smp, clip, right_px, zone);
+        }
+        if (smp.u_px < left_px + keep || smp.u_px > right_px - keep || i % 4 == 0)
+          samples->push_back(smp);
         ++i;
       });
   if (!inside) return false;

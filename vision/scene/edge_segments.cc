@@ -310,8 +310,8 @@ Detection DetectEdgePoints(const cv::Mat& channel, const SceneOptions& o) {
   std::vector<int> lane_counts(whole_levels ? kLanes * kLevels : 0, 0);
   long long counted = 0;
   std::vector<float> response(img.cols, 0.0f);
-  std::vector<int16_t> column8(whole_levels ? img.cols : 0);
-  std::vector<float> column32(whole_levels ? 0 : img.cols);
+  std::vector<SumOf<uint8_t>::type> column8(whole_levels ? img.cols : 0);
+  std::vector<SumOf<float>::type> column32(whole_levels ? 0 : img.cols);
   for (int y = std::max(1, d.row_step / 2); y + 1 < img.rows; y += d.row_step) {
     if (whole_levels)
       NoiseMaskRow<uint8_t>(img, y, column8.data(), response.data());

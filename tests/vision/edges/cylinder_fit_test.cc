@@ -206,8 +206,7 @@ TEST(NormalSystemTest, ProductsAreTheWeightedJacobiansOwn) {
       const Eigen::Matrix<double, 1, kN> row = j.row(i);
       by_row.Set(i, row.data(), r(i), w(i));
     }
-    const Eigen::ArrayXd s = w.array().sqrt();
-    at_once.SetRows(j, s, s * r.array());
+    at_once.SetRows(j, r.array(), w.array());
     for (auto* system : {&by_row, &at_once}) {
       fitcore::Mat<kN> jtj;
       fitcore::Vec<kN> jtr;
