@@ -212,7 +212,7 @@ void SolveAmplitudes(const std::vector<EdgeSample>& samples, const PixelGroups& 
     atb += wv_sum * row;
   }
   ata.diagonal().array() += 1e-9;
-  p->template head<L::kAmplitudes>() = ata.ldlt().solve(atb);
+  p->template head<L::kAmplitudes>() = fitcore::SolveSymmetric<L::kAmplitudes>(ata, atb);
 }
 
 template <int kBg>
@@ -380,10 +380,11 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   // Covariance from the weighted normal matrix, scaled by the weighted residual variance.
   const double dof = wsum * (1.0 - static_cast<double>(kN) / samples.size());
   const double var = dof > 0 ? wrss / dof : 0.0;
-  const Mat<kN> cov = lm.jtj.ldlt().solve(Mat<kN>::Identity()) * var;
-  out.left_sigma_px = std::sqrt(std::max(0.0, cov(kC, kC) + cov(kR, kR) - 2 * cov(kC, kR)));
-  out.right_sigma_px = std::sqrt(std::max(0.0, cov(kC, kC) + cov(kR, kR) + 2 * cov(kC, kR)));
-  out.width_sigma_px = 2.0 * std::sqrt(std::max(0.0, cov(kR, kR)));
+  const Vec<kN> cov_c = fitcore::InverseColumn<kN>(lm.jtj, kC) * var;
+  const Vec<kN> cov_r = fitcore::InverseColumn<kN>(lm.jtj, kR) * var;
+  out.left_sigma_px = std::sqrt(std::max(0.0, cov_c(kC) + cov_r(kR) - 2 * cov_c(kR)));
+  out.right_sigma_px = std::sqrt(std::max(0.0, cov_c(kC) + cov_r(kR) + 2 * cov_c(kR)));
+  out.width_sigma_px = 2.0 * std::sqrt(std::max(0.0, cov_r(kR)));
   // A fit that ends on a bound found no optimum inside the model's domain.
   const bool on_bound = p[kS] >= max_sigma_px - 1e-6 || p[kR] <= std::max(1.0, 0.5 * r0) + 1e-6 ||
                         p[kR] >= 1.5 * r0 + 2.0 - 1e-6;

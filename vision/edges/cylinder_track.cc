@@ -164,10 +164,9 @@ Vec<kN> Step(const System& s) {
       h(kA + k, kDc + m) += s.cross[k][m];
       h(kDc + m, kA + k) += s.cross[k][m];
     }
-  const Eigen::LDLT<Mat<kN>> newton(h);
-  if (newton.info() == Eigen::Success && newton.vectorD().minCoeff() > 0)
-    return newton.solve(-s.jtr);
-  return a.ldlt().solve(-s.jtr);
+  fitcore::SmallCholesky<kN> newton;
+  if (newton.Factor(h)) return newton.Solve(-s.jtr);
+  return fitcore::SolveSymmetric<kN>(a, -s.jtr);
 }
 
 // The template's pixels grouped about the geometry (centre, radius, blur) and its shapes there at
@@ -347,10 +346,11 @@ CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t, const std::vector<Edg
   out->rms = std::sqrt(sys.wrss / std::max(sys.wsum, 1.0));
   const double dof = sys.wsum * (1.0 - static_cast<double>(kN) / samples.size());
   const double var = dof > 0 ? sys.wrss / dof : 0.0;
-  const Mat<kN> cov = sys.jtj.ldlt().solve(Mat<kN>::Identity()) * var;
-  out->left_sigma_px = std::sqrt(std::max(0.0, cov(kDc, kDc) + cov(kDr, kDr) - 2 * cov(kDc, kDr)));
-  out->right_sigma_px = std::sqrt(std::max(0.0, cov(kDc, kDc) + cov(kDr, kDr) + 2 * cov(kDc, kDr)));
-  out->width_sigma_px = 2.0 * std::sqrt(std::max(0.0, cov(kDr, kDr)));
+  const Vec<kN> cov_c = fitcore::InverseColumn<kN>(sys.jtj, kDc) * var;
+  const Vec<kN> cov_r = fitcore::InverseColumn<kN>(sys.jtj, kDr) * var;
+  out->left_sigma_px = std::sqrt(std::max(0.0, cov_c(kDc) + cov_r(kDr) - 2 * cov_c(kDr)));
+  out->right_sigma_px = std::sqrt(std::max(0.0, cov_c(kDc) + cov_r(kDr) + 2 * cov_c(kDr)));
+  out->width_sigma_px = 2.0 * std::sqrt(std::max(0.0, cov_r(kDr)));
   return CylinderTrackRefusal::kNone;
 }
 

@@ -354,8 +354,8 @@ EdgeFit Solve(const std::vector<EdgeSample>& samples, const Vec<Model::kN>& p0, 
   const double dof = counted - N;
   fit.rms = counted > 0 ? std::sqrt(lm.cost / counted) : 0.0;
   const double residual_var = dof > 0 ? lm.cost / dof : 0.0;
-  const Mat<N> cov = lm.jtj.ldlt().solve(Mat<N>::Identity());
-  fit.edge_sigma_px = std::sqrt(std::max(0.0, cov(kE, kE) * residual_var));
+  const double var_e = fitcore::InverseColumn<N>(lm.jtj, kE)[kE];
+  fit.edge_sigma_px = std::sqrt(std::max(0.0, var_e * residual_var));
   if (!std::isfinite(fit.edge_px) || !std::isfinite(fit.sigma_px)) fit.converged = false;
   return fit;
 }
@@ -540,7 +540,7 @@ double PlainStepMovePerSlopeChange(double step, double sigma_px, double below_px
     jtj.noalias() += column * column.transpose();
     jtr += column * (sigma_px * (z * f + df));
   }
-  const Vec<StepModel::kN> delta = jtj.ldlt().solve(jtr);
+  const Vec<StepModel::kN> delta = fitcore::SolveSymmetric<StepModel::kN>(jtj, jtr);
   return std::isfinite(delta[kE]) ? delta[kE] : 0.0;
 }
 

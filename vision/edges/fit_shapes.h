@@ -102,6 +102,64 @@ using Mat = Eigen::Matrix<double, N, N>;
 template <int N>
 using Vec = Eigen::Matrix<double, N, 1>;
 
+// A symmetric N×N system's Cholesky factor L·Lᵀ, written out for the fits' few parameters.
+// Eigen's LDLT at these sizes runs its dynamic-size block kernels and pivots: ~11 % of a tracked
+// frame's instructions went to it. Reads the lower triangle, as Eigen's LDLT does.
+template <int N>
+class SmallCholesky {
+ public:
+  // False when a is not positive definite to rounding (a pivot not above 0).
+  bool Factor(const Mat<N>& a) {
+    for (int j = 0; j < N; ++j) {
+      double d = a(j, j);
+      for (int k = 0; k < j; ++k) d -= l_[j][k] * l_[j][k];
+      if (!(d > 0)) return false;  // NaN too
+      inv_diag_[j] = 1.0 / std::sqrt(d);
+      for (int i = j + 1; i < N; ++i) {
+        double s = a(i, j);
+        for (int k = 0; k < j; ++k) s -= l_[i][k] * l_[j][k];
+        l_[i][j] = s * inv_diag_[j];
+      }
+    }
+    return true;
+  }
+  Vec<N> Solve(const Vec<N>& b) const {
+    double y[N];
+    for (int i = 0; i < N; ++i) {
+      double s = b[i];
+      for (int k = 0; k < i; ++k) s -= l_[i][k] * y[k];
+      y[i] = s * inv_diag_[i];
+    }
+    Vec<N> x;
+    for (int i = N - 1; i >= 0; --i) {
+      double s = y[i];
+      for (int k = i + 1; k < N; ++k) s -= l_[k][i] * x[k];
+      x[i] = s * inv_diag_[i];
+    }
+    return x;
+  }
+
+ private:
+  double l_[N][N];  // below the diagonal
+  double inv_diag_[N];
+};
+
+// a⁻¹·b for a symmetric a: by Cholesky where a is positive definite (a damped or regularised
+// normal matrix always is but for rounding), else by Eigen's LDLT, whose pseudo-inverse of a
+// singular D the callers relied on.
+template <int N>
+Vec<N> SolveSymmetric(const Mat<N>& a, const Vec<N>& b) {
+  SmallCholesky<N> c;
+  if (c.Factor(a)) return c.Solve(b);
+  return a.ldlt().solve(b);
+}
+
+// Column i of a⁻¹ (a symmetric), as SolveSymmetric: a covariance's column from its normal matrix.
+template <int N>
+Vec<N> InverseColumn(const Mat<N>& a, int i) {
+  return SolveSymmetric<N>(a, Vec<N>::Unit(i));
+}
+
 template <int N>
 struct LmResult {
   Vec<N> p;
@@ -128,7 +186,7 @@ LmResult<N> MinimiseLm(Vec<N> p, const Evaluate& evaluate, const Bound& bound,
     Mat<N> a = out.jtj;
     a.diagonal() *= 1.0 + lambda;
     a.diagonal().array() += 1e-12;
-    const Vec<N> delta = a.ldlt().solve(-jtr);
+    const Vec<N> delta = SolveSymmetric<N>(a, -jtr);
     Vec<N> trial = p + delta;
     bound(&trial);
     // One pass gives the trial's cost and, if it is accepted, the next step's system.
