@@ -124,7 +124,7 @@ class TerminatorStrip {
     double sum_cxz = 0;
     for (const Node& n : nodes_) {
       const double z = (u - centre_ - n.rx) * inv_s_;
-      const double g = fitcore::kInvSqrt2Pi * std::exp(-0.5 * z * z) * inv_s_ * du_;
+      const double g = fitcore::kInvSqrt2Pi * fitcore::Exp(-0.5 * z * z) * inv_s_ * du_;
       f.value += n.c * g;
       f.d_k -= n.root * g;
       f.d_l -= n.x * g;

@@ -166,7 +166,7 @@ struct LineModel : OnePosition {
   void operator()(double du, double u, const double* p, double* value, double* j) const {
     const double inv_s = 1.0 / p[kS];
     const double z = (u - p[kE]) * inv_s;
-    const double f = std::exp(-0.5 * z * z);
+    const double f = fitcore::Exp(-0.5 * z * z);
     *value = p[kA] + p[kB] * du + p[kC] * f;
     const double de = p[kC] * z * f * inv_s;
     StepColumns(du, f, de, z, j);

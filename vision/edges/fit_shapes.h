@@ -4,7 +4,9 @@
 // and a small dense Levenberg–Marquardt loop. Internal to the vision module.
 #include <Eigen/Dense>
 #include <algorithm>
+#include <cassert>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <utility>
 #include <vector>
@@ -13,6 +15,43 @@ namespace clogscope::vision::fitcore {
 
 constexpr double kInvSqrt2 = 0.70710678118654752440;
 constexpr double kInvSqrt2Pi = 0.39894228040143267794;
+
+// e^x for x ≤ 700 (0 below −700, where e^x < 1e-304; NaN for NaN), to 4e-16 relative: inline,
+// without libm's call and errno. The fits' Gaussians call it for every group at every step
+// (glibc's exp took ~9 % of a tracked frame's instructions, 60 a call against 38 here).
+// e^x = 2^(n/32)·e^r, n the integer nearest x·32/ln 2, |r| ≤ ln 2/64, e^r by its Taylor series to
+// r⁶ (the rest below 4e-18).
+inline double Exp(double x) {
+  assert(!(x > 700.0));
+  if (!(x >= -700.0)) return x < -700.0 ? 0.0 : x;
+  static constexpr double kTwoToJ32[32] = {
+      0x1.0000000000000p+0, 0x1.059b0d3158574p+0, 0x1.0b5586cf9890fp+0, 0x1.11301d0125b51p+0,
+      0x1.172b83c7d517bp+0, 0x1.1d4873168b9aap+0, 0x1.2387a6e756238p+0, 0x1.29e9df51fdee1p+0,
+      0x1.306fe0a31b715p+0, 0x1.371a7373aa9cbp+0, 0x1.3dea64c123422p+0, 0x1.44e086061892dp+0,
+      0x1.4bfdad5362a27p+0, 0x1.5342b569d4f82p+0, 0x1.5ab07dd485429p+0, 0x1.6247eb03a5585p+0,
+      0x1.6a09e667f3bcdp+0, 0x1.71f75e8ec5f74p+0, 0x1.7a11473eb0187p+0, 0x1.82589994cce13p+0,
+      0x1.8ace5422aa0dbp+0, 0x1.93737b0cdc5e5p+0, 0x1.9c49182a3f090p+0, 0x1.a5503b23e255dp+0,
+      0x1.ae89f995ad3adp+0, 0x1.b7f76f2fb5e47p+0, 0x1.c199bdd85529cp+0, 0x1.cb720dcef9069p+0,
+      0x1.d5818dcfba487p+0, 0x1.dfc97337b9b5fp+0, 0x1.ea4afa2a490dap+0, 0x1.f50765b6e4540p+0};
+  constexpr double k32OverLn2 = 0x1.71547652b82fep+5;
+  // ln 2/32 in two parts, the first with 20 zero bits at its end, so that n·its first is exact.
+  constexpr double kLn2Over32Hi = 0x1.62e42fee00000p-6, kLn2Over32Lo = 0x1.a39ef35793c76p-38;
+  // Adding 1.5·2⁵² rounds to the nearest integer and leaves it in the low bits.
+  constexpr double kRound = 0x1.8p52;
+  const double shifted = x * k32OverLn2 + kRound;
+  const double n = shifted - kRound;
+  int64_t bits;
+  std::memcpy(&bits, &shifted, sizeof bits);
+  const int32_t ni = static_cast<int32_t>(bits);
+  const double r = (x - n * kLn2Over32Hi) - n * kLn2Over32Lo;
+  const double p =
+      1.0 +
+      r * (1.0 + r * (0.5 + r * (1.0 / 6 + r * (1.0 / 24 + r * (1.0 / 120 + r * (1.0 / 720))))));
+  const int64_t exponent = static_cast<int64_t>((ni >> 5) + 1023) << 52;
+  double scale;
+  std::memcpy(&scale, &exponent, sizeof scale);
+  return kTwoToJ32[ni & 31] * p * scale;
+}
 
 // Phi(z) and phi(z) from one exp: Abramowitz & Stegun 7.1.26 gives erf to 1.5e-7, i.e. 2e-5 grey
 // levels on a 160-level step, far below the noise; glibc's erfc costs about as much as the rest of
@@ -25,7 +64,7 @@ inline void StepShape(double z, double* f, double* df) {
     *df = 0.0;
     return;
   }
-  const double g = std::exp(-0.5 * z * z);
+  const double g = Exp(-0.5 * z * z);
   *df = kInvSqrt2Pi * g;
   const double x = std::abs(z) * kInvSqrt2;
   const double t = 1.0 / (1.0 + 0.3275911 * x);
