@@ -1,7 +1,8 @@
 #pragma once
 
-// What the profile fits (edge_fit, cylinder_fit) share: the blurred step and blurred √d shapes,
-// and a small dense Levenberg–Marquardt loop. Internal to the vision module.
+// What the profile fits (edge_fit, cylinder_fit, cylinder_track) share: the blurred step and
+// blurred √d shapes with the exp under them, a small dense Levenberg–Marquardt loop, its normal
+// equations and its solver. Internal to the vision module.
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cassert>
@@ -162,6 +163,7 @@ class SmallCholesky {
     }
     return true;
   }
+  // a⁻¹·b, once Factor(a) has returned true.
   Vec<N> Solve(const Vec<N>& b) const {
     double y[N];
     for (int i = 0; i < N; ++i) {
