@@ -380,11 +380,10 @@ CylinderFit FitCylinder(const std::vector<EdgeSample>& samples, double left_gues
   // Covariance from the weighted normal matrix, scaled by the weighted residual variance.
   const double dof = wsum * (1.0 - static_cast<double>(kN) / samples.size());
   const double var = dof > 0 ? wrss / dof : 0.0;
-  const Vec<kN> cov_c = fitcore::InverseColumn<kN>(lm.jtj, kC) * var;
-  const Vec<kN> cov_r = fitcore::InverseColumn<kN>(lm.jtj, kR) * var;
-  out.left_sigma_px = std::sqrt(std::max(0.0, cov_c(kC) + cov_r(kR) - 2 * cov_c(kR)));
-  out.right_sigma_px = std::sqrt(std::max(0.0, cov_c(kC) + cov_r(kR) + 2 * cov_c(kR)));
-  out.width_sigma_px = 2.0 * std::sqrt(std::max(0.0, cov_r(kR)));
+  const auto sigmas = fitcore::cylinder::SilhouetteSigmasOf<kN>(lm.jtj, kC, kR, var);
+  out.left_sigma_px = sigmas.left_px;
+  out.right_sigma_px = sigmas.right_px;
+  out.width_sigma_px = sigmas.width_px;
   // A fit that ends on a bound found no optimum inside the model's domain.
   const bool on_bound = p[kS] >= max_sigma_px - 1e-6 || p[kR] <= std::max(1.0, 0.5 * r0) + 1e-6 ||
                         p[kR] >= 1.5 * r0 + 2.0 - 1e-6;

@@ -16,6 +16,20 @@ inline double RobustScale(const std::vector<double>& residuals) {
   return std::max(kMadToSigma * Mad(residuals, 0.0), 1e-6);
 }
 
+// The silhouettes' and the width's standard errors from a fit's normal matrix (its centre and
+// radius at indices c and r), scaled by the residual variance: centre ∓ radius and twice the
+// radius.
+struct SilhouetteSigmas {
+  double left_px = 0, right_px = 0, width_px = 0;
+};
+template <int N>
+SilhouetteSigmas SilhouetteSigmasOf(const Mat<N>& jtj, int c, int r, double residual_var) {
+  const Eigen::Matrix<double, N, 2> cov = InverseColumns<N, 2>(jtj, {c, r}) * residual_var;
+  const double cc = cov(c, 0), rr = cov(r, 1), cr = cov(r, 0);
+  return {std::sqrt(std::max(0.0, cc + rr - 2 * cr)), std::sqrt(std::max(0.0, cc + rr + 2 * cr)),
+          2.0 * std::sqrt(std::max(0.0, rr))};
+}
+
 constexpr double kMinSigmaPx = 0.15;  // the narrowest blur a fit may take
 // Cauchy weights 1/(1 + (r/(c·s))²) with c = 2.385: 95 % efficiency on Gaussian noise.
 constexpr double kCauchyC = 2.385;

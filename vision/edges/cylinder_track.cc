@@ -49,9 +49,10 @@ struct Work {
   Eigen::Matrix<double, Eigen::Dynamic, kN> j;
   Eigen::ArrayXd model, slope;
   std::vector<double> residuals;
-  // Weigh's, per group: the weights' sum, the weighted mean residual, Σ w·r, the curvature's sum.
-  Eigen::ArrayXd w_sum, mean_r, wr_sum, curvature_sum;
+  // Weigh's, per group: the weights' sum, Σ w·r, the curvature's sum.
+  Eigen::ArrayXd w_sum, wr_sum, curvature_sum;
 };
+
 // The template's model at q for all groups at once, its Jacobian rows and its slope across each
 // group (the line's, less the object's shapes' by their centre), then each pixel's residual from
 // its group's value and slope.
@@ -116,7 +117,6 @@ System Weigh(const CylinderTemplate& t, double noise, Curvature curvature, Work*
   const PixelGroups& groups = t.groups;
   const auto n = static_cast<Eigen::Index>(groups.size());
   work->w_sum.resize(n);
-  work->mean_r.resize(n);
   work->wr_sum.resize(n);
   work->curvature_sum.resize(n);
   int p = 0;
@@ -134,15 +134,18 @@ System Weigh(const CylinderTemplate& t, double noise, Curvature curvature, Work*
         curvature_sum += std::max((1.0 - z2) * w * w, kMinCurvatureShare * w);
     }
     work->w_sum[g] = w_sum;
-    work->mean_r[g] = wr_sum / w_sum;
     work->wr_sum[g] = wr_sum;
     work->curvature_sum[g] = curvature_sum;
   }
+  // The weights' rows: each group's weighted mean residual at its weights' sum.
+  const auto weights_rows = [&](fitcore::NormalSystem<kN>* system) {
+    system->SetRows(work->j, work->wr_sum / work->w_sum, work->w_sum);
+  };
   if (curvature == Curvature::kWeights) {
-    normal->SetRows(work->j, work->mean_r, work->w_sum);
+    weights_rows(normal);
   } else {
     normal->SetNewtonRows(work->j, work->wr_sum, work->curvature_sum);
-    if (weighted) weighted->SetRows(work->j, work->mean_r, work->w_sum);
+    if (weighted) weights_rows(weighted);
     const auto s = ShapesOf(t);
     for (int k = 0; k < 3; ++k)
       for (int m = 0; m < 3; ++m)
@@ -346,11 +349,10 @@ CylinderTrackRefusal TrackLitCylinder(CylinderTemplate* t, const std::vector<Edg
   out->rms = std::sqrt(sys.wrss / std::max(sys.wsum, 1.0));
   const double dof = sys.wsum * (1.0 - static_cast<double>(kN) / samples.size());
   const double var = dof > 0 ? sys.wrss / dof : 0.0;
-  const Vec<kN> cov_c = fitcore::InverseColumn<kN>(sys.jtj, kDc) * var;
-  const Vec<kN> cov_r = fitcore::InverseColumn<kN>(sys.jtj, kDr) * var;
-  out->left_sigma_px = std::sqrt(std::max(0.0, cov_c(kDc) + cov_r(kDr) - 2 * cov_c(kDr)));
-  out->right_sigma_px = std::sqrt(std::max(0.0, cov_c(kDc) + cov_r(kDr) + 2 * cov_c(kDr)));
-  out->width_sigma_px = 2.0 * std::sqrt(std::max(0.0, cov_r(kDr)));
+  const auto sigmas = fitcore::cylinder::SilhouetteSigmasOf<kN>(sys.jtj, kDc, kDr, var);
+  out->left_sigma_px = sigmas.left_px;
+  out->right_sigma_px = sigmas.right_px;
+  out->width_sigma_px = sigmas.width_px;
   return CylinderTrackRefusal::kNone;
 }
 

@@ -195,10 +195,21 @@ Vec<N> SolveSymmetric(const Mat<N>& a, const Vec<N>& b) {
   return a.ldlt().solve(b);
 }
 
-// Column i of a⁻¹ (a symmetric), as SolveSymmetric: a covariance's column from its normal matrix.
+// Columns cols of a⁻¹ (a symmetric) from one factorisation, as SolveSymmetric: a covariance's
+// columns from its normal matrix.
+template <int N, int M>
+Eigen::Matrix<double, N, M> InverseColumns(const Mat<N>& a, const int (&cols)[M]) {
+  Eigen::Matrix<double, N, M> unit = Eigen::Matrix<double, N, M>::Zero();
+  for (int m = 0; m < M; ++m) unit(cols[m], m) = 1.0;
+  SmallCholesky<N> c;
+  if (!c.Factor(a)) return a.ldlt().solve(unit);
+  Eigen::Matrix<double, N, M> out;
+  for (int m = 0; m < M; ++m) out.col(m) = c.Solve(unit.col(m));
+  return out;
+}
 template <int N>
 Vec<N> InverseColumn(const Mat<N>& a, int i) {
-  return SolveSymmetric<N>(a, Vec<N>::Unit(i));
+  return InverseColumns<N, 1>(a, {i});
 }
 
 template <int N>
