@@ -65,21 +65,21 @@ void BenchAdversarial(int argc, char** argv) {
     std::string tsv =
         "class\tseed\tframe\tstatus\twidth_px\tsigma_px\tmodel_sigma_px\tcodec_sigma_px\t"
         "spread_px\tshading_px\tcylinder_px\ttip_px\tstructure_px\ttwo_slope_px\tmissing_px\t"
-        "inner_level_px\tedge_blur_px\t"
+        "inner_level_px\tedge_blur_px\tone_edge_px\t"
         "truth_px\twrong\tbound_sigma_px\tscene\tdetail\n";
     for (const auto& f : r.frames) {
       const clogscope::vision::WidthDoubt& d = f.doubt;
       tsv += fmt::format(
           "{}\t{}\t{}\t{}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t"
-          "{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{}\t{:.4f}\t{}\t{}\n",
+          "{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{:.4f}\t{}\t{:.4f}\t{}\t{}\n",
           syn::TroubleClassName(f.trouble), f.seed, f.frame,
           f.status == clogscope::vision::FrameStatus::kValid
               ? "valid"
               : clogscope::vision::FrameStatusName(f.status),
           f.width_px, f.sigma_px, f.model_sigma_px, f.codec_sigma_px, d.spread_px, d.shading_px,
           d.cylinder_px, d.tip_px, d.structure_px, d.two_slope_px, d.missing_px, d.inner_level_px,
-          d.edge_blur_px, f.truth_px, f.wrong ? 1 : 0, f.bound_sigma_px, OneField(f.scene),
-          OneField(f.detail));
+          d.edge_blur_px, d.one_edge_px, f.truth_px, f.wrong ? 1 : 0, f.bound_sigma_px,
+          OneField(f.scene), OneField(f.detail));
     }
     clogscope::WriteFileAtomically(tsv_path, tsv);
   }

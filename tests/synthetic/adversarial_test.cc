@@ -156,6 +156,15 @@ TEST(AdversarialTest, ALightClippedBesideAnEdgeIsNotTakenAtItsClip) {
   ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kSpecularStripe, 4033));
 }
 
+TEST(AdversarialTest, OneEdgeSlidingAlongTheBandCarriesItsDoubt) {
+  // A lit 81 px strand through H.264, a lamp's spot (+100, sigma 8 px) 12 px outside its left
+  // edge by the band's lower end (background spot 10205): the spot lifted the left background to
+  // the rim's level and the left edge slid 1.7 px in over the band while the right held, the
+  // band's middle turning 3° off the pair's axis. Its width trend was taken for a swell's: four
+  // frames 0.87-0.94 px narrow at sigma 0.09-0.11, valid.
+  ExpectMatrixFramesRefusedOrRight(RandomAdversarialScene(TroubleClass::kBackgroundSpot, 10205));
+}
+
 TEST(AdversarialTest, AHighlightAtTheRimOfAFlatStrandCarriesItsDoubt) {
   // Bright flat strands with a brighter stripe 2.8 px inside one edge, closer than the blur lets
   // it show as an edge of its own: the edge's fitted step took the stripe in and moved inward,

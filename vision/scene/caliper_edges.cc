@@ -40,6 +40,41 @@ EdgeLines FitEdgeLines(const std::vector<CaliperFit>& fits, double band_s0, doub
   return out;
 }
 
+double OneEdgeDriftDoubtPx(const std::vector<Caliper>& calipers, int begin, int end,
+                           double width_slope_px_per_px, double band_length_px) {
+  if (width_slope_px_per_px == 0) return 0.0;
+  // The inlier calipers' middles against s: their line's slope and its σ from their scatter.
+  double n = 0, ss = 0, sss = 0, sm = 0, sms = 0, smm = 0;
+  for (int k = begin; k < end; ++k) {
+    const Caliper& c = calipers[k];
+    if (!c.inlier) continue;
+    const double mid = 0.5 * (c.left_u_px + c.right_u_px);
+    n += 1;
+    ss += c.s_px;
+    sss += c.s_px * c.s_px;
+    sm += mid;
+    sms += mid * c.s_px;
+    smm += mid * mid;
+  }
+  if (n < 4) return 0.0;
+  const double var_s = sss - ss * ss / n;
+  if (!(var_s > 1e-9)) return 0.0;
+  const double turn = (sms - sm * ss / n) / var_s;  // px across per px along
+  const double residual = std::max(0.0, (smm - sm * sm / n) - turn * turn * var_s);
+  // The turn is taken against the strand's axis from the pair found in the frame, whose own angle
+  // is uncertain too: its σ adds to the middles' scatter.
+  const double turn_sigma =
+      std::hypot(std::sqrt(residual / (n - 2) / var_s), kPairAxisAngleSigmaRad);
+  if (std::abs(turn) <= 3.0 * turn_sigma) return 0.0;
+  // One edge alone moves the middle by half the width's change: the width's slope and twice the
+  // turn agree. A swell (the turn ≪) or a turning strand whose width barely changes (a bend
+  // below the band, the width's slope ≪) is another thing that fits only as far as the smaller
+  // of the two goes, and only by their ratio.
+  const double a = std::abs(width_slope_px_per_px), b = 2.0 * std::abs(turn);
+  const double alone = std::min(a, b) * std::min(a, b) / std::max(a, b);
+  return 0.5 * alone * band_length_px;
+}
+
 double InnerLevelDoubtPx(const GreyImage& img, const AxisFrame& f, double band_s0, double spacing,
                          const std::vector<CaliperFit>& fits, const std::vector<bool>& use,
                          double blur_px) {

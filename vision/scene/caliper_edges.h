@@ -4,6 +4,7 @@
 // lines through the calipers' edges.
 #include <vector>
 
+#include "vision/edges/caliper.h"
 #include "vision/edges/edge_fit.h"
 #include "vision/edges/grey_image.h"
 
@@ -30,6 +31,25 @@ struct EdgeLines {
 };
 
 EdgeLines FitEdgeLines(const std::vector<CaliperFit>& fits, double band_s0, double spacing);
+
+// How far the axis of the pair found in a frame may turn from a straight strand's band, rad (σ).
+// Measured on the straight strands of four adversarial sets (plain, stripe, lens, saturated,
+// blur gradient, motion; 1862 frames): beyond the band middles' own scatter the turn is 0.001
+// rad by maximum likelihood, but its tails reach 0.013 (the 99th percentile where the width
+// changed) and 0.022. At 0.005 rad (0.3°, as far as H.264 tilts a 50 px band's edge lines in
+// testdata's jitter_sway.mp4) none of them is beyond 3σ.
+inline constexpr double kPairAxisAngleSigmaRad = 0.005;
+
+// A width changing along the band (width_slope_px_per_px, already judged real) is a swell when
+// the edges move apart alike, the strand's axis staying put; when the band's middle also turns
+// off the strand's axis (the frame's u = 0, from the whole strand) by more than 3σ (the inlier
+// calipers' middles' scatter and kPairAxisAngleSigmaRad), one edge may be drifting alone: a lamp's
+// spot or a texture lifting one side's background toward the rim's level, a lit strand's edge
+// sliding in. The slope one edge alone would make is the smaller of the width's slope and twice
+// the middle's turn, counted by how far the two agree (min²/max); over the band's length, half of
+// it is one σ of the band's mean width. 0 without such a turn.
+double OneEdgeDriftDoubtPx(const std::vector<Caliper>& calipers, int begin, int end,
+                           double width_slope_px_per_px, double band_length_px);
 
 // A flat object's level just inside its two edges (each plain step's model kLevelBlurs of its
 // blurs inside the edge, the median over the calipers `use`d; caliper k spans s from band_s0 +

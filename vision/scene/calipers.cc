@@ -665,7 +665,8 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   // A strand's width about its smooth trend along the band: a swell relaxing down the band widens
   // the calipers' spread without making their mean any less certain.
   double trend_var = -1, width_slope = 0;
-  double missing_doubt_px = 0;  // a changing width's calipers that are not in the mean
+  double missing_doubt_px = 0;   // a changing width's calipers that are not in the mean
+  double one_edge_doubt_px = 0;  // a changing width whose band turns off the strand's axis
   if (cal_widths.size() >= 4) {
     Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
     Eigen::Vector3d atb = Eigen::Vector3d::Zero();
@@ -719,6 +720,8 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
           if (c.inlier) in += w, ++n_in;
         }
         if (n_in > 0) missing_doubt_px = std::abs(all / n_all - in / n_in);
+        one_edge_doubt_px = OneEdgeDriftDoubtPx(m->calipers, run_begin, run_end, width_slope,
+                                                m->straight_end_px - m->straight_start_px);
       }
     }
     const double half = 0.5 * (m->straight_end_px - m->straight_start_px);
@@ -752,6 +755,7 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
   doubt.shading_px = 0.5 * (shading_doubt_px[0] + shading_doubt_px[1]);
   doubt.cylinder_px = cylinder_doubt_px;
   doubt.missing_px = missing_doubt_px;
+  doubt.one_edge_px = one_edge_doubt_px;
   // A flat object's two edges (plain steps, no stripe modelled beside either) see one level
   // inside it: where they do not, a step beside one edge may have moved it (caliper_edges.h).
   // (The inlier calipers with their own edge models, not refitted as one cylinder.)

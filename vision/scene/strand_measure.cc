@@ -46,7 +46,8 @@ constexpr NamedDoubtPart kModelDoubtParts[] = {
     {"a background sloping to the edge", &WidthDoubt::two_slope_px},
     {"calipers missing from a changing width", &WidthDoubt::missing_px},
     {"the object's level differing at its two edges", &WidthDoubt::inner_level_px},
-    {"one edge blurred more than the other", &WidthDoubt::edge_blur_px}};
+    {"one edge blurred more than the other", &WidthDoubt::edge_blur_px},
+    {"one edge drifting off the strand's axis", &WidthDoubt::one_edge_px}};
 
 // Each model part of `from`'s doubt where larger than *to's.
 void TakeLargerModelDoubt(const WidthDoubt& from, WidthDoubt* to) {
@@ -361,7 +362,7 @@ namespace {
 // Every part of a width's σ, each named for a user: the spread first, then the model's parts in
 // WidthDoubt's order (kModelDoubtParts), then the codec's. The one list the σ is combined from
 // and shown as.
-constexpr size_t kSpreadPart = 0, kDoubtParts = 10;
+constexpr size_t kSpreadPart = 0, kDoubtParts = 11;
 static_assert(std::size(kModelDoubtParts) + 2 == kDoubtParts);
 std::array<DoubtPart, kDoubtParts> AllDoubtParts(const StrandMeasurement& m) {
   std::array<DoubtPart, kDoubtParts> parts;

@@ -76,6 +76,7 @@ struct WidthDoubt {
   double missing_px = 0;    // calipers left out of the mean of a width changing along the band
   double inner_level_px = 0;  // a flat object's level differing at its two edges: a step by one
   double edge_blur_px = 0;    // one edge blurred more than the other: a step folded into it
+  double one_edge_px = 0;     // a width changing along the band as one edge alone drifts
 };
 
 // The result for one frame. Geometry is in full-frame pixel coordinates (ROI offset added).

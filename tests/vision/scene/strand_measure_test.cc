@@ -351,7 +351,7 @@ TEST(StrandMeasureTest, TheSigmasSpreadPartIsTheNoisesScatter) {
     sum += m.width_px, sum2 += m.width_px * m.width_px, ++n;
     spread2 += m.doubt.spread_px * m.doubt.spread_px;
     const std::vector<DoubtPart> parts = DoubtParts(m);
-    ASSERT_EQ(parts.size(), 10u);
+    ASSERT_EQ(parts.size(), 11u);
     double total2 = 0;
     for (const DoubtPart& part : parts) total2 += part.sigma_px * part.sigma_px;
     EXPECT_NEAR(std::sqrt(total2), m.width_sigma_px, 1e-9);
@@ -368,9 +368,9 @@ TEST(StrandMeasureTest, TheSigmasSpreadPartIsTheNoisesScatter) {
   const StrandMeasurement m = MeasureStrand(RenderFrame(p, 0, nullptr), strict);
   ASSERT_EQ(m.status, FrameStatus::kImprecise);
   const WidthDoubt& d = m.doubt;
-  const double largest_px = std::max({d.spread_px, d.shading_px, d.cylinder_px, d.tip_px,
-                                      d.structure_px, d.two_slope_px, d.missing_px,
-                                      d.inner_level_px, d.edge_blur_px});
+  const double largest_px =
+      std::max({d.spread_px, d.shading_px, d.cylinder_px, d.tip_px, d.structure_px, d.two_slope_px,
+                d.missing_px, d.inner_level_px, d.edge_blur_px, d.one_edge_px});
   ASSERT_EQ(DoubtParts(m).front().sigma_px, largest_px);
   EXPECT_NE(m.detail.find(fmt::format("{}, {:.2f} px", DoubtParts(m).front().what, largest_px)),
             std::string::npos)
