@@ -36,21 +36,22 @@ TEST(AdversarialMatrixTest, FewConfidentlyWrongWidthsAndNoneWithoutAStrand) {
   // model's first round. The renders are the same from run to run (H.264 on one thread).
   EXPECT_LE(r.all.wrong, 1);
   EXPECT_LE(r.all.wrong_beyond_sigma, 1);
-  // What that costs: valid widths on 632 of the 1000 measurable strand frames (2026-12-01; 631
-  // before a swell's edges were followed from where they lie; 2026-11-30: 661 before the slopes
-  // read along the band past each edge's window were doubted, and luma's doubt about the scene was
-  // carried by a blurrier colour channel; over seeds 1, 101 and twelve unseen sets the widths
-  // whose doubt that changed had 3.3 % of their errors beyond 3σ before and 1.5 % after. 664 when
-  // this floor was written, 672 before a face read beside one object on one side only stopped
-  // deciding between it and a rival: two scenes of a hair from the face's corner are ambiguous;
-  // 660 before an edge whose background slopes toward a flat object was put where the band's
-  // two-slope step says; 674 before a width from x264 carried the codec's doubt, 654 while its
-  // second pass coded a lone key frame, 677 before the change above; the saturated and
-  // nozzle-alone classes are refused by design).
+  // What that costs: valid widths on 619 of the 1000 measurable strand frames (2026-12-03: 620
+  // before a side too noisy to call shaded took its lit cylinders' outward shift as doubt too;
+  // 632 on 2026-12-01; 631 before a swell's edges were followed from where they lie; 2026-11-30:
+  // 661 before the slopes read along the band past each edge's window were doubted, and luma's
+  // doubt about the scene was carried by a blurrier colour channel; over seeds 1, 101 and twelve
+  // unseen sets the widths whose doubt that changed had 3.3 % of their errors beyond 3σ before
+  // and 1.5 % after. 664 when this floor was written, 672 before a face read beside one object on
+  // one side only stopped deciding between it and a rival: two scenes of a hair from the face's
+  // corner are ambiguous; 660 before an edge whose background slopes toward a flat object was put
+  // where the band's two-slope step says; 674 before a width from x264 carried the codec's doubt,
+  // 654 while its second pass coded a lone key frame, 677 before the change above; the saturated
+  // and nozzle-alone classes are refused by design).
   const int measurable = r.all.frames -
                          r.classes[static_cast<int>(TroubleClass::kSaturated)].frames -
                          r.classes[static_cast<int>(TroubleClass::kNoStrand)].frames;
-  EXPECT_GE(r.all.valid, 0.62 * measurable);
+  EXPECT_GE(r.all.valid, 0.61 * measurable);
   // The classes the first round fixed stay fixed: the lens at its silhouette, clipping refused,
   // the tip of a swelling strand at the nozzle (1 % wrong measured; 10 % in the first round, 57 %
   // before).

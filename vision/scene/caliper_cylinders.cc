@@ -75,4 +75,20 @@ void RefitAsCylinders(const GreyImage& img, const AxisFrame& f, const ClipLevels
     structure_doubt_px[side] = doubt[side].DoubtPx();
 }
 
+bool CylinderOutwardShiftsPx(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
+                             double band_s0, double spacing, double s_mid_px,
+                             const EdgeLines& lines, double sigma_px,
+                             const std::vector<CaliperFit>& fits, double outward_px[2]) {
+  std::vector<CaliperFit> cylinders = fits;
+  RefitAsCylinders(img, f, clip, band_s0, spacing, lines, sigma_px, CylinderBackground::kEachSide,
+                   &cylinders, nullptr, nullptr);
+  const EdgeLines lit = FitEdgeLines(cylinders, band_s0, spacing);
+  const EdgeLines plain = FitEdgeLines(fits, band_s0, spacing);
+  if (lit.calipers < 2 || plain.calipers < 2) return false;
+  const auto at = [&](double u0, double slope) { return u0 + slope * s_mid_px; };
+  outward_px[0] = at(plain.left_u0, plain.slope) - at(lit.left_u0, lit.slope);
+  outward_px[1] = at(lit.right_u0, lit.slope) - at(plain.right_u0, plain.slope);
+  return true;
+}
+
 }  // namespace clogscope::vision

@@ -31,4 +31,13 @@ void RefitAsCylinders(const GreyImage& img, const AxisFrame& f, const ClipLevels
                       CylinderBackground background, std::vector<CaliperFit>* fits,
                       double structure_doubt_px[2], CylinderMemory* memory);
 
+// Where the calipers' lit cylinders (fitted as RefitAsCylinders does, each side's background its
+// own line, nothing kept) would put an object's silhouettes against the per-edge fits in `fits`:
+// per side (0 left, 1 right), how far outward of the per-edge lines at s_mid_px the cylinders'
+// lines lie, px (negative: inward). False when fewer than two calipers have both.
+bool CylinderOutwardShiftsPx(const GreyImage& img, const AxisFrame& f, const ClipLevels& clip,
+                             double band_s0, double spacing, double s_mid_px,
+                             const EdgeLines& lines, double sigma_px,
+                             const std::vector<CaliperFit>& fits, double outward_px[2]);
+
 }  // namespace clogscope::vision

@@ -562,8 +562,25 @@ void MeasureCalipers(const GreyImage& img, double data_max, const StrandGeometry
       slope_guess = lines.slope;
     }
     if (memory) memory->cylinder_doubt_px = cylinder_doubt_px;
-  } else if (memory) {
-    memory->Clear();  // not lit cylinders this time: nothing to track
+  } else {
+    if (memory) memory->Clear();  // not lit cylinders this time: nothing to track
+    // Both sides taken as plain, while the shaded fits put one of them as far out as a shaded
+    // side lies: the evidence was too weak to decide. On their rims' windows alone, the shaded
+    // fits come short of the shift in noise (a 205 px strand at ambient 0.75, noise 10: 0.13-0.37
+    // px of a true 0.4 px a side; the width 1.0-1.1 px narrow at σ 0.23-0.29, valid). The lit
+    // cylinders, whose whole interior's curve fixes the shading, tell it better: each side's
+    // doubt is the larger of the two. (Not on flat objects, whose shaded fits barely move: the
+    // cylinders would double a frame's cost.)
+    double outward_px[2];
+    if (!filament && shade[0] == 0 && shade[1] == 0 &&
+        std::max(shading_doubt_px[0], shading_doubt_px[1]) > kMinShadingShiftPx &&
+        g.left_sign == -g.right_sign && per_edge_consistent >= min_used &&
+        CylinderOutwardShiftsPx(img, f, clip, band_s0, opt.caliper_spacing_px,
+                                0.5 * (band_s0 + band_s1), {left_guess, right_guess, slope_guess},
+                                sigma_guess, fits, outward_px)) {
+      for (int side = 0; side < 2; ++side)
+        shading_doubt_px[side] = std::max(shading_doubt_px[side], outward_px[side]);
+    }
   }
 
   // Per-caliper widths, robust combination.
